@@ -1,0 +1,62 @@
+#include "cli/common.h"
+
+#include <mujoco/mujoco.h>
+
+#include <cerrno>
+#include <cstdlib>
+
+#include "src/atomic_file.h"
+#include "src/errors.h"
+#include "src/json_util.h"
+
+namespace fetchscope::cli {
+
+void AddEnvOptions(CLI::App* sub, EnvOptions* options, bool with_seed) {
+  sub->add_option("--env-id", options->env_id,
+                  "FetchReach-v4, FetchReachDense-v4, FetchPush[Dense]-v4, "
+                  "FetchPickAndPlace[Dense]-v4, FetchSlide[Dense]-v4, or auto (FetchReachDense-v4)")
+      ->capture_default_str();
+  sub->add_option("--assets", options->assets,
+                  "bundled (our models/), auto ($FETCHSCOPE_ASSETS, else an installed "
+                  "gymnasium_robotics, else bundled), or a Gymnasium-Robotics envs/assets folder")
+      ->capture_default_str();
+  if (with_seed) {
+    sub->add_option("--seed", options->seed,
+                    "env.reset(seed=S) for the first episode (later episodes continue the "
+                    "generator) and action_space.seed(S) for the random policy")
+        ->capture_default_str();
+  }
+}
+
+uint64_t ParseSeed(const std::string& text) {
+  const std::string accepted = ": a seed is a non-negative integer below 2^64, as Gymnasium accepts";
+  if (text.empty() || text.find_first_not_of("0123456789") != std::string::npos) {
+    throw UsageError("--seed '" + text + "' is not valid" + accepted);
+  }
+  errno = 0;
+  char* end = nullptr;
+  unsigned long long v = std::strtoull(text.c_str(), &end, 10);
+  if (errno == ERANGE || *end != '\0') throw UsageError("--seed '" + text + "' is too large" + accepted);
+  return v;
+}
+
+std::string JsonOutPath(const std::string& prefix, const std::string& suffix) {
+  if (prefix.empty()) return "";
+  if (prefix.size() >= 5 && prefix.compare(prefix.size() - 5, 5, ".json") == 0) return prefix;
+  return prefix + "_" + suffix + ".json";
+}
+
+void WriteJson(const std::string& path, const nlohmann::json& json) {
+  WriteFileAtomically(path, DumpJson(json) + "\n");
+}
+
+nlohmann::json VersionsJson() {
+  return {{"fetchscope", FETCHSCOPE_VERSION}, {"mujoco", mj_versionString()}};
+}
+
+int& ExitStatus() {
+  static int status = 0;
+  return status;
+}
+
+}  // namespace fetchscope::cli

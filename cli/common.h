@@ -1,0 +1,49 @@
+// Options and helpers shared by the subcommands.
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+#include <cstdint>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+namespace fetchscope::cli {
+
+/// --env-id, --assets, --seed as every env-driven subcommand takes them.
+struct EnvOptions {
+  std::string env_id = "auto";     ///< a v4 id or auto (FetchReachDense-v4)
+  std::string assets = "bundled";  ///< bundled | auto | DIR
+  std::string seed = "0";          ///< non-negative integer, parsed by ParseSeed
+};
+
+/// Adds --env-id/--assets (and --seed when with_seed) to `sub`.
+void AddEnvOptions(CLI::App* sub, EnvOptions* options, bool with_seed = true);
+
+/// Parses a Gymnasium seed: a non-negative integer below 2^64. Throws UsageError.
+uint64_t ParseSeed(const std::string& text);
+
+/// `--json-out P` naming: P itself if it ends in .json, else P + "_" + suffix + ".json".
+std::string JsonOutPath(const std::string& prefix, const std::string& suffix);
+
+/// Writes JSON atomically (temporary name, then rename) with a trailing newline.
+void WriteJson(const std::string& path, const nlohmann::json& json);
+
+/// Versions of fetchscope and MuJoCo, for every output.
+nlohmann::json VersionsJson();
+
+/// Exit status a subcommand asks for (0 unless it set one).
+int& ExitStatus();
+
+/// Registration of each subcommand (one file each).
+void RegisterListEnvs(CLI::App& app);
+void RegisterDescribe(CLI::App& app);
+void RegisterRewardCheck(CLI::App& app);
+void RegisterRandomEpisodes(CLI::App& app);
+void RegisterRollout(CLI::App& app);
+void RegisterRender(CLI::App& app);
+void RegisterListCameras(CLI::App& app);
+void RegisterRecord(CLI::App& app);
+void RegisterBench(CLI::App& app);
+
+}  // namespace fetchscope::cli

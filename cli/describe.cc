@@ -1,0 +1,168 @@
+// fetchscope describe: Gymnasium-style spaces plus what every index means.
+#include <cstdio>
+
+#include "cli/common.h"
+#include "src/episode.h"
+#include "src/fetch_env.h"
+#include "src/json_util.h"
+
+namespace fetchscope::cli {
+namespace {
+
+nlohmann::json Box(int n, const std::string& dtype, double low, double high) {
+  return {{"type", "Box"}, {"shape", {n}}, {"dtype", dtype}, {"low", JsonDouble(low)},
+          {"high", JsonDouble(high)}};
+}
+
+struct Label {
+  const char* name;
+  const char* meaning;
+  const char* unit;
+};
+
+std::vector<Label> ObservationLabels(bool has_object) {
+  const std::vector<Label> grip = {
+      {"grip_pos.x", "gripper (site robot0:grip) position x, world frame", "m"},
+      {"grip_pos.y", "gripper position y, world frame", "m"},
+      {"grip_pos.z", "gripper position z, world frame (0.02 m below gripper_link's origin)", "m"}};
+  const std::vector<Label> fingers = {
+      {"gripper_state.right", "right finger slide joint position (0 closed .. 0.05 open)", "m"},
+      {"gripper_state.left", "left finger slide joint position (0 closed .. 0.05 open)", "m"}};
+  const std::vector<Label> grip_vel = {
+      {"grip_velp.x", "gripper linear velocity x times dt: displacement per env step", "m/step"},
+      {"grip_velp.y", "gripper linear velocity y times dt", "m/step"},
+      {"grip_velp.z", "gripper linear velocity z times dt", "m/step"}};
+  const std::vector<Label> finger_vel = {
+      {"gripper_vel.right", "right finger joint velocity times dt (not a linear velocity)", "m/step"},
+      {"gripper_vel.left", "left finger joint velocity times dt", "m/step"}};
+  std::vector<Label> out = grip;
+  if (!has_object) {
+    out.insert(out.end(), fingers.begin(), fingers.end());
+    out.insert(out.end(), grip_vel.begin(), grip_vel.end());
+    out.insert(out.end(), finger_vel.begin(), finger_vel.end());
+    return out;
+  }
+  const std::vector<Label> object = {
+      {"object_pos.x", "object (site object0) position x, world frame", "m"},
+      {"object_pos.y", "object position y", "m"},
+      {"object_pos.z", "object position z", "m"},
+      {"object_rel_pos.x", "object minus gripper position x", "m"},
+      {"object_rel_pos.y", "object minus gripper position y", "m"},
+      {"object_rel_pos.z", "object minus gripper position z", "m"}};
+  const std::vector<Label> rot = {
+      {"object_rot.x", "object Euler angle x (rotations.mat2euler of the site matrix)", "rad"},
+      {"object_rot.y", "object Euler angle y", "rad"},
+      {"object_rot.z", "object Euler angle z", "rad"},
+      {"object_velp.x", "object linear velocity minus gripper linear velocity x, times dt", "m/step"},
+      {"object_velp.y", "object minus gripper linear velocity y, times dt", "m/step"},
+      {"object_velp.z", "object minus gripper linear velocity z, times dt", "m/step"},
+      {"object_velr.x", "object angular velocity x (world axes, absolute) times dt", "rad/step"},
+      {"object_velr.y", "object angular velocity y times dt", "rad/step"},
+      {"object_velr.z", "object angular velocity z times dt", "rad/step"}};
+  out.insert(out.end(), object.begin(), object.end());
+  out.insert(out.end(), fingers.begin(), fingers.end());
+  out.insert(out.end(), rot.begin(), rot.end());
+  out.insert(out.end(), grip_vel.begin(), grip_vel.end());
+  out.insert(out.end(), finger_vel.begin(), finger_vel.end());
+  return out;
+}
+
+nlohmann::json Describe(const FetchEnv& env) {
+  const EnvSpec& s = env.spec();
+  const mjModel* m = env.model();
+  nlohmann::json obs_labels = nlohmann::json::array();
+  int i = 0;
+  for (const Label& l : ObservationLabels(s.has_object)) {
+    obs_labels.push_back({{"index", i++}, {"name", l.name}, {"meaning", l.meaning}, {"unit", l.unit}});
+  }
+  const std::string gripper_meaning =
+      s.block_gripper
+          ? "ignored: this task blocks the gripper (no finger actuators; the command is zeroed and "
+            "both finger joints are forced to 0 after every step)"
+          : "finger position servo target = current finger position + action[3] (not scaled by "
+            "0.05; servo target clamped to [0, 0.2], joint range [0, 0.05]): action[3] > 0 OPENS "
+            "the fingers, < 0 closes them; |action[3]| above about 0.05 already drives a finger to "
+            "its limit";
+  nlohmann::json actions = nlohmann::json::array({
+      {{"index", 0}, {"name", "dx"}, {"meaning", "displace the mocap target of the gripper by 0.05 m * action[0] along world x per step (position, not velocity; re-anchored on the gripper each step)"}, {"unit", "0.05 m"}},
+      {{"index", 1}, {"name", "dy"}, {"meaning", "displace the gripper target by 0.05 m * action[1] along world y per step"}, {"unit", "0.05 m"}},
+      {{"index", 2}, {"name", "dz"}, {"meaning", "displace the gripper target by 0.05 m * action[2] along world z per step"}, {"unit", "0.05 m"}},
+      {{"index", 3}, {"name", "gripper"}, {"meaning", gripper_meaning}, {"unit", "m (finger target offset)"}}});
+  const int obs_size = s.has_object ? 25 : 10;
+  nlohmann::json j;
+  j["env_id"] = s.id;
+  j["task"] = TaskName(s.task);
+  j["reward_type"] = s.dense ? "dense" : "sparse";
+  j["action_space"] = Box(4, "float32", -1.0, 1.0);
+  j["action_space"]["labels"] = actions;
+  j["action_space"]["clipping"] = "actions are clipped to [-1, 1] before use; larger commands saturate";
+  j["observation_space"] = {
+      {"type", "Dict"},
+      {"spaces",
+       {{"achieved_goal", Box(3, "float64", -INFINITY, INFINITY)},
+        {"desired_goal", Box(3, "float64", -INFINITY, INFINITY)},
+        {"observation", Box(obs_size, "float64", -INFINITY, INFINITY)}}}};
+  j["observation_space"]["spaces"]["observation"]["labels"] = obs_labels;
+  j["observation_space"]["spaces"]["achieved_goal"]["meaning"] =
+      s.has_object ? "object (site object0) position, m" : "gripper (site robot0:grip) position, m";
+  j["observation_space"]["spaces"]["desired_goal"]["meaning"] = "the episode's goal position, m";
+  j["reward"] = {
+      {"distance", "d = || achieved_goal - desired_goal ||_2 (Euclidean, metres)"},
+      {"sparse", "-1.0 if d > distance_threshold else -0.0 (float32)"},
+      {"dense", "-d (float64)"},
+      {"this_env", s.dense ? "dense" : "sparse"},
+      {"is_success", "1.0 if d < distance_threshold else 0.0 (strict <; reward uses strict >)"},
+      {"relabelling", "compute_reward(achieved_goal, desired_goal, info) depends only on the two "
+                      "goals (info is ignored), so any achieved goal can be paired with any goal "
+                      "after the fact: that is what makes hindsight experience replay work"}};
+  j["distance_threshold"] = s.distance_threshold;
+  j["max_episode_steps"] = s.max_episode_steps;
+  j["n_substeps"] = s.n_substeps;
+  j["timestep"] = m->opt.timestep;
+  j["control_dt"] = env.dt();
+  j["block_gripper"] = s.block_gripper;
+  j["has_object"] = s.has_object;
+  j["target_in_the_air"] = s.target_in_the_air;
+  j["target_range"] = s.target_range;
+  j["obj_range"] = s.obj_range;
+  j["target_offset"] = JsonVector(s.target_offset.data(), 3);
+  j["initial_gripper_xpos"] = JsonVector(env.initial_gripper_xpos().data(), 3);
+  if (s.has_object) j["height_offset"] = env.height_offset();
+  j["assets"] = AssetsJson(env.assets());
+  j["model_file"] = env.model_path();
+  j["versions"] = VersionsJson();
+  j["answers"] = {
+      {"observation_size", obs_size},
+      {"action_index_3", s.block_gripper
+                             ? "nothing in this task: the gripper is blocked"
+                             : "the two finger position servos: > 0 opens, < 0 closes"},
+      {"success_threshold_m", s.distance_threshold},
+      {"why_relabelling_works", "the reward is a pure function of (achieved_goal, desired_goal)"}};
+  return j;
+}
+
+}  // namespace
+
+void RegisterDescribe(CLI::App& app) {
+  auto env = std::make_shared<EnvOptions>();
+  auto json_out = std::make_shared<std::string>();
+  CLI::App* sub = app.add_subcommand(
+      "describe", "Observation/action schema with a label per index, reward formulas, timing");
+  AddEnvOptions(sub, env.get(), false);
+  sub->add_option("--json-out", *json_out, "Write P (if it ends in .json) else P_describe.json; "
+                                           "without it the JSON goes to stdout");
+  sub->callback([env, json_out]() {
+    const EnvSpec& spec = FindEnvSpec(env->env_id);
+    FetchEnv fetch(spec, ResolveAssets(env->assets));
+    const nlohmann::json j = Describe(fetch);
+    if (json_out->empty()) {
+      std::printf("%s\n", DumpJson(j).c_str());
+    } else {
+      const std::string path = JsonOutPath(*json_out, "describe");
+      WriteJson(path, j);
+      std::printf("wrote %s\n", path.c_str());
+    }
+  });
+}
+
+}  // namespace fetchscope::cli

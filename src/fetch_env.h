@@ -1,0 +1,112 @@
+// One Fetch v4 environment on MuJoCo 2.2.2: setup, reset, step, observation, reward,
+// exactly as Gymnasium-Robotics does it (see the reference's sections 2 to 6 and 11).
+#pragma once
+
+#include <mujoco/mujoco.h>
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "src/action.h"
+#include "src/assets.h"
+#include "src/env_spec.h"
+#include "src/mj_handles.h"
+#include "src/rng.h"
+
+namespace fetchscope {
+
+/// The goal-env observation dict.
+struct Observation {
+  std::vector<double> observation;      ///< 10 values (Reach) or 25 (object tasks)
+  std::array<double, 3> achieved_goal;  ///< grip site (Reach) or object site position, m
+  std::array<double, 3> desired_goal;   ///< the episode's goal, m
+};
+
+/// What step() returns (terminated is always false for Fetch).
+struct StepResult {
+  Observation obs;                      ///< observation after the step
+  double reward = 0;                    ///< sparse: -1.0 or -0.0; dense: -distance
+  bool is_success = false;              ///< distance < threshold
+  bool truncated = false;               ///< TimeLimit: elapsed steps reached max_episode_steps
+  std::array<double, 4> applied{};      ///< the action after clipping, as promoted to double
+};
+
+/// A Fetch environment. Not copyable; one per thread.
+class FetchEnv {
+ public:
+  /// Loads the model from `assets` and runs the one-time setup (settling included).
+  /// Throws RunError with MuJoCo's message if the model cannot be loaded.
+  FetchEnv(const EnvSpec& spec, const AssetSource& assets);
+  FetchEnv(const FetchEnv&) = delete;
+  FetchEnv& operator=(const FetchEnv&) = delete;
+
+  /// env.reset(seed=...): a seed restarts the generator; none continues it.
+  Observation Reset(std::optional<uint64_t> seed = std::nullopt);
+
+  /// env.step(action) with TimeLimit semantics. Requires a prior Reset().
+  StepResult Step(const Action& action);
+
+  /// compute_reward(achieved_goal, desired_goal): pure function of the two goals.
+  double ComputeReward(const std::array<double, 3>& achieved,
+                       const std::array<double, 3>& desired) const;
+  /// _is_success: distance < threshold.
+  bool IsSuccess(const std::array<double, 3>& achieved,
+                 const std::array<double, 3>& desired) const;
+
+  /// The current observation (no simulation work).
+  Observation Observe() const;
+
+  const EnvSpec& spec() const { return spec_; }                 ///< the registered id
+  const AssetSource& assets() const { return assets_; }         ///< where the model came from
+  std::string model_path() const { return model_path_; }        ///< the MJCF file loaded
+  mjModel* model() const { return model_.get(); }               ///< the compiled model
+  mjData* data() const { return data_.get(); }                  ///< the live state
+  const std::array<double, 3>& goal() const { return goal_; }   ///< current goal, m
+  int elapsed_steps() const { return elapsed_steps_; }          ///< steps since reset
+  double dt() const { return model_->opt.timestep * spec_.n_substeps; }  ///< s per env step
+  const std::array<double, 3>& initial_gripper_xpos() const { return initial_gripper_xpos_; }
+  double height_offset() const { return height_offset_; }       ///< object z after settling
+  int grip_site() const { return grip_site_; }                  ///< site id of robot0:grip
+  int gripper_body() const { return gripper_body_; }            ///< body id of robot0:gripper_link
+
+ private:
+  void Setup();
+  std::array<double, 3> SampleGoal();
+
+  EnvSpec spec_;
+  AssetSource assets_;
+  std::string model_path_;
+  MjModelPtr model_;
+  MjDataPtr data_;
+  std::optional<NumpyGenerator> rng_;
+
+  int grip_site_ = -1;
+  int object_site_ = -1;
+  int gripper_body_ = -1;
+  int mocap_id_ = -1;
+  int object_qpos_ = -1;
+  int l_finger_qpos_ = -1, r_finger_qpos_ = -1;
+  int l_finger_dof_ = -1, r_finger_dof_ = -1;
+
+  double initial_time_ = 0;
+  std::vector<double> initial_qpos_, initial_qvel_;
+  std::array<double, 3> initial_gripper_xpos_{};
+  double height_offset_ = 0;
+  std::array<double, 3> goal_{};
+  int elapsed_steps_ = 0;
+  bool has_reset_ = false;
+  mutable std::vector<double> jacp_, jacr_;
+};
+
+/// Installs MuJoCo's error and warning handlers (errors print one line and exit 1; warnings
+/// are printed once each on stderr). Call once at program start.
+void InstallMujocoHandlers();
+
+/// rotations.mat2euler of Gymnasium-Robotics for one row-major 3x3 matrix.
+std::array<double, 3> Mat2Euler(const double* mat);
+
+}  // namespace fetchscope

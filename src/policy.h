@@ -1,0 +1,49 @@
+// Action sources: random (Gymnasium's Box.sample), zero, replay:FILE, scripted, exec:CMD.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "src/action.h"
+#include "src/env_spec.h"
+#include "src/fetch_env.h"
+
+namespace fetchscope {
+
+/// Chooses an action from the current observation.
+class Policy {
+ public:
+  virtual ~Policy() = default;
+  /// Called after each reset, with the episode index and the reset observation.
+  virtual void BeginEpisode(int episode, const Observation& obs) {
+    (void)episode;
+    (void)obs;
+  }
+  /// The action for step t (0-based) given the latest observation.
+  virtual Action Act(const Observation& obs, int t) = 0;
+  /// The spec as given, e.g. "replay:run.csv".
+  virtual std::string name() const = 0;
+};
+
+/// Options shared by policy construction.
+struct PolicyContext {
+  uint64_t seed = 0;             ///< action_space.seed(seed) for random
+  int steps_per_episode = 50;    ///< replay checks it has enough rows
+  int episodes = 1;              ///< replay checks it has enough rows
+  double exec_timeout_s = 10.0;  ///< exec: seconds to wait for each answer
+};
+
+/// Builds a policy from `--policy`: random | zero | scripted | replay:FILE | exec:CMD.
+/// Throws UsageError for an unknown name (listing the accepted ones), RunError for a bad file.
+std::unique_ptr<Policy> MakePolicy(const std::string& spec, const EnvSpec& env,
+                                   const PolicyContext& context);
+
+/// The accepted policy names, for --help.
+inline constexpr const char* kPolicyHelp =
+    "random (seeded like action_space.seed + sample), zero, scripted, replay:FILE "
+    "(.csv with 4 columns, .npy T x 4 float32/float64, .jsonl), exec:CMD (child process "
+    "speaking JSON lines)";
+
+}  // namespace fetchscope

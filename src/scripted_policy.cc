@@ -1,0 +1,176 @@
+#include "src/scripted_policy.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "src/policy.h"
+
+namespace fetchscope {
+namespace {
+
+using Vec3 = std::array<double, 3>;
+
+constexpr double kStep = 0.05;  // m of mocap displacement per unit action
+
+Vec3 Sub(const Vec3& a, const Vec3& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
+double NormXY(const Vec3& v) { return std::hypot(v[0], v[1]); }
+double Norm(const Vec3& v) { return std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]); }
+
+// An action that moves the gripper towards `target` at most `speed` (in action units).
+Action Toward(const Vec3& grip, const Vec3& target, double gripper, double speed = 1.0) {
+  Action a;
+  Vec3 delta = Sub(target, grip);
+  for (int i = 0; i < 3; ++i) a.value[i] = std::clamp(delta[i] / kStep, -speed, speed);
+  a.value[3] = gripper;
+  return a;
+}
+
+Vec3 At(const std::vector<double>& o, int i) { return {o[i], o[i + 1], o[i + 2]}; }
+
+class ScriptedReach : public Policy {
+ public:
+  Action Act(const Observation& obs, int) override {
+    return Toward(At(obs.observation, 0), obs.desired_goal, 0.0);
+  }
+  std::string name() const override { return "scripted"; }
+};
+
+// Push and Slide: line up behind the object on the goal line, then drive through it.
+class ScriptedPush : public Policy {
+ public:
+  explicit ScriptedPush(bool slide) : slide_(slide) {}
+  void BeginEpisode(int, const Observation&) override {
+    phase_ = kLineUp;
+    strike_steps_ = 0;
+  }
+  Action Act(const Observation& obs, int) override {
+    const Vec3 grip = At(obs.observation, 0);
+    const Vec3 object = At(obs.observation, 3);
+    const Vec3 goal = obs.desired_goal;
+    Vec3 to_goal = Sub(goal, object);
+    to_goal[2] = 0;
+    const double dist = NormXY(to_goal);
+    if (dist < 1e-6) return Toward(grip, grip, 0.0);
+    const Vec3 dir = {to_goal[0] / dist, to_goal[1] / dist, 0};
+    const double table_z = object[2];  // push at the object's centre height
+    const double behind = 0.055;       // gripper centre behind the object centre
+    const Vec3 contact = {object[0] - dir[0] * behind, object[1] - dir[1] * behind, table_z};
+    // lateral error of the gripper from the goal line through the object
+    const Vec3 rel = Sub(grip, object);
+    const double along = rel[0] * dir[0] + rel[1] * dir[1];
+    const double lateral = std::abs(rel[0] * dir[1] - rel[1] * dir[0]);
+
+    if (phase_ == kLineUp) {
+      const Vec3 above = {contact[0], contact[1], table_z + 0.06};
+      if (NormXY(Sub(grip, contact)) > 0.012) {
+        // travel high so the gripper never sweeps the object off its line
+        if (grip[2] < table_z + 0.04 && NormXY(Sub(grip, contact)) > 0.03) {
+          return Toward(grip, {grip[0], grip[1], table_z + 0.07}, 0.0);
+        }
+        return Toward(grip, above, 0.0);
+      }
+      if (grip[2] > table_z + 0.01) return Toward(grip, contact, 0.0);
+      phase_ = kDrive;
+    }
+    if (phase_ == kDrive && (lateral > 0.03 || along > -0.01)) {
+      phase_ = kLineUp;  // lost the object: line up again
+      return Toward(grip, {grip[0], grip[1], table_z + 0.07}, 0.0);
+    }
+    if (slide_) {
+      // strike: accelerate along the line for a few steps at a speed set by the distance,
+      // then stop dead and let the puck slide
+      if (strike_steps_ < kStrikeSteps) {
+        ++strike_steps_;
+        const double speed = std::clamp(0.18 + 0.9 * dist, 0.2, 1.0);
+        Action a;
+        a.value = {dir[0] * speed, dir[1] * speed, (table_z - grip[2]) / kStep, 0.0};
+        return a;
+      }
+      return Toward(grip, grip, 0.0);
+    }
+    // push: aim the gripper at the spot behind the goal, slowing down near it
+    const Vec3 target = {goal[0] - dir[0] * behind, goal[1] - dir[1] * behind, table_z};
+    const double speed = std::clamp(dist / 0.1, 0.15, 0.6);
+    return Toward(grip, target, 0.0, speed);
+  }
+  std::string name() const override { return "scripted"; }
+
+ private:
+  enum Phase { kLineUp, kDrive };
+  static constexpr int kStrikeSteps = 4;
+  bool slide_;
+  Phase phase_ = kLineUp;
+  int strike_steps_ = 0;
+};
+
+// PickAndPlace: open above the block, descend, close, lift and carry to the goal.
+class ScriptedPickAndPlace : public Policy {
+ public:
+  void BeginEpisode(int, const Observation&) override {
+    phase_ = kAbove;
+    close_steps_ = 0;
+  }
+  Action Act(const Observation& obs, int) override {
+    const Vec3 grip = At(obs.observation, 0);
+    const Vec3 object = At(obs.observation, 3);
+    const Vec3 goal = obs.desired_goal;
+    const double opening = obs.observation[9] + obs.observation[10];
+    switch (phase_) {
+      case kAbove: {
+        const Vec3 above = {object[0], object[1], object[2] + 0.08};
+        if (Norm(Sub(grip, above)) > 0.01 || opening < 0.08) return Toward(grip, above, 1.0);
+        phase_ = kDescend;
+        [[fallthrough]];
+      }
+      case kDescend: {
+        const Vec3 at = {object[0], object[1], object[2] - 0.005};
+        if (Norm(Sub(grip, at)) > 0.008) return Toward(grip, at, 1.0, 0.6);
+        phase_ = kClose;
+        [[fallthrough]];
+      }
+      case kClose:
+        if (close_steps_++ < 4) return Toward(grip, {object[0], object[1], object[2] - 0.005}, -1.0);
+        phase_ = kCarry;
+        [[fallthrough]];
+      case kCarry: {
+        // lost the block (it is no longer between the fingers): start over
+        if (Norm(Sub(object, grip)) > 0.04) {
+          phase_ = kAbove;
+          close_steps_ = 0;
+          return Toward(grip, {grip[0], grip[1], grip[2] + 0.05}, 1.0);
+        }
+        Vec3 target = goal;
+        // lift first so the block does not drag on the table
+        if (grip[2] < object[2] + 0.005 && NormXY(Sub(goal, object)) > 0.02 && object[2] < 0.44) {
+          target = {grip[0], grip[1], grip[2] + 0.05};
+        }
+        return Toward(grip, target, -1.0);
+      }
+    }
+    return Toward(grip, grip, 0.0);
+  }
+  std::string name() const override { return "scripted"; }
+
+ private:
+  enum Phase { kAbove, kDescend, kClose, kCarry };
+  Phase phase_ = kAbove;
+  int close_steps_ = 0;
+};
+
+}  // namespace
+
+std::unique_ptr<Policy> MakeScriptedPolicy(const EnvSpec& env) {
+  switch (env.task) {
+    case Task::kReach:
+      return std::make_unique<ScriptedReach>();
+    case Task::kPush:
+      return std::make_unique<ScriptedPush>(false);
+    case Task::kSlide:
+      return std::make_unique<ScriptedPush>(true);
+    case Task::kPickAndPlace:
+      return std::make_unique<ScriptedPickAndPlace>();
+  }
+  return nullptr;
+}
+
+}  // namespace fetchscope

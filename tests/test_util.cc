@@ -1,0 +1,68 @@
+#include "tests/test_util.h"
+
+#include <sys/wait.h>
+
+#include <array>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <random>
+#include <sstream>
+
+namespace fetchscope::testing {
+
+CommandResult RunCommand(const std::string& command) {
+  CommandResult result{-1, ""};
+  std::string full = command + " 2>&1";
+  FILE* pipe = popen(full.c_str(), "r");
+  if (!pipe) return result;
+  std::array<char, 4096> buf;
+  size_t n;
+  while ((n = fread(buf.data(), 1, buf.size(), pipe)) > 0) result.output.append(buf.data(), n);
+  int status = pclose(pipe);
+  if (WIFEXITED(status)) {
+    result.exit_code = WEXITSTATUS(status);
+  } else if (WIFSIGNALED(status)) {
+    result.exit_code = 128 + WTERMSIG(status);
+  }
+  return result;
+}
+
+CommandResult RunFetchscope(const std::string& args) {
+  return RunCommand(std::string(FETCHSCOPE_BIN) + " " + args);
+}
+
+TempDir::TempDir() {
+  std::random_device rd;
+  for (int i = 0; i < 100; ++i) {
+    auto p = std::filesystem::temp_directory_path() /
+             ("fetchscope_test_" + std::to_string(rd()) + "_" + std::to_string(i));
+    if (std::filesystem::create_directory(p)) {
+      path_ = p;
+      return;
+    }
+  }
+  std::abort();
+}
+
+TempDir::~TempDir() {
+  std::error_code ec;
+  std::filesystem::remove_all(path_, ec);
+}
+
+std::filesystem::path GenuineAssetsDir() {
+  std::filesystem::path p = std::filesystem::path(FETCHSCOPE_SHARED_DIR) / "gymnasium-robotics-assets";
+  if (std::filesystem::exists(p / "fetch" / "reach.xml")) return std::filesystem::canonical(p);
+  return {};
+}
+
+std::filesystem::path SourceDir() { return FETCHSCOPE_SOURCE_DIR; }
+
+std::string ReadFile(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+}  // namespace fetchscope::testing

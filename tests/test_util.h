@@ -1,0 +1,45 @@
+// Helpers shared by the test binaries: temp folders, running the CLI.
+#pragma once
+
+#include <filesystem>
+#include <string>
+
+namespace fetchscope::testing {
+
+/// Result of running a shell command.
+struct CommandResult {
+  int exit_code;       ///< exit status (128+signal if killed)
+  std::string output;  ///< stdout and stderr together
+};
+
+/// Runs `fetchscope ARGS` (the built binary) through /bin/sh and captures its output.
+CommandResult RunFetchscope(const std::string& args);
+
+/// Runs an arbitrary shell command and captures its output.
+CommandResult RunCommand(const std::string& command);
+
+/// A fresh empty folder under the system temp dir, removed on destruction.
+class TempDir {
+ public:
+  TempDir();
+  ~TempDir();
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+  /// The folder.
+  const std::filesystem::path& path() const { return path_; }
+
+ private:
+  std::filesystem::path path_;
+};
+
+/// The genuine Gymnasium-Robotics assets folder (../shared/gymnasium-robotics-assets),
+/// or empty if absent (tests then GTEST_SKIP).
+std::filesystem::path GenuineAssetsDir();
+
+/// The project's source folder.
+std::filesystem::path SourceDir();
+
+/// Reads a whole file into a string (empty if missing).
+std::string ReadFile(const std::filesystem::path& path);
+
+}  // namespace fetchscope::testing
