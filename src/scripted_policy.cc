@@ -41,7 +41,8 @@ class ScriptedPush : public Policy {
   explicit ScriptedPush(bool slide) : slide_(slide) {}
   void BeginEpisode(int, const Observation&) override {
     phase_ = kLineUp;
-    strike_steps_ = 0;
+    released_ = false;
+    last_grip_ = {0, 0, 0};
   }
   Action Act(const Observation& obs, int) override {
     const Vec3 grip = At(obs.observation, 0);
@@ -53,19 +54,23 @@ class ScriptedPush : public Policy {
     if (dist < 1e-6) return Toward(grip, grip, 0.0);
     const Vec3 dir = {to_goal[0] / dist, to_goal[1] / dist, 0};
     const double table_z = object[2];  // push at the object's centre height
-    const double behind = 0.055;       // gripper centre behind the object centre
+    const double behind = 0.045;       // gripper centre behind the object centre
     const Vec3 contact = {object[0] - dir[0] * behind, object[1] - dir[1] * behind, table_z};
     // lateral error of the gripper from the goal line through the object
     const Vec3 rel = Sub(grip, object);
     const double along = rel[0] * dir[0] + rel[1] * dir[1];
     const double lateral = std::abs(rel[0] * dir[1] - rel[1] * dir[0]);
 
+    // the arm cannot always reach the exact spot (far side of the table): accept a gripper
+    // that has stopped within 3 cm of it
+    const bool stuck = NormXY(Sub(grip, last_grip_)) < 0.002 && NormXY(Sub(grip, contact)) < 0.03;
+    last_grip_ = grip;
     if (phase_ == kLineUp) {
-      const Vec3 above = {contact[0], contact[1], table_z + 0.06};
-      if (NormXY(Sub(grip, contact)) > 0.012) {
+      const Vec3 above = {contact[0], contact[1], table_z + 0.055};
+      if (NormXY(Sub(grip, contact)) > 0.012 && !stuck) {
         // travel high so the gripper never sweeps the object off its line
         if (grip[2] < table_z + 0.04 && NormXY(Sub(grip, contact)) > 0.03) {
-          return Toward(grip, {grip[0], grip[1], table_z + 0.07}, 0.0);
+          return Toward(grip, {grip[0], grip[1], table_z + 0.06}, 0.0);
         }
         return Toward(grip, above, 0.0);
       }
@@ -77,16 +82,20 @@ class ScriptedPush : public Policy {
       return Toward(grip, {grip[0], grip[1], table_z + 0.07}, 0.0);
     }
     if (slide_) {
-      // strike: accelerate along the line for a few steps at a speed set by the distance,
-      // then stop dead and let the puck slide
-      if (strike_steps_ < kStrikeSteps) {
-        ++strike_steps_;
-        const double speed = std::clamp(0.18 + 0.9 * dist, 0.2, 1.0);
-        Action a;
-        a.value = {dir[0] * speed, dir[1] * speed, (table_z - grip[2]) / kStep, 0.0};
-        return a;
+      // drive the puck along the line until its own speed would carry it to the goal
+      // (sliding distance v^2 / (2 mu g)), then stop dead and let it slide
+      const std::vector<double>& o = obs.observation;
+      const double vx = (o[14] + o[20]) / kDt, vy = (o[15] + o[21]) / kDt;
+      const double puck_speed = std::hypot(vx, vy);
+      const double glide = puck_speed * puck_speed / (2 * kSlideFriction * 9.81);
+      if (released_ || glide >= dist) {
+        released_ = true;
+        return Toward(grip, grip, 0.0);
       }
-      return Toward(grip, grip, 0.0);
+      const double speed = std::clamp(std::sqrt(2 * kSlideFriction * 9.81 * dist) / (kStep / kDt) * 1.3, 0.3, 1.0);
+      Action a;
+      a.value = {dir[0] * speed, dir[1] * speed, (table_z - 0.01 - grip[2]) / kStep, 0.0};
+      return a;
     }
     // push: aim the gripper at the spot behind the goal, slowing down near it
     const Vec3 target = {goal[0] - dir[0] * behind, goal[1] - dir[1] * behind, table_z};
@@ -97,10 +106,12 @@ class ScriptedPush : public Policy {
 
  private:
   enum Phase { kLineUp, kDrive };
-  static constexpr int kStrikeSteps = 4;
+  static constexpr double kDt = 0.04;            // s per env step
+  static constexpr double kSlideFriction = 0.1;  // puck-table sliding friction, calibrated
+  bool released_ = false;
   bool slide_;
   Phase phase_ = kLineUp;
-  int strike_steps_ = 0;
+  Vec3 last_grip_{};
 };
 
 // PickAndPlace: open above the block, descend, close, lift and carry to the goal.
