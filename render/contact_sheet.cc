@@ -1,0 +1,198 @@
+#include "render/contact_sheet.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <string>
+
+#include "src/errors.h"
+
+namespace fetchscope {
+namespace {
+
+constexpr int kMinTileWidth = 16;
+constexpr int kMaxTileWidth = 4096;
+constexpr int kLabelLines = 2;
+constexpr int kLabelPadding = 3;  // left and top inset of label text, pixels
+
+// Source pixels that cover one destination pixel, with their box-filter weights.
+struct Span {
+  int first = 0;
+  std::vector<double> weights;  // weights[k] is for source index first + k; they sum to 1
+};
+
+// Box-filter spans mapping `source` samples onto `destination` samples: each
+// destination pixel averages the source interval it covers, partial pixels
+// weighted by overlap. Works for up- and downscaling alike.
+std::vector<Span> BoxSpans(int source, int destination) {
+  std::vector<Span> spans(destination);
+  const double step = static_cast<double>(source) / destination;
+  for (int i = 0; i < destination; ++i) {
+    const double lo = i * step, hi = std::min((i + 1) * step, static_cast<double>(source));
+    Span& span = spans[i];
+    span.first = std::min(static_cast<int>(std::floor(lo)), source - 1);
+    double total = 0;
+    for (int j = span.first; j < source && j < hi; ++j) {
+      const double overlap = std::min(hi, j + 1.0) - std::max(lo, static_cast<double>(j));
+      if (overlap <= 0) continue;
+      span.weights.push_back(overlap);
+      total += overlap;
+    }
+    for (double& w : span.weights) w /= total;
+  }
+  return spans;
+}
+
+// Box-filters `tile` to out_width x out_height and writes it at (x0, y0) of
+// the sheet (which is large enough).
+void PasteScaled(const SheetTile& tile, int out_width, int out_height, SheetImage* sheet, int x0,
+                 int y0) {
+  const std::vector<Span> columns = BoxSpans(tile.width, out_width);
+  const std::vector<Span> rows = BoxSpans(tile.height, out_height);
+  // Horizontal pass over every source row, then vertical pass.
+  std::vector<double> narrow(static_cast<std::size_t>(tile.height) * out_width * 3);
+  for (int y = 0; y < tile.height; ++y) {
+    const uint8_t* in = tile.rgb.data() + static_cast<std::size_t>(y) * tile.width * 3;
+    double* out = narrow.data() + static_cast<std::size_t>(y) * out_width * 3;
+    for (int x = 0; x < out_width; ++x) {
+      const Span& span = columns[x];
+      double r = 0, g = 0, b = 0;
+      for (std::size_t k = 0; k < span.weights.size(); ++k) {
+        const uint8_t* p = in + (span.first + k) * 3;
+        r += span.weights[k] * p[0];
+        g += span.weights[k] * p[1];
+        b += span.weights[k] * p[2];
+      }
+      out[x * 3 + 0] = r;
+      out[x * 3 + 1] = g;
+      out[x * 3 + 2] = b;
+    }
+  }
+  for (int y = 0; y < out_height; ++y) {
+    const Span& span = rows[y];
+    uint8_t* out = sheet->rgb.data() + (static_cast<std::size_t>(y0 + y) * sheet->width + x0) * 3;
+    for (int x = 0; x < out_width * 3; ++x) {
+      double value = 0;
+      for (std::size_t k = 0; k < span.weights.size(); ++k) {
+        value += span.weights[k] * narrow[(span.first + k) * out_width * 3 + x];
+      }
+      out[x] = static_cast<uint8_t>(std::clamp(std::lround(value), 0L, 255L));
+    }
+  }
+}
+
+void FillRect(SheetImage* image, int x0, int y0, int width, int height, Rgb color) {
+  for (int y = y0; y < y0 + height; ++y) {
+    uint8_t* p = image->rgb.data() + (static_cast<std::size_t>(y) * image->width + x0) * 3;
+    for (int x = 0; x < width; ++x, p += 3) {
+      p[0] = color.r;
+      p[1] = color.g;
+      p[2] = color.b;
+    }
+  }
+}
+
+// Cuts `line` so it is at most `max_width` pixels wide at `scale`, marking a
+// cut with "..".
+std::string FitLine(const std::string& line, int max_width, int scale) {
+  if (TextWidth(line, scale) <= max_width) return line;
+  std::string cut = line;
+  while (!cut.empty() && TextWidth(cut + "..", scale) > max_width) cut.pop_back();
+  return cut.empty() ? std::string() : cut + "..";
+}
+
+// The first kLabelLines lines of `label`, each fitted to `max_width`.
+std::string FitLabel(const std::string& label, int max_width) {
+  std::string fitted;
+  std::size_t start = 0;
+  for (int line = 0; line < kLabelLines && start <= label.size(); ++line) {
+    const std::size_t end = std::min(label.find('\n', start), label.size());
+    if (line > 0) fitted += '\n';
+    fitted += FitLine(label.substr(start, end - start), max_width, kSheetLabelScale);
+    start = end + 1;
+  }
+  return fitted;
+}
+
+int ScaledHeight(const SheetTile& tile, int tile_width) {
+  const long rounded = std::lround(static_cast<double>(tile.height) * tile_width / tile.width);
+  return static_cast<int>(std::max(1L, rounded));
+}
+
+}  // namespace
+
+SheetImage MakeContactSheet(const std::string& title, const std::vector<SheetTile>& tiles,
+                            int tile_width, int columns) {
+  if (tile_width < kMinTileWidth || tile_width > kMaxTileWidth) {
+    throw UsageError("contact sheet tile width " + std::to_string(tile_width) +
+                     " is out of range: accepted " + std::to_string(kMinTileWidth) + ".." +
+                     std::to_string(kMaxTileWidth));
+  }
+  if (columns < 0) {
+    throw UsageError("contact sheet columns " + std::to_string(columns) +
+                     " is negative: give 0 (automatic) or more");
+  }
+  const int n = static_cast<int>(tiles.size());
+  for (int i = 0; i < n; ++i) {
+    const SheetTile& tile = tiles[i];
+    const bool valid = tile.width > 0 && tile.height > 0 &&
+                       tile.rgb.size() == static_cast<std::size_t>(tile.width) * tile.height * 3;
+    if (!valid) {
+      throw RunError("contact sheet tile " + std::to_string(i) + " (" + tile.label + ") is " +
+                     std::to_string(tile.width) + "x" + std::to_string(tile.height) + " with " +
+                     std::to_string(tile.rgb.size()) + " bytes: expected width * height * 3 > 0");
+    }
+  }
+
+  if (columns == 0) columns = static_cast<int>(std::ceil(std::sqrt(static_cast<double>(n))));
+  columns = std::max(1, std::min(columns, n));
+  const int rows = (n + columns - 1) / columns;
+  int cell_height = 0;
+  for (const SheetTile& tile : tiles)
+    cell_height = std::max(cell_height, ScaledHeight(tile, tile_width));
+
+  SheetImage sheet;
+  sheet.width = kSheetMargin + columns * (tile_width + kSheetMargin);
+  sheet.height = kSheetTitleBarHeight + rows * (kSheetMargin + cell_height + kSheetLabelBarHeight) +
+                 kSheetMargin;
+  sheet.rgb.resize(static_cast<std::size_t>(sheet.width) * sheet.height * 3);
+  FillRect(&sheet, 0, 0, sheet.width, sheet.height, kSheetBackground);
+
+  // A long title drops to the label size before it is cut.
+  const int title_room = sheet.width - 2 * kSheetMargin;
+  const std::string first_line = title.substr(0, title.find('\n'));
+  const int title_scale =
+      TextWidth(first_line, kSheetTitleScale) <= title_room ? kSheetTitleScale : kSheetLabelScale;
+  const int title_y = kSheetMargin;  // inset from the top as from the left
+  DrawText(sheet.rgb.data(), sheet.width, sheet.height, kSheetMargin, title_y,
+           FitLine(first_line, title_room, title_scale), title_scale, kSheetText);
+
+  const int label_room = tile_width - 2 * kLabelPadding;
+  for (int i = 0; i < n; ++i) {
+    const int x0 = kSheetMargin + (i % columns) * (tile_width + kSheetMargin);
+    const int y0 = kSheetTitleBarHeight + kSheetMargin +
+                   (i / columns) * (kSheetMargin + cell_height + kSheetLabelBarHeight);
+    PasteScaled(tiles[i], tile_width, ScaledHeight(tiles[i], tile_width), &sheet, x0, y0);
+    const int bar_y = y0 + cell_height;
+    FillRect(&sheet, x0, bar_y, tile_width, kSheetLabelBarHeight, kSheetLabelBar);
+    DrawText(sheet.rgb.data(), sheet.width, sheet.height, x0 + kLabelPadding, bar_y + kLabelPadding,
+             FitLabel(tiles[i].label, label_room), kSheetLabelScale, kSheetText);
+  }
+  return sheet;
+}
+
+std::vector<int> SheetFrameIndices(int num_frames, int every) {
+  if (every < 0) {
+    throw UsageError("contact sheet frame step " + std::to_string(every) +
+                     " is negative: give 0 (about 12 tiles) or a step in frames");
+  }
+  std::vector<int> indices;
+  if (num_frames <= 0) return indices;
+  const int last = num_frames - 1;
+  if (every == 0) every = std::max(1, (last + 10) / 11);  // ceil(last / 11): 12 tiles at most
+  for (int i = 0; i < last; i += every) indices.push_back(i);
+  indices.push_back(last);
+  return indices;
+}
+
+}  // namespace fetchscope

@@ -1,0 +1,62 @@
+// Contact sheets: a grid of downscaled frames with a label under each and a
+// title on top, as one RGB image (written to PNG by the caller).
+//
+// Layout, all in pixels (M = kSheetMargin, T = kSheetTitleBarHeight,
+// L = kSheetLabelBarHeight, W = tile_width, H = tallest scaled tile):
+//   width  = M + columns * (W + M)
+//   height = T + rows * (M + H + L) + M
+// Tile i sits in row i / columns, column i % columns, its top-left corner at
+// (M + column * (W + M), T + M + row * (M + H + L)); its label bar is the W x L
+// strip right under the H rows of the cell.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "render/bitmap_font.h"
+
+namespace fetchscope {
+
+inline constexpr int kSheetMargin = 8;                 ///< gap around and between cells, pixels
+inline constexpr int kSheetTitleBarHeight = 28;        ///< title band at the top, pixels
+inline constexpr int kSheetLabelBarHeight = 24;        ///< band under each tile (2 lines), pixels
+inline constexpr int kSheetTitleScale = 2;             ///< font scale of the title
+inline constexpr int kSheetLabelScale = 1;             ///< font scale of the labels
+inline constexpr Rgb kSheetBackground = {24, 24, 28};  ///< behind everything
+inline constexpr Rgb kSheetLabelBar = {44, 44, 50};    ///< label band fill
+inline constexpr Rgb kSheetText = {235, 235, 235};     ///< title and label text
+
+/// One frame for the sheet.
+struct SheetTile {
+  std::vector<uint8_t> rgb;  ///< RGB24, width * height * 3 bytes, row 0 = top
+  int width = 0;             ///< pixels
+  int height = 0;            ///< pixels
+  std::string label;         ///< up to 2 lines separated by '\n'; longer lines are cut with ".."
+};
+
+/// An RGB24 image, row 0 = top.
+struct SheetImage {
+  int width = 0;             ///< pixels
+  int height = 0;            ///< pixels
+  std::vector<uint8_t> rgb;  ///< width * height * 3 bytes
+};
+
+/// Lays `tiles` out in a grid, in order, row by row: `columns` per row
+/// (0 = ceil(sqrt(n)); never more than n), each tile scaled to `tile_width`
+/// pixels wide keeping its aspect (box filter: every source pixel counts, so
+/// thin lines survive downscaling), its label in a bar underneath and `title`
+/// on top (cut with ".." if wider than the sheet). Throws UsageError for
+/// tile_width outside 16..4096 or negative columns, RunError for a tile whose
+/// buffer does not match its size (naming the tile).
+SheetImage MakeContactSheet(const std::string& title, const std::vector<SheetTile>& tiles,
+                            int tile_width = 240, int columns = 0);
+
+/// Which frames go on the sheet of an episode with `num_frames` frames
+/// (frame 0 = reset, frame num_frames - 1 = last step: T + 1 frames for T
+/// steps): every `every`-th from 0, and the last frame always. `every` = 0
+/// picks about 12 tiles: every ceil((num_frames - 1) / 11)-th. Empty for
+/// num_frames <= 0; throws UsageError for negative `every`.
+std::vector<int> SheetFrameIndices(int num_frames, int every);
+
+}  // namespace fetchscope

@@ -1,0 +1,432 @@
+#include "render/video_writer.h"
+
+#include <algorithm>
+#include <array>
+#include <cerrno>
+#include <cstdarg>
+#include <cstring>
+#include <filesystem>
+#include <mutex>
+#include <system_error>
+#include <utility>
+#include <vector>
+
+#include "render/av_handles.h"
+#include "src/errors.h"
+
+extern "C" {
+#include <libavutil/error.h>
+#include <libavutil/imgutils.h>
+#include <libavutil/log.h>
+}
+
+namespace fetchscope {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr int kMaxDimension = 8192;
+constexpr int kMaxFps = 1000;
+constexpr const char* kAcceptedCodecs = "auto, libx264, h264_nvenc";
+constexpr std::array<const char*, 10> kX264Presets = {
+    "ultrafast", "superfast", "veryfast", "faster",   "fast",
+    "medium",    "slow",      "slower",   "veryslow", "placebo"};
+// The nearest NVENC preset (p1 fastest .. p7 best) for each x264 name above.
+constexpr std::array<const char*, 10> kNvencPresets = {"p1", "p1", "p2", "p3", "p3",
+                                                       "p4", "p5", "p6", "p7", "p7"};
+
+// FFmpeg logs through a process-wide callback. Ours prints nothing (encoders
+// and the muxer are chatty) and keeps the last error line of each thread, so
+// a failure can quote FFmpeg's own reason. It must not throw: C calls it.
+thread_local char t_last_av_error[512];
+
+void CaptureAvLog(void* context, int level, const char* format, va_list args) noexcept {
+  if (level > AV_LOG_ERROR) return;
+  char line[sizeof(t_last_av_error)];
+  int print_prefix = 0;
+  if (av_log_format_line2(context, level, format, args, line, sizeof(line), &print_prefix) < 0) {
+    return;
+  }
+  std::size_t length = std::strlen(line);
+  while (length > 0 && (line[length - 1] == '\n' || line[length - 1] == ' ')) line[--length] = '\0';
+  if (length > 0) std::memcpy(t_last_av_error, line, length + 1);
+}
+
+void InstallAvLogCapture() {
+  static std::once_flag once;
+  std::call_once(once, [] { av_log_set_callback(CaptureAvLog); });
+}
+
+// Forgets earlier messages so the next one quoted belongs to this failure.
+void ClearLastAvError() { t_last_av_error[0] = '\0'; }
+
+// FFmpeg's last logged error for this thread when there is one (it says
+// more, e.g. "Cannot load libcuda.so.1"), else the text for `code`.
+std::string DescribeAvError(int code) {
+  if (t_last_av_error[0] != '\0') return t_last_av_error;
+  char buffer[AV_ERROR_MAX_STRING_SIZE] = {};
+  av_strerror(code, buffer, sizeof(buffer));
+  return buffer;
+}
+
+std::string Quoted(const std::string& s) { return "'" + s + "'"; }
+
+int PresetIndex(const std::string& preset) {
+  for (std::size_t i = 0; i < kX264Presets.size(); ++i) {
+    if (preset == kX264Presets[i]) return static_cast<int>(i);
+  }
+  return -1;
+}
+
+void ValidateOptions(const VideoOptions& options) {
+  auto in_range = [](int value, int low, int high) { return value >= low && value <= high; };
+  if (!in_range(options.width, 1, kMaxDimension) || !in_range(options.height, 1, kMaxDimension)) {
+    throw UsageError(
+        "video size " + std::to_string(options.width) + "x" + std::to_string(options.height) +
+        " is out of range: width and height must be 1.." + std::to_string(kMaxDimension));
+  }
+  if (!in_range(options.fps, 1, kMaxFps)) {
+    throw UsageError("video fps " + std::to_string(options.fps) + " is out of range: accepted 1.." +
+                     std::to_string(kMaxFps));
+  }
+  if (options.codec != "auto" && options.codec != "libx264" && options.codec != "h264_nvenc") {
+    throw UsageError("unknown video codec " + Quoted(options.codec) + ": accepted " +
+                     kAcceptedCodecs);
+  }
+  if (!in_range(options.crf, 0, 51)) {
+    throw UsageError(
+        "video crf " + std::to_string(options.crf) +
+        " is out of range: accepted 0..51 (lower is better quality, 23 is the default)");
+  }
+  if (!options.preset.empty() && PresetIndex(options.preset) < 0) {
+    std::string accepted;
+    for (const char* name : kX264Presets)
+      accepted += (accepted.empty() ? "" : ", ") + std::string(name);
+    throw UsageError("unknown video preset " + Quoted(options.preset) + ": accepted " + accepted);
+  }
+}
+
+// The folder that holds `path` ("." for a bare file name).
+fs::path FolderOf(const fs::path& path) {
+  return path.parent_path().empty() ? fs::path(".") : path.parent_path();
+}
+
+// Fails early, with the folder named, when the output folder cannot take the file.
+void CheckOutputFolder(const fs::path& final_path) {
+  const fs::path folder = FolderOf(final_path);
+  std::error_code error;
+  const fs::file_status status = fs::status(folder, error);
+  if (!fs::exists(status)) {
+    throw RunError("cannot write video " + Quoted(final_path.string()) + ": folder " +
+                   Quoted(folder.string()) + " does not exist");
+  }
+  if (!fs::is_directory(status)) {
+    throw RunError("cannot write video " + Quoted(final_path.string()) + ": " +
+                   Quoted(folder.string()) + " is not a folder");
+  }
+  if (fs::is_directory(final_path, error)) {
+    throw RunError("cannot write video " + Quoted(final_path.string()) + ": it is a folder");
+  }
+}
+
+// ".<stem>.partial.mp4" beside the final file: hidden, and never mistaken for
+// a finished video by a glob on "*_000.mp4".
+fs::path TemporaryPathFor(const fs::path& final_path) {
+  return final_path.parent_path() / ("." + final_path.stem().string() + ".partial.mp4");
+}
+
+// Removes the file it was given (Adopt) on destruction unless Release()d.
+class TemporaryFile {
+ public:
+  TemporaryFile() = default;
+  ~TemporaryFile() {
+    if (!path_.empty()) {
+      std::error_code ignored;
+      fs::remove(path_, ignored);
+    }
+  }
+  TemporaryFile(const TemporaryFile&) = delete;
+  TemporaryFile& operator=(const TemporaryFile&) = delete;
+  void Adopt(fs::path path) { path_ = std::move(path); }
+  const fs::path& path() const { return path_; }
+  void Release() { path_.clear(); }
+
+ private:
+  fs::path path_;
+};
+
+}  // namespace
+
+struct VideoWriter::Impl {
+  Impl(const std::string& path, const VideoOptions& options);
+  void OpenEncoder();
+  bool TryOpenEncoder(const std::string& name, std::string* failure);
+  void OpenOutput();
+  void ConvertFrame(const uint8_t* rgb);
+  void SendFrame(const AVFrame* frame);
+  void Finish();
+
+  std::string final_path;
+  VideoOptions options;
+  int encoded_width;
+  int encoded_height;
+  // Declared before the FFmpeg objects so it is destroyed after them: the file
+  // is closed before it is removed.
+  TemporaryFile temporary;
+  std::string codec_name;
+  CodecContextPtr encoder;
+  OutputFormatContextPtr muxer;
+  AVStream* stream = nullptr;   // owned by muxer
+  FramePtr frame;               // one YUV frame reused for every AddFrame
+  PacketPtr packet;             // one packet reused for every encoded output
+  SwsContextPtr converter;      // RGB24 -> yuv420p, BT.709 limited range
+  std::vector<uint8_t> padded;  // RGB with the odd row/column repeated; empty when even
+  int frames_written = 0;
+  bool finished = false;
+};
+
+VideoWriter::Impl::Impl(const std::string& path, const VideoOptions& opts)
+    : final_path(path),
+      options(opts),
+      encoded_width((opts.width + 1) & ~1),
+      encoded_height((opts.height + 1) & ~1) {
+  ValidateOptions(options);
+  if (options.preset.empty()) options.preset = kDefaultVideoPreset;
+  if (path.empty()) throw UsageError("video path is empty: give a file name ending in .mp4");
+  CheckOutputFolder(path);
+  InstallAvLogCapture();
+  OpenEncoder();
+  OpenOutput();
+
+  frame.reset(av_frame_alloc());
+  packet.reset(av_packet_alloc());
+  if (!frame || !packet) throw RunError("out of memory allocating video frame buffers");
+  frame->format = AV_PIX_FMT_YUV420P;
+  frame->width = encoded_width;
+  frame->height = encoded_height;
+  frame->color_range = AVCOL_RANGE_MPEG;
+  frame->colorspace = AVCOL_SPC_BT709;
+  if (int rc = av_frame_get_buffer(frame.get(), 0); rc < 0) {
+    throw RunError("cannot allocate a " + std::to_string(encoded_width) + "x" +
+                   std::to_string(encoded_height) + " video frame: " + DescribeAvError(rc));
+  }
+
+  converter.reset(sws_getContext(encoded_width, encoded_height, AV_PIX_FMT_RGB24, encoded_width,
+                                 encoded_height, AV_PIX_FMT_YUV420P,
+                                 SWS_BILINEAR | SWS_ACCURATE_RND, nullptr, nullptr, nullptr));
+  if (!converter)
+    throw RunError("cannot create the RGB to yuv420p converter: " + DescribeAvError(0));
+  // sRGB content gets BT.709 coefficients and limited range, matching the tags
+  // set on the stream, so players show the colours that were rendered.
+  const int* bt709 = sws_getCoefficients(SWS_CS_ITU709);
+  sws_setColorspaceDetails(converter.get(), bt709, /*srcRange=*/1, bt709, /*dstRange=*/0,
+                           /*brightness=*/0, /*contrast=*/1 << 16, /*saturation=*/1 << 16);
+
+  if (encoded_width != options.width || encoded_height != options.height) {
+    padded.resize(static_cast<std::size_t>(encoded_width) * encoded_height * 3);
+  }
+}
+
+void VideoWriter::Impl::OpenEncoder() {
+  const bool automatic = options.codec == "auto";
+  std::string failure;
+  if (automatic || options.codec == "h264_nvenc") {
+    if (TryOpenEncoder("h264_nvenc", &failure)) return;
+    if (!automatic) {
+      throw RunError("video codec h264_nvenc: NVENC is unavailable (" + failure +
+                     "); use --codec libx264");
+    }
+  }
+  if (!TryOpenEncoder("libx264", &failure)) {
+    throw RunError("video codec libx264 cannot open (" + failure +
+                   "); install a libavcodec built with libx264 (Debian's libavcodec59 is)");
+  }
+}
+
+bool VideoWriter::Impl::TryOpenEncoder(const std::string& name, std::string* failure) {
+  ClearLastAvError();
+  const AVCodec* codec = avcodec_find_encoder_by_name(name.c_str());
+  if (codec == nullptr) {
+    *failure = "this libavcodec has no " + name + " encoder";
+    return false;
+  }
+  CodecContextPtr context(avcodec_alloc_context3(codec));
+  if (!context) {
+    *failure = "out of memory";
+    return false;
+  }
+  context->width = encoded_width;
+  context->height = encoded_height;
+  context->pix_fmt = AV_PIX_FMT_YUV420P;
+  context->time_base = AVRational{1, options.fps};
+  context->framerate = AVRational{options.fps, 1};
+  context->sample_aspect_ratio = AVRational{1, 1};
+  // A keyframe every 2 s keeps scrubbing through an episode quick.
+  context->gop_size = 2 * options.fps;
+  context->color_range = AVCOL_RANGE_MPEG;
+  context->colorspace = AVCOL_SPC_BT709;
+  context->color_primaries = AVCOL_PRI_BT709;
+  context->color_trc = AVCOL_TRC_BT709;
+  // MP4 keeps SPS/PPS in the avcC box rather than in the stream.
+  context->flags |= AV_CODEC_FLAG_GLOBAL_HEADER;
+
+  const int preset_index = PresetIndex(options.preset);
+  AvDictionary codec_options;
+  if (name == "h264_nvenc") {
+    // Constant-quality VBR is NVENC's nearest match to x264's crf (cq 0 means
+    // "automatic" there, so crf 0 asks for the best fixed quality instead).
+    codec_options.Set("preset", kNvencPresets[preset_index]);
+    codec_options.Set("rc", "vbr");
+    codec_options.Set("cq", std::to_string(std::max(options.crf, 1)));
+    context->bit_rate = 0;
+  } else {
+    codec_options.Set("preset", options.preset);
+    codec_options.Set("crf", std::to_string(options.crf));
+  }
+  if (int rc = avcodec_open2(context.get(), codec, codec_options.address()); rc < 0) {
+    *failure = DescribeAvError(rc);
+    return false;
+  }
+  encoder = std::move(context);
+  codec_name = name;
+  return true;
+}
+
+void VideoWriter::Impl::OpenOutput() {
+  const fs::path temp_path = TemporaryPathFor(final_path);
+  AVFormatContext* raw = nullptr;
+  ClearLastAvError();
+  // The format is named: the muxer must not guess it from the temporary name.
+  if (int rc = avformat_alloc_output_context2(&raw, nullptr, "mp4", temp_path.c_str()); rc < 0) {
+    throw RunError("cannot create an MP4 muxer: " + DescribeAvError(rc));
+  }
+  muxer.reset(raw);
+  stream = avformat_new_stream(muxer.get(), nullptr);
+  if (stream == nullptr) throw RunError("cannot add a video stream to the MP4 muxer");
+  if (int rc = avcodec_parameters_from_context(stream->codecpar, encoder.get()); rc < 0) {
+    throw RunError("cannot copy encoder parameters to the MP4 stream: " + DescribeAvError(rc));
+  }
+  stream->time_base = encoder->time_base;
+  stream->avg_frame_rate = encoder->framerate;
+  stream->r_frame_rate = encoder->framerate;
+
+  if (int rc = avio_open(&muxer->pb, temp_path.c_str(), AVIO_FLAG_WRITE); rc < 0) {
+    throw RunError("cannot write video " + Quoted(final_path) + ": cannot create a file in " +
+                   Quoted(FolderOf(temp_path).string()) + " (" + DescribeAvError(rc) + ")");
+  }
+  temporary.Adopt(temp_path);
+
+  AvDictionary muxer_options;
+  // faststart: after the last frame the muxer moves the index (moov) in front
+  // of the data, so a browser can start playing before the whole file arrives.
+  muxer_options.Set("movflags", "+faststart");
+  if (int rc = avformat_write_header(muxer.get(), muxer_options.address()); rc < 0) {
+    throw RunError("cannot write the MP4 header of " + Quoted(temp_path.string()) + ": " +
+                   DescribeAvError(rc));
+  }
+}
+
+void VideoWriter::Impl::ConvertFrame(const uint8_t* rgb) {
+  const uint8_t* source = rgb;
+  if (!padded.empty()) {
+    // yuv420p needs even sizes: repeat the last column and/or row.
+    const std::size_t in_row = static_cast<std::size_t>(options.width) * 3;
+    const std::size_t out_row = static_cast<std::size_t>(encoded_width) * 3;
+    for (int y = 0; y < encoded_height; ++y) {
+      const uint8_t* in = rgb + std::min(y, options.height - 1) * in_row;
+      uint8_t* out = padded.data() + y * out_row;
+      std::memcpy(out, in, in_row);
+      if (encoded_width != options.width) std::memcpy(out + in_row, in + in_row - 3, 3);
+    }
+    source = padded.data();
+  }
+  // The encoder released its reference when it consumed the previous frame,
+  // so this normally keeps the same buffers (no per-frame allocation).
+  if (int rc = av_frame_make_writable(frame.get()); rc < 0) {
+    throw RunError("cannot reuse the video frame buffer: " + DescribeAvError(rc));
+  }
+  const uint8_t* const planes[1] = {source};
+  const int strides[1] = {encoded_width * 3};
+  sws_scale(converter.get(), planes, strides, 0, encoded_height, frame->data, frame->linesize);
+}
+
+// Sends `input` (nullptr: flush) and writes every packet the encoder has ready.
+void VideoWriter::Impl::SendFrame(const AVFrame* input) {
+  ClearLastAvError();
+  if (int rc = avcodec_send_frame(encoder.get(), input); rc < 0) {
+    throw RunError("video encoder " + codec_name + " rejected frame " +
+                   std::to_string(frames_written) + ": " + DescribeAvError(rc));
+  }
+  while (true) {
+    const int rc = avcodec_receive_packet(encoder.get(), packet.get());
+    if (rc == AVERROR(EAGAIN) || rc == AVERROR_EOF) return;
+    if (rc < 0) {
+      throw RunError("video encoder " + codec_name + " failed: " + DescribeAvError(rc));
+    }
+    av_packet_rescale_ts(packet.get(), encoder->time_base, stream->time_base);
+    packet->stream_index = stream->index;
+    // Takes the packet's reference and leaves it blank for the next one.
+    if (int write_rc = av_interleaved_write_frame(muxer.get(), packet.get()); write_rc < 0) {
+      throw RunError("cannot write video " + Quoted(temporary.path().string()) + ": " +
+                     DescribeAvError(write_rc));
+    }
+  }
+}
+
+void VideoWriter::Impl::Finish() {
+  if (finished) return;
+  if (frames_written == 0) {
+    throw RunError("video " + Quoted(final_path) + " has no frames: nothing written");
+  }
+  SendFrame(nullptr);
+  ClearLastAvError();
+  if (int rc = av_write_trailer(muxer.get()); rc < 0) {
+    throw RunError("cannot finish video " + Quoted(temporary.path().string()) + ": " +
+                   DescribeAvError(rc));
+  }
+  if (int rc = avio_closep(&muxer->pb); rc < 0) {
+    throw RunError("cannot close video " + Quoted(temporary.path().string()) + ": " +
+                   DescribeAvError(rc));
+  }
+  std::error_code error;
+  fs::rename(temporary.path(), final_path, error);
+  if (error) {
+    throw RunError("cannot rename " + Quoted(temporary.path().string()) + " to " +
+                   Quoted(final_path) + ": " + error.message());
+  }
+  temporary.Release();
+  finished = true;
+  // The encoder's and scaler's memory is no longer needed.
+  converter.reset();
+  frame.reset();
+  packet.reset();
+  encoder.reset();
+  muxer.reset();
+}
+
+VideoWriter::VideoWriter(const std::string& path, const VideoOptions& options)
+    : impl_(std::make_unique<Impl>(path, options)) {}
+
+VideoWriter::~VideoWriter() = default;
+VideoWriter::VideoWriter(VideoWriter&& other) noexcept = default;
+VideoWriter& VideoWriter::operator=(VideoWriter&& other) noexcept = default;
+
+void VideoWriter::AddFrame(const uint8_t* rgb) {
+  if (impl_->finished) {
+    throw RunError("video " + Quoted(impl_->final_path) +
+                   " is already finished: cannot add frames");
+  }
+  impl_->ConvertFrame(rgb);
+  impl_->frame->pts = impl_->frames_written;
+  impl_->SendFrame(impl_->frame.get());
+  ++impl_->frames_written;
+}
+
+void VideoWriter::Finish() { impl_->Finish(); }
+int VideoWriter::frames_written() const { return impl_->frames_written; }
+const std::string& VideoWriter::codec_name() const { return impl_->codec_name; }
+int VideoWriter::encoded_width() const { return impl_->encoded_width; }
+int VideoWriter::encoded_height() const { return impl_->encoded_height; }
+const std::string& VideoWriter::path() const { return impl_->final_path; }
+
+}  // namespace fetchscope

@@ -1,0 +1,84 @@
+// H.264 MP4 writer on libavcodec/libavformat/libswscale: RGB frames in,
+// a file that browsers and players open (yuv420p, BT.709 tags, moov atom in
+// front) out. The file appears under its final name only when complete.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+
+namespace fetchscope {
+
+/// Encoder settings for VideoWriter.
+struct VideoOptions {
+  int width = 480;   ///< frame width given to AddFrame, pixels (1..8192)
+  int height = 480;  ///< frame height given to AddFrame, pixels (1..8192)
+  int fps = 25;      ///< frames per second (1..1000); frame i is shown at i / fps s
+  /// auto | libx264 | h264_nvenc; auto: h264_nvenc if it opens, else libx264.
+  std::string codec = "auto";
+  int crf = 23;  ///< quality 0..51, lower is better: libx264 crf, h264_nvenc cq (vbr)
+  /// libx264 preset name (ultrafast superfast veryfast faster fast medium slow
+  /// slower veryslow placebo); empty = kDefaultVideoPreset. h264_nvenc gets the
+  /// nearest of its p1..p7 (veryfast -> p2, medium -> p4, veryslow -> p7).
+  std::string preset = "";
+};
+
+/// The preset used when VideoOptions::preset is empty. "veryfast" encodes
+/// several times faster than x264's "medium" at a modest size cost, which
+/// suits rendered scenes (flat colours, little noise) and keeps encoding
+/// from dominating a record run.
+inline constexpr const char* kDefaultVideoPreset = "veryfast";
+
+/// Writes one H.264 MP4 file, frame by frame.
+///
+/// The encoder gets yuv420p, which needs even dimensions: an odd width or
+/// height is padded by one pixel that repeats the last column or row, so the
+/// encoded size is the frame size rounded up to even (encoded_width/height).
+/// Frame i gets pts i in time base 1/fps, so N frames last exactly N / fps s.
+/// The data goes to a temporary ".<stem>.partial.mp4" in the same folder and
+/// is renamed to `path` by Finish(); a writer destroyed unfinished removes it.
+/// Not thread-safe; separate writers may run on separate threads.
+class VideoWriter {
+ public:
+  /// Opens the encoder and the temporary output file. Throws UsageError for
+  /// bad options (naming the value and what is accepted) and RunError when the
+  /// folder of `path` is missing or unwritable, or when an explicitly named
+  /// encoder cannot open (h264_nvenc without an NVIDIA GPU/driver).
+  VideoWriter(const std::string& path, const VideoOptions& options);
+  /// Removes the temporary file if Finish() did not complete.
+  ~VideoWriter();
+  VideoWriter(const VideoWriter&) = delete;
+  VideoWriter& operator=(const VideoWriter&) = delete;
+  /// Moves leave `other` empty: its destructor does nothing.
+  VideoWriter(VideoWriter&& other) noexcept;
+  /// Moves; the writer replaced is destroyed first (its partial file removed).
+  VideoWriter& operator=(VideoWriter&& other) noexcept;
+
+  /// Encodes one RGB24 frame: options.width * options.height * 3 bytes,
+  /// rows top to bottom, no padding between rows. Throws RunError if encoding
+  /// or writing fails, or if the writer is finished.
+  void AddFrame(const uint8_t* rgb);
+
+  /// Flushes the encoder, writes the trailer (moov moved to the front:
+  /// faststart) and renames the file into place. Throws RunError on failure,
+  /// including a video with no frames (then the destructor still removes the
+  /// temporary file). Calling it again after success does nothing.
+  void Finish();
+
+  /// Frames passed to AddFrame so far.
+  int frames_written() const;
+  /// The encoder actually used: "libx264" or "h264_nvenc".
+  const std::string& codec_name() const;
+  /// Width in the file: options.width rounded up to even.
+  int encoded_width() const;
+  /// Height in the file: options.height rounded up to even.
+  int encoded_height() const;
+  /// The final path given to the constructor.
+  const std::string& path() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace fetchscope
