@@ -54,6 +54,11 @@ nlohmann::json VersionsJson() {
   return {{"fetchscope", FETCHSCOPE_VERSION}, {"mujoco", mj_versionString()}};
 }
 
+std::string& CommandLine() {
+  static std::string line;
+  return line;
+}
+
 int& ExitStatus() {
   static int status = 0;
   return status;

@@ -35,6 +35,9 @@ nlohmann::json VersionsJson();
 /// Exit status a subcommand asks for (0 unless it set one).
 int& ExitStatus();
 
+/// The command line as typed (set by main), recorded in manifests.
+std::string& CommandLine();
+
 /// Registration of each subcommand (one file each).
 void RegisterListEnvs(CLI::App& app);
 void RegisterDescribe(CLI::App& app);

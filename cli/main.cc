@@ -15,6 +15,7 @@ int main(int argc, char** argv) {
       "fetchscope " FETCHSCOPE_VERSION
       ": step Gymnasium-Robotics Fetch v4 episodes on MuJoCo, render them headless (EGL or "
       "OSMesa), write videos, contact sheets, trajectories and the env's anatomy JSON."};
+  for (int i = 0; i < argc; ++i) cli::CommandLine() += (i ? " " : "") + std::string(argv[i]);
   app.set_version_flag("--version", FETCHSCOPE_VERSION);
   app.require_subcommand(1);
   cli::RegisterListEnvs(app);

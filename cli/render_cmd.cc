@@ -1,0 +1,120 @@
+// fetchscope render: one frame (after reset, or after --steps K of a policy) to PNG;
+// fetchscope list-cameras: the cameras a model names.
+#include <cstdio>
+#include <filesystem>
+
+#include "cli/common.h"
+#include "cli/render_common.h"
+#include "render/png_io.h"
+#include "render/renderer.h"
+#include "src/errors.h"
+
+namespace fetchscope::cli {
+namespace {
+
+// frame.png + "depth" -> frame_depth.png
+std::string LayerPath(const std::string& path, const std::string& layer) {
+  std::filesystem::path p(path);
+  return (p.parent_path() / (p.stem().string() + "_" + layer + p.extension().string())).string();
+}
+
+}  // namespace
+
+void RegisterRender(CLI::App& app) {
+  auto env = std::make_shared<EnvOptions>();
+  auto view = std::make_shared<ViewOptions>();
+  auto steps = std::make_shared<int>(0);
+  auto policy_spec = std::make_shared<std::string>("random");
+  auto layers = std::make_shared<std::string>("rgb");
+  auto output = std::make_shared<std::string>();
+  auto verbose = std::make_shared<bool>(false);
+  CLI::App* sub = app.add_subcommand("render", "Render one frame to PNG (after reset, or after --steps K)");
+  AddEnvOptions(sub, env.get());
+  AddViewOptions(sub, view.get());
+  sub->add_option("--steps", *steps, "Steps of --policy to take before the frame")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 50));
+  sub->add_option("--policy", *policy_spec, kPolicyHelp)->capture_default_str();
+  sub->add_option("--layers", *layers,
+                  "Comma list of rgb, depth (16-bit PNG, millimetres), segmentation (colour per "
+                  "object); extra layers go to NAME_depth.png, NAME_segmentation.png")
+      ->capture_default_str();
+  sub->add_option("-o,--output", *output, "Output PNG")->required();
+  sub->add_flag("-v,--verbose", *verbose, "Print the GL vendor, renderer and version");
+  sub->callback([=]() {
+    bool want_rgb = false, want_depth = false, want_seg = false;
+    std::stringstream ss(*layers);
+    for (std::string token; std::getline(ss, token, ',');) {
+      if (token == "rgb") {
+        want_rgb = true;
+      } else if (token == "depth") {
+        want_depth = true;
+      } else if (token == "segmentation") {
+        want_seg = true;
+      } else {
+        throw UsageError("--layers: unknown layer '" + token + "': use rgb, depth, segmentation");
+      }
+    }
+    const EnvSpec& spec = FindEnvSpec(env->env_id);
+    const uint64_t seed = ParseSeed(env->seed);
+    const OverlaySet overlays = ParseOverlays(view->overlay);
+    PolicyContext context;
+    context.seed = seed;
+    context.steps_per_episode = *steps;
+    auto policy = MakePolicy(*policy_spec, spec, context);
+    FetchEnv fetch(spec, ResolveAssets(env->assets));
+    RenderOptions options;
+    options.width = view->width;
+    options.height = view->height;
+    options.cameras = ParseCameraList(view->camera, fetch.model());
+    options.overlays = overlays;
+    const EpisodeRecord episode = RunEpisode(fetch, *policy, 0, seed, *steps);
+    auto gl = CreateGlContext(view->backend, view->gpu);
+    Renderer renderer(*gl, fetch.model(), options);
+    if (*verbose) {
+      const GlInfo& i = gl->info();
+      std::fprintf(stderr, "GL: backend %s (%s), vendor %s, renderer %s, version %s\n", i.backend.c_str(),
+                   i.device.c_str(), i.vendor.c_str(), i.renderer.c_str(), i.version.c_str());
+    }
+    const FrameInfo info = MakeFrameInfo(fetch, episode.steps.back());
+    if (want_rgb) {
+      std::vector<uint8_t> rgb(static_cast<size_t>(view->width) * view->height * 3);
+      renderer.Render(fetch.data(), info, rgb.data());
+      WritePng(*output, view->width, view->height, 3, 8, rgb.data());
+      std::printf("wrote %s\n", output->c_str());
+    }
+    std::vector<uint8_t> layer;
+    if (want_depth) {
+      renderer.RenderLayer(fetch.data(), info, Layer::kDepth, &layer);
+      const std::string path = want_rgb ? LayerPath(*output, "depth") : *output;
+      WritePng(path, view->width, view->height, 1, 16, layer.data());
+      std::printf("wrote %s (depth, 16-bit, millimetres)\n", path.c_str());
+    }
+    if (want_seg) {
+      renderer.RenderLayer(fetch.data(), info, Layer::kSegmentation, &layer);
+      const std::string path = (want_rgb || want_depth) ? LayerPath(*output, "segmentation") : *output;
+      WritePng(path, view->width, view->height, 3, 8, layer.data());
+      std::printf("wrote %s (segmentation)\n", path.c_str());
+    }
+  });
+}
+
+void RegisterListCameras(CLI::App& app) {
+  auto env = std::make_shared<EnvOptions>();
+  CLI::App* sub = app.add_subcommand("list-cameras", "List the cameras --camera accepts for a model");
+  AddEnvOptions(sub, env.get(), false);
+  sub->callback([env]() {
+    const EnvSpec& spec = FindEnvSpec(env->env_id);
+    FetchEnv fetch(spec, ResolveAssets(env->assets));
+    const mjModel* m = fetch.model();
+    std::printf("default   Gymnasium's free camera: distance 2.5, azimuth 132, elevation -14, lookat 1.3 0.75 0.55\n");
+    std::printf("track     follows robot0:gripper_link\n");
+    std::printf("free:...  free:lookat=x,y,z,distance=d,azimuth=a,elevation=e (any subset)\n");
+    for (int i = 0; i < m->ncam; ++i) {
+      std::printf("%-26s model camera %d (body %s)\n", mj_id2name(m, mjOBJ_CAMERA, i), i,
+                  mj_id2name(m, mjOBJ_BODY, m->cam_bodyid[i]));
+    }
+  });
+}
+
+}  // namespace fetchscope::cli

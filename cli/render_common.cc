@@ -1,0 +1,41 @@
+#include "cli/render_common.h"
+
+#include <cmath>
+
+namespace fetchscope::cli {
+
+void AddViewOptions(CLI::App* sub, ViewOptions* o) {
+  sub->add_option("--camera", o->camera,
+                  "default (Gymnasium's view), a camera named in the model (see list-cameras), "
+                  "free:lookat=x,y,z,distance=d,azimuth=a,elevation=e, track (follows the "
+                  "gripper), or several joined by commas to tile them")
+      ->capture_default_str();
+  sub->add_option("--overlay", o->overlay,
+                  "Comma list of goal, achieved, hud, action, trail; or none")
+      ->capture_default_str();
+  sub->add_option("--width", o->width, "Frame width in pixels")->capture_default_str();
+  sub->add_option("--height", o->height, "Frame height in pixels")->capture_default_str();
+  sub->add_option("--backend", o->backend,
+                  "auto (EGL, then OSMesa), egl or osmesa; default: $MUJOCO_GL, else auto");
+  sub->add_option("--gpu", o->gpu, "EGL device index (default: $MUJOCO_EGL_DEVICE_ID, else the first)");
+}
+
+FrameInfo MakeFrameInfo(const FetchEnv& env, const StepRecord& record) {
+  FrameInfo info;
+  info.step = record.t;
+  info.reward = record.reward ? *record.reward : NAN;
+  const auto& a = record.obs.achieved_goal;
+  const auto& g = record.obs.desired_goal;
+  info.distance = std::sqrt((a[0] - g[0]) * (a[0] - g[0]) + (a[1] - g[1]) * (a[1] - g[1]) +
+                            (a[2] - g[2]) * (a[2] - g[2]));
+  info.success = record.is_success;
+  info.has_action = record.action.has_value();
+  if (record.action) info.action = record.action->value;
+  info.goal = g;
+  info.achieved = a;
+  info.distance_threshold = env.spec().distance_threshold;
+  info.title = env.spec().id;
+  return info;
+}
+
+}  // namespace fetchscope::cli

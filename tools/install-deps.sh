@@ -1,0 +1,28 @@
+#!/usr/bin/env bash
+# Installs the Debian 12 packages fetchscope needs (only those missing). Run as root or with sudo.
+#   tools/install-deps.sh           build + test dependencies
+#   tools/install-deps.sh --bench   also the benchmark peers (mujoco-record, xvfb)
+set -euo pipefail
+packages=(cmake g++ make pkg-config
+  libmujoco-dev libqhull-dev
+  libegl-dev libegl1 libegl-mesa0 libgl1-mesa-dri libosmesa6-dev
+  libeigen3-dev libpng-dev libavcodec-dev libavformat-dev libavutil-dev libswscale-dev
+  libcli11-dev nlohmann-json3-dev libgtest-dev
+  ffmpeg python3 python3-numpy)
+if [[ "${1:-}" == "--bench" ]]; then
+  packages+=(libmujoco-samples xvfb xauth time)
+fi
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [[ ${#missing[@]} -eq 0 ]]; then
+  echo "install-deps: all ${#packages[@]} Debian packages present"
+  exit 0
+fi
+sudo=""
+if [[ $(id -u) -ne 0 ]]; then sudo="sudo"; fi
+echo "install-deps: installing ${missing[*]}"
+$sudo apt-get update -qq
+DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+echo "install-deps: done"

@@ -1,0 +1,10 @@
+#!/usr/bin/env bash
+# The README's first command: install, build, record a demo episode into out/demo.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+tools/install-deps.sh
+cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DBUILD_TESTING=ON >/dev/null
+cmake --build build -j"$(nproc)" --target fetchscope
+build/fetchscope record --env-id FetchPickAndPlace-v4 --policy scripted --seed 0 --episodes 1 \
+  --out out/demo
+echo "demo written to out/demo: episode_000.mp4, episode_000_sheet.png, episode_000.json, manifest.json"
