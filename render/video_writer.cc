@@ -429,4 +429,6 @@ int VideoWriter::encoded_width() const { return impl_->encoded_width; }
 int VideoWriter::encoded_height() const { return impl_->encoded_height; }
 const std::string& VideoWriter::path() const { return impl_->final_path; }
 
+void ValidateVideoOptions(const VideoOptions& options) { ValidateOptions(options); }
+
 }  // namespace fetchscope

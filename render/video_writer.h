@@ -29,6 +29,10 @@ struct VideoOptions {
 /// from dominating a record run.
 inline constexpr const char* kDefaultVideoPreset = "veryfast";
 
+/// Checks codec, crf, fps, preset and size without opening anything (UsageError on a bad one),
+/// so a command can reject bad options before it creates any output.
+void ValidateVideoOptions(const VideoOptions& options);
+
 /// Writes one H.264 MP4 file, frame by frame.
 ///
 /// The encoder gets yuv420p, which needs even dimensions: an odd width or

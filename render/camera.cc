@@ -1,0 +1,198 @@
+#include "render/camera.h"
+
+#include <cmath>
+#include <cstdlib>
+#include <string>
+#include <vector>
+
+#include "src/errors.h"
+
+namespace fetchscope {
+namespace {
+
+constexpr char kAccepted[] =
+    "accepted: default, track, free:lookat=x,y,z,distance=d,azimuth=a,elevation=e (any subset "
+    "of keys), a camera named in the model, or a comma list of these";
+
+// The tracking camera's pose relative to the gripper: close enough to see the fingers and the
+// object, from the same side as the default camera.
+constexpr double kTrackDistance = 1.0;
+constexpr double kTrackAzimuth = 132.0;
+constexpr double kTrackElevation = -20.0;
+
+std::vector<std::string> Split(const std::string& s, char sep) {
+  std::vector<std::string> parts;
+  size_t start = 0;
+  while (true) {
+    size_t end = s.find(sep, start);
+    parts.push_back(s.substr(start, end == std::string::npos ? std::string::npos : end - start));
+    if (end == std::string::npos) return parts;
+    start = end + 1;
+  }
+}
+
+bool ParseNumber(const std::string& s, double* value) {
+  if (s.empty()) return false;
+  char* end = nullptr;
+  *value = std::strtod(s.c_str(), &end);
+  return *end == '\0' && std::isfinite(*value);
+}
+
+std::string ModelCameraNames(const mjModel* model) {
+  if (!model || model->ncam == 0) return "this model names none";
+  std::string names;
+  for (int i = 0; i < model->ncam; ++i) {
+    if (i) names += ", ";
+    names += mj_id2name(model, mjOBJ_CAMERA, i);
+  }
+  return names;
+}
+
+[[noreturn]] void Fail(const std::string& what) {
+  throw UsageError("camera " + what + "; " + kAccepted);
+}
+
+// Parses the text after "free:" (keys and their comma-separated values).
+FreeCamera ParseFree(const std::string& token, const std::string& body) {
+  FreeCamera cam = DefaultFreeCamera();
+  bool seen[4] = {false, false, false, false};  // lookat, distance, azimuth, elevation
+  std::vector<std::string> parts = Split(body, ',');
+  for (size_t i = 0; i < parts.size(); ++i) {
+    size_t eq = parts[i].find('=');
+    if (eq == std::string::npos) {
+      Fail("'" + token + "': expected key=value, got '" + parts[i] + "'");
+    }
+    std::string key = parts[i].substr(0, eq);
+    std::string value = parts[i].substr(eq + 1);
+    int index = key == "lookat"      ? 0
+                : key == "distance"  ? 1
+                : key == "azimuth"   ? 2
+                : key == "elevation" ? 3
+                                     : -1;
+    if (index < 0) {
+      Fail("'" + token + "': unknown key '" + key +
+           "' (keys: lookat, distance, azimuth, elevation)");
+    }
+    if (seen[index]) Fail("'" + token + "': key '" + key + "' given twice");
+    seen[index] = true;
+    if (index == 0) {
+      // lookat takes this value and the next two parts
+      if (i + 2 >= parts.size()) Fail("'" + token + "': lookat needs three numbers x,y,z");
+      const std::string xyz[3] = {value, parts[i + 1], parts[i + 2]};
+      for (int k = 0; k < 3; ++k) {
+        if (!ParseNumber(xyz[k], &cam.lookat[k])) {
+          Fail("'" + token + "': lookat needs three numbers x,y,z, got '" + xyz[k] + "'");
+        }
+      }
+      i += 2;
+      continue;
+    }
+    double number = 0;
+    if (!ParseNumber(value, &number)) {
+      Fail("'" + token + "': " + key + " needs a number, got '" + value + "'");
+    }
+    if (index == 1) {
+      if (number <= 0) Fail("'" + token + "': distance must be > 0, got '" + value + "'");
+      cam.distance = number;
+    } else if (index == 2) {
+      cam.azimuth = number;
+    } else {
+      if (number < -90 || number > 90) {
+        Fail("'" + token + "': elevation must be within -90..90 degrees, got '" + value + "'");
+      }
+      cam.elevation = number;
+    }
+  }
+  return cam;
+}
+
+CameraSpec ParseOne(const std::string& token, const mjModel* model) {
+  CameraSpec spec{CameraSpec::kDefault, token, DefaultFreeCamera()};
+  if (token == "default") return spec;
+  if (token == "track") {
+    if (model && mj_name2id(model, mjOBJ_BODY, kTrackBody) < 0) {
+      Fail("'track' follows body " + std::string(kTrackBody) + ", which this model lacks");
+    }
+    spec.kind = CameraSpec::kTrack;
+    spec.free.distance = kTrackDistance;
+    spec.free.azimuth = kTrackAzimuth;
+    spec.free.elevation = kTrackElevation;
+    return spec;
+  }
+  if (token == "free") {
+    spec.kind = CameraSpec::kFree;
+    return spec;
+  }
+  if (token.rfind("free:", 0) == 0) {
+    spec.kind = CameraSpec::kFree;
+    spec.free = ParseFree(token, token.substr(5));
+    return spec;
+  }
+  if (model && mj_name2id(model, mjOBJ_CAMERA, token.c_str()) >= 0) {
+    spec.kind = CameraSpec::kNamed;
+    return spec;
+  }
+  throw UsageError("camera '" + token + "' is not known; " + kAccepted +
+                   " (model cameras: " + ModelCameraNames(model) + ")");
+}
+
+}  // namespace
+
+FreeCamera DefaultFreeCamera() { return FreeCamera{{1.3, 0.75, 0.55}, 2.5, 132.0, -14.0}; }
+
+std::vector<CameraSpec> ParseCameraList(const std::string& spec, const mjModel* model) {
+  // Regroup the comma-separated parts: a part holding '=' or a bare number continues the free
+  // camera before it (its keys and lookat values); anything else, "free..." included, starts
+  // a new camera.
+  std::vector<std::string> tokens;
+  for (const std::string& part : Split(spec, ',')) {
+    double unused;
+    bool continues = part.rfind("free", 0) != 0 &&
+                     (part.find('=') != std::string::npos || ParseNumber(part, &unused));
+    if (continues && !tokens.empty() && tokens.back().rfind("free:", 0) == 0) {
+      tokens.back() += "," + part;
+    } else {
+      tokens.push_back(part);
+    }
+  }
+  std::vector<CameraSpec> cameras;
+  for (const std::string& token : tokens) {
+    if (token.empty()) Fail("list '" + spec + "' has an empty entry");
+    cameras.push_back(ParseOne(token, model));
+  }
+  return cameras;
+}
+
+mjvCamera ToMjvCamera(const CameraSpec& spec, const mjModel* model) {
+  mjvCamera cam;
+  mjv_defaultCamera(&cam);
+  switch (spec.kind) {
+    case CameraSpec::kNamed:
+      cam.type = mjCAMERA_FIXED;
+      cam.fixedcamid = mj_name2id(model, mjOBJ_CAMERA, spec.name.c_str());
+      if (cam.fixedcamid < 0) {
+        throw UsageError("camera '" + spec.name +
+                         "' is not in this model (model cameras: " + ModelCameraNames(model) + ")");
+      }
+      return cam;
+    case CameraSpec::kTrack:
+      cam.type = mjCAMERA_TRACKING;
+      cam.trackbodyid = mj_name2id(model, mjOBJ_BODY, kTrackBody);
+      if (cam.trackbodyid < 0) {
+        throw UsageError("camera 'track' follows body " + std::string(kTrackBody) +
+                         ", which this model lacks");
+      }
+      break;
+    case CameraSpec::kDefault:
+    case CameraSpec::kFree:
+      cam.type = mjCAMERA_FREE;
+      break;
+  }
+  for (int k = 0; k < 3; ++k) cam.lookat[k] = spec.free.lookat[k];
+  cam.distance = spec.free.distance;
+  cam.azimuth = spec.free.azimuth;
+  cam.elevation = spec.free.elevation;
+  return cam;
+}
+
+}  // namespace fetchscope

@@ -1,0 +1,57 @@
+// Camera specs from the command line (--camera) and their MuJoCo cameras.
+//
+// Grammar (one or more cameras, separated by commas):
+//   spec   := camera ("," camera)*
+//   camera := "default" | "track" | "free" | "free:" key "=" value ("," key "=" value)*
+//           | NAME                                    (a camera named in the model)
+//   key    := lookat (three numbers x,y,z) | distance | azimuth | elevation (degrees)
+// A free spec's own commas are told apart from list commas by what follows: a comma-separated
+// token that holds '=' or is a number continues the free camera before it; any other token
+// starts the next camera, as does a token that begins with "free". So
+// "free:lookat=1,0.7,0.5,distance=2,external_camera_0" is two cameras. Missing free keys take the
+// default camera's values.
+#pragma once
+
+#include <mujoco/mujoco.h>
+
+#include <string>
+#include <vector>
+
+namespace fetchscope {
+
+/// Pose of a free (orbiting) camera, as MuJoCo's mjCAMERA_FREE.
+struct FreeCamera {
+  double lookat[3];  ///< point looked at (m, world frame)
+  double distance;   ///< from the lookat point (m)
+  double azimuth;    ///< degrees about +z
+  double elevation;  ///< degrees; negative looks down
+};
+
+/// Gymnasium's DEFAULT_CAMERA_CONFIG for the Fetch tasks.
+FreeCamera DefaultFreeCamera();
+
+/// One parsed camera.
+struct CameraSpec {
+  enum Kind {
+    kDefault,  ///< Gymnasium's default free camera
+    kNamed,    ///< a camera defined in the model (mjCAMERA_FIXED)
+    kFree,     ///< a free camera with the given pose
+    kTrack,    ///< follows robot0:gripper_link (mjCAMERA_TRACKING)
+  } kind;
+  std::string name;  ///< the camera name (kNamed) or the token as written
+  FreeCamera free;   ///< pose for kDefault/kFree; distance/azimuth/elevation for kTrack
+};
+
+/// Parses a --camera value (grammar above). `model` supplies the camera names (may be null:
+/// then no named camera is accepted). Throws UsageError naming the bad token and what is
+/// accepted, listing the model's cameras when a name is unknown.
+std::vector<CameraSpec> ParseCameraList(const std::string& spec, const mjModel* model);
+
+/// The body a "track" camera follows.
+inline constexpr char kTrackBody[] = "robot0:gripper_link";
+
+/// Fills a MuJoCo camera for `spec` on `model` (which must hold the named camera/track body;
+/// ParseCameraList checked that). Throws UsageError otherwise.
+mjvCamera ToMjvCamera(const CameraSpec& spec, const mjModel* model);
+
+}  // namespace fetchscope

@@ -1,0 +1,34 @@
+// PNG files through libpng. Pixels are row 0 = top; 16-bit samples are uint16 in the host's
+// byte order in memory (libpng swaps to PNG's big-endian on the way out and back).
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace fetchscope {
+
+/// Writes `pixels` (width*height*channels samples, row 0 = top; bit_depth 16: uint16 in host
+/// byte order) as a PNG: channels 1 = gray, 2 = gray+alpha, 3 = RGB, 4 = RGBA; bit_depth 8 or
+/// 16. The file appears complete or not at all: it is written to PATH.tmp-XXXXXX beside it and
+/// renamed. Throws UsageError for bad arguments and RunError when the file cannot be written.
+void WritePng(const std::string& path, int width, int height, int channels, int bit_depth,
+              const void* pixels);
+
+/// A decoded image.
+struct Image {
+  int width = 0;
+  int height = 0;
+  int channels = 0;             ///< 1 gray, 2 gray+alpha, 3 RGB, 4 RGBA
+  int bit_depth = 8;            ///< 8 or 16
+  std::vector<uint8_t> pixels;  ///< row 0 = top; 16-bit samples as uint16 in host byte order
+
+  /// Bytes per row.
+  size_t row_bytes() const { return static_cast<size_t>(width) * channels * (bit_depth / 8); }
+};
+
+/// Reads a PNG. Palette images become RGB(A), gray below 8 bits becomes 8-bit, transparency
+/// chunks become an alpha channel. Throws RunError for a missing, unreadable or corrupt file.
+Image ReadPng(const std::string& path);
+
+}  // namespace fetchscope

@@ -1,0 +1,230 @@
+#include "render/renderer.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <string>
+
+#include "src/errors.h"
+
+namespace fetchscope {
+namespace {
+
+// GL enums (from glext.h; we do not include GL headers here beyond what MuJoCo needs).
+constexpr unsigned kGlMaxTextureSize = 0x0D33;
+constexpr unsigned kGlMaxViewportDims = 0x0D3A;
+constexpr unsigned kGlMaxRenderbufferSize = 0x84E8;
+constexpr unsigned kGlMaxSamples = 0x8D57;
+
+// The largest frame side we accept even where GL allows more: beyond this the offscreen
+// buffers alone take gigabytes.
+constexpr int kMaxFrameSide = 16384;
+
+constexpr int kMinSceneGeoms = 1000;  // Gymnasium's maxgeom
+
+struct GlLimits {
+  int max_side = kMaxFrameSide;
+  int max_samples = 0;
+};
+
+GlLimits QueryLimits(const GlContext& gl) {
+  using GetIntegervFn = void (*)(unsigned, int*);
+  auto get = reinterpret_cast<GetIntegervFn>(gl.GetProcAddress("glGetIntegerv"));
+  if (!get) throw RunError(gl.info().backend + ": glGetIntegerv is not available");
+  GlLimits limits;
+  int value[2] = {0, 0};
+  for (unsigned name : {kGlMaxRenderbufferSize, kGlMaxTextureSize}) {
+    value[0] = 0;
+    get(name, value);
+    if (value[0] > 0) limits.max_side = std::min(limits.max_side, value[0]);
+  }
+  value[0] = value[1] = 0;
+  get(kGlMaxViewportDims, value);
+  if (value[0] > 0) limits.max_side = std::min({limits.max_side, value[0], value[1]});
+  get(kGlMaxSamples, &limits.max_samples);
+  return limits;
+}
+
+// Tiles for n cameras: one row up to three, then a near-square grid; row 0 at the top.
+std::vector<mjrRect> TileFrame(int n, int width, int height) {
+  int cols = n <= 3 ? n : static_cast<int>(std::ceil(std::sqrt(static_cast<double>(n))));
+  int rows = (n + cols - 1) / cols;
+  std::vector<mjrRect> tiles;
+  for (int i = 0; i < n; ++i) {
+    int col = i % cols, row = i / cols;
+    int left = col * width / cols, right = (col + 1) * width / cols;
+    int top = row * height / rows, bottom = (row + 1) * height / rows;  // from the top
+    tiles.push_back(mjrRect{left, height - bottom, right - left, bottom - top});
+  }
+  return tiles;
+}
+
+}  // namespace
+
+Renderer::Renderer(GlContext& gl, mjModel* model, const RenderOptions& options)
+    : gl_(gl), model_(model), options_(options) {
+  const int w = options_.width, h = options_.height;
+  if (w <= 0 || h <= 0) {
+    throw UsageError("frame size " + std::to_string(w) + "x" + std::to_string(h) +
+                     " is not positive; accepted: 1.." + std::to_string(kMaxFrameSide) +
+                     " pixels per side");
+  }
+  gl_.MakeCurrent();
+  GlLimits limits = QueryLimits(gl_);
+  if (w > limits.max_side || h > limits.max_side) {
+    throw UsageError("frame size " + std::to_string(w) + "x" + std::to_string(h) +
+                     " is too large; accepted: 1.." + std::to_string(limits.max_side) +
+                     " pixels per side (limit of " + gl_.info().renderer + ")");
+  }
+  gl_.PrepareForMujoco();
+
+  if (options_.cameras.empty()) {
+    options_.cameras.push_back(CameraSpec{CameraSpec::kDefault, "default", DefaultFreeCamera()});
+  }
+  for (const CameraSpec& spec : options_.cameras) cameras_.push_back(ToMjvCamera(spec, model_));
+  tiles_ = TileFrame(static_cast<int>(cameras_.size()), w, h);
+  long covered = 0;
+  for (const mjrRect& t : tiles_) covered += static_cast<long>(t.width) * t.height;
+  tiles_leave_gaps_ = covered < static_cast<long>(w) * h;
+
+  mjv_defaultOption(&option_);
+  mjv_defaultPerturb(&perturb_);
+  target_site_ = mj_name2id(model_, mjOBJ_SITE, "target0");
+  grip_site_ = mj_name2id(model_, mjOBJ_SITE, "robot0:grip");
+
+  // MuJoCo sizes its offscreen buffer from the model, and only in mjr_makeContext.
+  mjVisual& vis = model_->vis;
+  vis.global.offwidth = std::max(vis.global.offwidth, w);
+  vis.global.offheight = std::max(vis.global.offheight, h);
+  if (limits.max_samples > 0) {  // a driver without 4x multisampling still renders
+    vis.quality.offsamples = std::min(vis.quality.offsamples, limits.max_samples);
+  }
+
+  const int model_geoms = model_->ngeom + model_->nsite + model_->ntendon + model_->nskin;
+  scene_.emplace(model_, std::max(kMinSceneGeoms, 2 * model_geoms) + kMaxOverlayGeoms);
+
+  // Text stays about the same fraction of the frame: 100% font up to 600 rows.
+  int fontscale = h <= 600 ? mjFONTSCALE_100 : h <= 1200 ? mjFONTSCALE_150 : mjFONTSCALE_200;
+  context_.emplace(model_, fontscale);
+  mjrContext* con = context_->get();
+  mjr_setBuffer(mjFB_OFFSCREEN, con);
+  if (con->currentBuffer != mjFB_OFFSCREEN || con->offWidth < w || con->offHeight < h) {
+    throw RunError("MuJoCo could not make its " + std::to_string(w) + "x" + std::to_string(h) +
+                   " offscreen buffer on " + gl_.info().renderer);
+  }
+  rgb_bottom_up_.resize(static_cast<size_t>(w) * h * 3);
+}
+
+Renderer::~Renderer() {
+  // mjr_freeContext deletes GL objects: our context must be the current one.
+  try {
+    gl_.MakeCurrent();
+  } catch (...) {
+    // nothing better to do in a destructor; MuJoCo then frees into whatever is current
+  }
+}
+
+void Renderer::Draw(const mjData* data, const FrameInfo& info, bool overlays) {
+  gl_.MakeCurrent();
+  mjvScene* scene = scene_->get();
+  mjrContext* con = context_->get();
+  mjr_setBuffer(mjFB_OFFSCREEN, con);
+  const mjrRect frame{0, 0, options_.width, options_.height};
+  if (tiles_leave_gaps_) mjr_rectangle(frame, 0, 0, 0, 1);  // empty grid cells stay black
+
+  // mjv_updateScene takes a non-const mjData but only reads it (positions, orientations,
+  // camera poses); the simulation state is left as it was.
+  mjData* readonly = const_cast<mjData*>(data);
+  for (mjvCamera& cam : cameras_) {
+    // MuJoCo's tracking camera eases its lookat 20% of the way to the body per update, so a
+    // frame would depend on the frames before it; centring it on the body each frame keeps
+    // frames reproducible (golden images, re-renders) and the gripper in the middle.
+    if (cam.type == mjCAMERA_TRACKING) {
+      for (int k = 0; k < 3; ++k) cam.lookat[k] = data->subtree_com[3 * cam.trackbodyid + k];
+    }
+  }
+  for (size_t i = 0; i < cameras_.size(); ++i) {
+    if (i == 0) {
+      mjv_updateScene(model_, readonly, &option_, &perturb_, &cameras_[0], mjCAT_ALL, scene);
+      bool placed = PlaceSiteGeom(scene, target_site_, info.goal);
+      if (overlays) {
+        std::array<double, 3> grip = info.achieved;
+        if (grip_site_ >= 0) {
+          for (int k = 0; k < 3; ++k) grip[k] = data->site_xpos[3 * grip_site_ + k];
+        }
+        if (options_.overlays.trail) trail_.Add(info.step, info.achieved);
+        AddOverlayGeoms(options_.overlays, info, grip, trail_, !placed, scene);
+      } else if (!placed) {
+        AddOverlayGeoms(OverlaySet{false, false, false, false, false}, info, {}, trail_, true,
+                        scene);
+      }
+    } else {
+      mjv_updateCamera(model_, readonly, &cameras_[i], scene);  // same geoms, next view
+    }
+    mjr_render(tiles_[i], scene, con);
+  }
+  if (overlays && options_.overlays.hud) {
+    HudText hud = FormatHud(info, options_.overlays);
+    mjr_overlay(mjFONT_NORMAL, mjGRID_TOPLEFT, frame, hud.labels.c_str(), hud.values.c_str(), con);
+  }
+}
+
+void Renderer::FlipRows(const uint8_t* src, size_t row_bytes, uint8_t* dst) const {
+  const int h = options_.height;
+  for (int row = 0; row < h; ++row) {
+    std::memcpy(dst + row * row_bytes, src + (h - 1 - row) * row_bytes, row_bytes);
+  }
+}
+
+void Renderer::Render(const mjData* data, const FrameInfo& info, uint8_t* rgb) {
+  Draw(data, info, /*overlays=*/true);
+  const mjrRect frame{0, 0, options_.width, options_.height};
+  mjr_readPixels(rgb_bottom_up_.data(), nullptr, frame, context_->get());  // rows bottom-up
+  FlipRows(rgb_bottom_up_.data(), static_cast<size_t>(options_.width) * 3, rgb);
+}
+
+void Renderer::RenderLayer(const mjData* data, const FrameInfo& info, Layer layer,
+                           std::vector<uint8_t>* out) {
+  const size_t pixels = static_cast<size_t>(options_.width) * options_.height;
+  const mjrRect frame{0, 0, options_.width, options_.height};
+  if (layer == Layer::kRgb) {
+    out->resize(pixels * 3);
+    Render(data, info, out->data());
+    return;
+  }
+  if (layer == Layer::kSegmentation) {
+    mjvScene* scene = scene_->get();
+    scene->flags[mjRND_SEGMENT] = 1;
+    scene->flags[mjRND_IDCOLOR] = 1;
+    Draw(data, info, /*overlays=*/false);
+    scene->flags[mjRND_SEGMENT] = 0;
+    scene->flags[mjRND_IDCOLOR] = 0;
+    mjr_readPixels(rgb_bottom_up_.data(), nullptr, frame, context_->get());
+    out->resize(pixels * 3);
+    FlipRows(rgb_bottom_up_.data(), static_cast<size_t>(options_.width) * 3, out->data());
+    return;
+  }
+
+  // Depth: the buffer holds d in [0, 1], non-linear; with near n and far f (MuJoCo scales the
+  // model's znear/zfar by the model extent), the distance along the view axis is
+  // n f / (f - d (f - n)). The far plane (d = 1) and anything beyond uint16 millimetres
+  // (65.535 m; MuJoCo's skybox lies ~100 m away) become 0: no measurement.
+  Draw(data, info, /*overlays=*/false);
+  depth_bottom_up_.resize(pixels);
+  mjr_readPixels(nullptr, depth_bottom_up_.data(), frame, context_->get());
+  const double extent = model_->stat.extent;
+  const double znear = model_->vis.map.znear * extent;
+  const double zfar = model_->vis.map.zfar * extent;
+  std::vector<uint16_t> millimetres(pixels);
+  for (size_t i = 0; i < pixels; ++i) {
+    const double d = depth_bottom_up_[i];
+    if (d >= 1.0) continue;  // stays 0
+    const double mm = std::round(1000.0 * znear * zfar / (zfar - d * (zfar - znear)));
+    if (mm <= 65535.0) millimetres[i] = static_cast<uint16_t>(mm);
+  }
+  out->resize(pixels * 2);
+  FlipRows(reinterpret_cast<const uint8_t*>(millimetres.data()),
+           static_cast<size_t>(options_.width) * 2, out->data());
+}
+
+}  // namespace fetchscope

@@ -1,0 +1,92 @@
+// Renders Fetch frames off-screen with MuJoCo: one or more cameras tiled into one frame,
+// the goal marker where Gymnasium puts it, overlays, and a single readback per frame.
+#pragma once
+
+#include <mujoco/mujoco.h>
+
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include "render/camera.h"
+#include "render/gl_context.h"
+#include "render/mjr_handles.h"
+#include "render/overlay.h"
+
+namespace fetchscope {
+
+/// Which image RenderLayer produces.
+enum class Layer {
+  kRgb,           ///< width*height*3 bytes, as Render
+  kDepth,         ///< width*height uint16 (host byte order): mm along the view axis; 0 = none
+                  ///< (sky, or farther than 65.535 m)
+  kSegmentation,  ///< width*height*3 bytes: r + 256 g + 65536 b = scene geom segid + 1, 0 = none
+};
+
+/// Frame size, cameras and overlays of a renderer.
+struct RenderOptions {
+  int width = 480;                  ///< pixels
+  int height = 480;                 ///< pixels
+  std::vector<CameraSpec> cameras;  ///< tiled left to right (grid from 4 on); empty = default
+  OverlaySet overlays;              ///< drawn by Render (not by the depth/segmentation layers)
+};
+
+/// Off-screen renderer for one model on one GL context (one per thread).
+class Renderer {
+ public:
+  /// Makes the MuJoCo scene and context on `gl` (which must outlive the renderer and is made
+  /// current here) for `model`. Raises model->vis.global.offwidth/offheight to at least the
+  /// frame size (hence the non-const model). Throws UsageError for a frame size that is not
+  /// positive or exceeds the GL limits (the message gives the accepted range), or for a camera
+  /// the model lacks; RunError when MuJoCo cannot make its offscreen buffer.
+  Renderer(GlContext& gl, mjModel* model, const RenderOptions& options);
+  ~Renderer();
+  Renderer(const Renderer&) = delete;
+  Renderer& operator=(const Renderer&) = delete;
+
+  /// Renders the current state of `data` into `rgb` (width*height*3 bytes, row 0 = top).
+  /// Reads `data` only: the goal marker is placed by moving the target0 site's scene geom to
+  /// info.goal after mjv_updateScene (Gymnasium moves the site and runs mj_forward instead).
+  void Render(const mjData* data, const FrameInfo& info, uint8_t* rgb);
+
+  /// Renders `layer` into `out` (resized; row 0 = top). Depth and segmentation show the scene
+  /// with the goal marker but without overlays.
+  void RenderLayer(const mjData* data, const FrameInfo& info, Layer layer,
+                   std::vector<uint8_t>* out);
+
+  /// Starts a new episode's trail.
+  void ResetTrail() { trail_.Clear(); }
+
+  int width() const { return options_.width; }    ///< frame width in pixels
+  int height() const { return options_.height; }  ///< frame height in pixels
+  /// The viewport of each camera within the frame (OpenGL convention: bottom-left origin).
+  const std::vector<mjrRect>& tiles() const { return tiles_; }
+  /// The scene of the last frame: maps segmentation ids (segid) to model objects.
+  const mjvScene& scene() const { return *scene_->get(); }
+
+ private:
+  // Updates the scene for `data` and draws every tile into the offscreen buffer.
+  void Draw(const mjData* data, const FrameInfo& info, bool overlays);
+  // Copies the bottom-up rows of `src` (row_bytes each) into `dst` top-down.
+  void FlipRows(const uint8_t* src, size_t row_bytes, uint8_t* dst) const;
+
+  GlContext& gl_;
+  mjModel* model_;
+  RenderOptions options_;
+  std::vector<mjvCamera> cameras_;
+  std::vector<mjrRect> tiles_;
+  bool tiles_leave_gaps_ = false;  // a grid with empty cells: clear the frame first
+  mjvOption option_;
+  mjvPerturb perturb_;
+  int target_site_ = -1;  // target0, the goal marker
+  int grip_site_ = -1;    // robot0:grip, where the action arrow starts
+  Trail trail_;
+  // Made in the constructor body, after the size checks. Lifetime order: the GL context (gl_)
+  // outlives both; the MuJoCo context is freed first, with gl_ current (see ~Renderer).
+  std::optional<MjvScene> scene_;
+  std::optional<MjrContext> context_;
+  std::vector<uint8_t> rgb_bottom_up_;  // readback buffer, reused every frame
+  std::vector<float> depth_bottom_up_;
+};
+
+}  // namespace fetchscope

@@ -1,0 +1,243 @@
+// --camera and --overlay parsing, and the MuJoCo cameras they become.
+#include "render/camera.h"
+
+#include <gtest/gtest.h>
+#include <mujoco/mujoco.h>
+
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "render/overlay.h"
+#include "src/errors.h"
+#include "src/mj_handles.h"
+#include "tests/test_util.h"
+
+namespace fetchscope {
+namespace {
+
+// A tiny model with two named cameras and the body the track camera follows.
+constexpr char kModelXml[] = R"(
+<mujoco>
+  <worldbody>
+    <camera name="overhead" pos="0 0 3"/>
+    <body name="robot0:gripper_link" pos="1 0.5 0.4">
+      <geom type="sphere" size="0.05"/>
+      <camera name="wrist_cam" pos="0 0 0.1"/>
+    </body>
+  </worldbody>
+</mujoco>
+)";
+
+constexpr char kNoGripperXml[] = R"(
+<mujoco><worldbody><geom type="sphere" size="0.05"/></worldbody></mujoco>
+)";
+
+MjModelPtr LoadString(const char* xml) {
+  testing::TempDir dir;
+  std::string path = (dir.path() / "model.xml").string();
+  std::ofstream(path) << xml;
+  char error[1000] = "";
+  MjModelPtr model(mj_loadXML(path.c_str(), nullptr, error, sizeof(error)));
+  EXPECT_TRUE(model) << error;
+  return model;
+}
+
+const mjModel* Model() {
+  static MjModelPtr model = LoadString(kModelXml);
+  return model.get();
+}
+
+using K = CameraSpec::Kind;
+
+// One valid spec and what it must parse to.
+struct ValidCase {
+  std::string spec;
+  std::vector<K> kinds;
+  std::vector<std::string> names;  // expected CameraSpec::name per camera ("" = don't care)
+};
+
+void PrintTo(const ValidCase& c, std::ostream* os) { *os << "'" << c.spec << "'"; }
+
+class ValidCameraSpec : public ::testing::TestWithParam<ValidCase> {};
+
+TEST_P(ValidCameraSpec, Parses) {
+  const ValidCase& c = GetParam();
+  std::vector<CameraSpec> cameras = ParseCameraList(c.spec, Model());
+  ASSERT_EQ(cameras.size(), c.kinds.size()) << c.spec;
+  for (size_t i = 0; i < cameras.size(); ++i) {
+    EXPECT_EQ(cameras[i].kind, c.kinds[i]) << c.spec << " #" << i;
+    if (i < c.names.size() && !c.names[i].empty()) {
+      EXPECT_EQ(cameras[i].name, c.names[i]);
+    }
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Specs, ValidCameraSpec,
+    ::testing::Values(
+        ValidCase{"default", {K::kDefault}, {}}, ValidCase{"track", {K::kTrack}, {}},
+        ValidCase{"free", {K::kFree}, {}}, ValidCase{"overhead", {K::kNamed}, {"overhead"}},
+        ValidCase{"free:distance=1.5", {K::kFree}, {}},
+        ValidCase{"free:lookat=1,0.7,0.5,distance=2,azimuth=90,elevation=-30", {K::kFree}, {}},
+        ValidCase{"default,track", {K::kDefault, K::kTrack}, {}},
+        ValidCase{"free:lookat=1,2,3,wrist_cam", {K::kFree, K::kNamed}, {"", "wrist_cam"}},
+        ValidCase{"overhead,free:azimuth=-10,elevation=-5,default",
+                  {K::kNamed, K::kFree, K::kDefault},
+                  {"overhead"}},
+        ValidCase{"free:elevation=-14.5,free:azimuth=3", {K::kFree, K::kFree}, {}},
+        ValidCase{"default,default,default,default",
+                  {K::kDefault, K::kDefault, K::kDefault, K::kDefault},
+                  {}}));
+
+TEST(CameraSpec, FreeKeysOverrideOnlyWhatTheyName) {
+  std::vector<CameraSpec> cameras =
+      ParseCameraList("free:lookat=1,0.7,0.5,elevation=-30,wrist_cam", Model());
+  ASSERT_EQ(cameras.size(), 2u);
+  const FreeCamera& f = cameras[0].free;
+  EXPECT_DOUBLE_EQ(f.lookat[0], 1.0);
+  EXPECT_DOUBLE_EQ(f.lookat[1], 0.7);
+  EXPECT_DOUBLE_EQ(f.lookat[2], 0.5);
+  EXPECT_DOUBLE_EQ(f.elevation, -30.0);
+  EXPECT_DOUBLE_EQ(f.distance, 2.5);   // from the default camera
+  EXPECT_DOUBLE_EQ(f.azimuth, 132.0);  // from the default camera
+}
+
+TEST(CameraSpec, DefaultIsGymnasiumsCamera) {
+  CameraSpec spec = ParseCameraList("default", Model())[0];
+  EXPECT_DOUBLE_EQ(spec.free.distance, 2.5);
+  EXPECT_DOUBLE_EQ(spec.free.azimuth, 132.0);
+  EXPECT_DOUBLE_EQ(spec.free.elevation, -14.0);
+  EXPECT_DOUBLE_EQ(spec.free.lookat[0], 1.3);
+  EXPECT_DOUBLE_EQ(spec.free.lookat[1], 0.75);
+  EXPECT_DOUBLE_EQ(spec.free.lookat[2], 0.55);
+}
+
+// One invalid spec and the substrings its message must hold.
+struct InvalidCase {
+  std::string spec;
+  std::vector<std::string> expected;
+};
+
+void PrintTo(const InvalidCase& c, std::ostream* os) { *os << "'" << c.spec << "'"; }
+
+class InvalidCameraSpec : public ::testing::TestWithParam<InvalidCase> {};
+
+TEST_P(InvalidCameraSpec, ThrowsUsageErrorSayingWhy) {
+  const InvalidCase& c = GetParam();
+  try {
+    ParseCameraList(c.spec, Model());
+    FAIL() << "'" << c.spec << "' should be rejected";
+  } catch (const UsageError& e) {
+    std::string message = e.what();
+    for (const std::string& s : c.expected) {
+      EXPECT_NE(message.find(s), std::string::npos) << "'" << s << "' not in: " << message;
+    }
+    EXPECT_EQ(message.find('\n'), std::string::npos) << "one line: " << message;
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Specs, InvalidCameraSpec,
+    ::testing::Values(InvalidCase{"", {"empty entry"}},
+                      InvalidCase{"default,,track", {"empty entry"}},
+                      InvalidCase{"nope",
+                                  {"camera 'nope' is not known",
+                                   "model cameras: overhead, wrist_cam", "free:lookat=x,y,z"}},
+                      InvalidCase{"default,Overhead", {"'Overhead'", "overhead, wrist_cam"}},
+                      InvalidCase{"free:zoom=2", {"unknown key 'zoom'", "lookat, distance"}},
+                      InvalidCase{"free:lookat=1,2", {"lookat needs three numbers"}},
+                      InvalidCase{"free:lookat=1,2,x", {"lookat needs three numbers"}},
+                      InvalidCase{"free:distance=-1", {"distance must be > 0"}},
+                      InvalidCase{"free:distance=abc", {"distance needs a number", "'abc'"}},
+                      InvalidCase{"free:distance=nan", {"distance needs a number"}},
+                      InvalidCase{"free:azimuth=1,azimuth=2", {"key 'azimuth' given twice"}},
+                      InvalidCase{"free:elevation=100", {"elevation must be within -90..90"}},
+                      InvalidCase{"free:", {"expected key=value"}},
+                      InvalidCase{"distance=2", {"camera 'distance=2' is not known"}}));
+
+TEST(CameraSpec, TrackNeedsTheGripperBody) {
+  MjModelPtr model = LoadString(kNoGripperXml);
+  try {
+    ParseCameraList("track", model.get());
+    FAIL();
+  } catch (const UsageError& e) {
+    EXPECT_NE(std::string(e.what()).find("robot0:gripper_link"), std::string::npos) << e.what();
+  }
+  try {
+    ParseCameraList("overhead", model.get());
+    FAIL();
+  } catch (const UsageError& e) {
+    EXPECT_NE(std::string(e.what()).find("this model names none"), std::string::npos) << e.what();
+  }
+}
+
+TEST(CameraSpec, BecomesMujocoCameras) {
+  std::vector<CameraSpec> cameras =
+      ParseCameraList("wrist_cam,track,free:distance=3,default", Model());
+  mjvCamera named = ToMjvCamera(cameras[0], Model());
+  EXPECT_EQ(named.type, mjCAMERA_FIXED);
+  EXPECT_EQ(named.fixedcamid, mj_name2id(Model(), mjOBJ_CAMERA, "wrist_cam"));
+
+  mjvCamera track = ToMjvCamera(cameras[1], Model());
+  EXPECT_EQ(track.type, mjCAMERA_TRACKING);
+  EXPECT_EQ(track.trackbodyid, mj_name2id(Model(), mjOBJ_BODY, "robot0:gripper_link"));
+  EXPECT_GT(track.distance, 0.5);
+  EXPECT_LT(track.distance, 2.0);
+
+  mjvCamera free = ToMjvCamera(cameras[2], Model());
+  EXPECT_EQ(free.type, mjCAMERA_FREE);
+  EXPECT_DOUBLE_EQ(free.distance, 3.0);
+  EXPECT_DOUBLE_EQ(free.azimuth, 132.0);
+
+  mjvCamera standard = ToMjvCamera(cameras[3], Model());
+  EXPECT_EQ(standard.type, mjCAMERA_FREE);
+  EXPECT_DOUBLE_EQ(standard.lookat[0], 1.3);
+  EXPECT_DOUBLE_EQ(standard.elevation, -14.0);
+}
+
+// --overlay
+struct OverlayCase {
+  std::string spec;
+  OverlaySet expected;
+};
+
+void PrintTo(const OverlayCase& c, std::ostream* os) { *os << "'" << c.spec << "'"; }
+
+class OverlaySpec : public ::testing::TestWithParam<OverlayCase> {};
+
+TEST_P(OverlaySpec, Parses) {
+  OverlaySet got = ParseOverlays(GetParam().spec);
+  const OverlaySet& want = GetParam().expected;
+  EXPECT_EQ(got.goal, want.goal);
+  EXPECT_EQ(got.achieved, want.achieved);
+  EXPECT_EQ(got.hud, want.hud);
+  EXPECT_EQ(got.action, want.action);
+  EXPECT_EQ(got.trail, want.trail);
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Specs, OverlaySpec,
+    ::testing::Values(OverlayCase{"default", {true, true, true, false, false}},
+                      OverlayCase{"none", {false, false, false, false, false}},
+                      OverlayCase{"goal", {true, false, false, false, false}},
+                      OverlayCase{"hud,trail", {false, false, true, false, true}},
+                      OverlayCase{"default,action", {true, true, true, true, false}},
+                      OverlayCase{"goal,achieved,hud,action,trail",
+                                  {true, true, true, true, true}}));
+
+TEST(OverlaySpec, RejectsUnknownNames) {
+  for (const char* bad : {"sparkles", "goal,sparkles", "", "goal,", "GOAL"}) {
+    try {
+      ParseOverlays(bad);
+      FAIL() << "'" << bad << "' should be rejected";
+    } catch (const UsageError& e) {
+      std::string message = e.what();
+      EXPECT_NE(message.find("is not known"), std::string::npos) << message;
+      EXPECT_NE(message.find("goal, achieved, hud, action, trail"), std::string::npos) << message;
+    }
+  }
+}
+
+}  // namespace
+}  // namespace fetchscope

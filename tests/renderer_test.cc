@@ -1,0 +1,537 @@
+// The renderer on real GL contexts and the real Fetch PickAndPlace model (the genuine
+// Gymnasium-Robotics assets and the bundled model, each skipped when absent).
+#include "render/renderer.h"
+
+#include <gtest/gtest.h>
+#include <mujoco/mujoco.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <iostream>
+#include <string>
+#include <vector>
+
+#include "render/gl_context.h"
+#include "render/png_io.h"
+#include "src/errors.h"
+#include "src/mj_handles.h"
+#include "tests/test_util.h"
+
+namespace fetchscope {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr int kSize = 480;
+
+void OnMujocoError(const char* message) {
+  // MuJoCo's default handler waits for Enter; a test must fail instead.
+  std::fprintf(stderr, "MuJoCo error: %s\n", message);
+  std::_Exit(1);
+}
+
+fs::path ModelPath(const std::string& source) {
+  if (source == "genuine") {
+    fs::path dir = testing::GenuineAssetsDir();
+    return dir.empty() ? fs::path() : dir / "fetch" / "pick_and_place.xml";
+  }
+  return testing::SourceDir() / "models" / "pick_and_place.xml";
+}
+
+struct Rgb {
+  int r, g, b;
+};
+
+// A projected point: column from the left, row from the top.
+struct Pixel {
+  int col, row;
+};
+
+// Projects world point `p` with MuJoCo's free camera `cam` (vertical field of view fovy):
+// forward = (cos el cos az, cos el sin az, sin el), eye = lookat - distance * forward,
+// up = (-sin el cos az, -sin el sin az, cos el), right = forward x up.
+Pixel Project(const FreeCamera& cam, const std::array<double, 3>& p, int width, int height,
+              double fovy_degrees) {
+  const double az = cam.azimuth * M_PI / 180, el = cam.elevation * M_PI / 180;
+  const double f[3] = {std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el)};
+  const double u[3] = {-std::sin(el) * std::cos(az), -std::sin(el) * std::sin(az), std::cos(el)};
+  const double r[3] = {f[1] * u[2] - f[2] * u[1], f[2] * u[0] - f[0] * u[2],
+                       f[0] * u[1] - f[1] * u[0]};
+  double v[3];
+  for (int k = 0; k < 3; ++k) v[k] = p[k] - (cam.lookat[k] - cam.distance * f[k]);
+  const double x = v[0] * r[0] + v[1] * r[1] + v[2] * r[2];
+  const double y = v[0] * u[0] + v[1] * u[1] + v[2] * u[2];
+  const double z = v[0] * f[0] + v[1] * f[1] + v[2] * f[2];
+  const double t = std::tan(fovy_degrees * M_PI / 360);
+  const double aspect = static_cast<double>(width) / height;
+  const double ndc_x = x / (z * t * aspect), ndc_y = y / (z * t);
+  return Pixel{static_cast<int>(std::floor((ndc_x + 1) / 2 * width)),
+               static_cast<int>(std::floor((1 - ndc_y) / 2 * height))};
+}
+
+// Distance from the default camera's eye to `p` along the view axis.
+double ViewDepth(const FreeCamera& cam, const std::array<double, 3>& p) {
+  const double az = cam.azimuth * M_PI / 180, el = cam.elevation * M_PI / 180;
+  const double f[3] = {std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el)};
+  double z = 0;
+  for (int k = 0; k < 3; ++k) z += (p[k] - (cam.lookat[k] - cam.distance * f[k])) * f[k];
+  return z;
+}
+
+Rgb At(const std::vector<uint8_t>& image, int width, Pixel p) {
+  const uint8_t* q = image.data() + (static_cast<size_t>(p.row) * width + p.col) * 3;
+  return Rgb{q[0], q[1], q[2]};
+}
+
+bool IsRed(Rgb c) { return c.r > 150 && c.g < 90 && c.b < 90; }
+bool IsSky(Rgb c) { return c.g > c.r + 40 && c.g > c.b + 40; }  // the green gradient skybox
+bool IsGray(Rgb c) { return std::abs(c.r - c.g) < 16 && std::abs(c.g - c.b) < 16; }
+bool IsDarkGray(Rgb c) { return IsGray(c) && c.r < 110; }   // floor_mat 0.2, lit
+bool IsLightGray(Rgb c) { return IsGray(c) && c.r > 170; }  // table_mat 0.93, lit
+
+double MeanAbsDiff(const std::vector<uint8_t>& a, const std::vector<uint8_t>& b) {
+  double sum = 0;
+  for (size_t i = 0; i < a.size(); ++i) sum += std::abs(a[i] - b[i]);
+  return sum / a.size();
+}
+
+// The fraction of pixels that differ in any channel, and their bounding box.
+struct Difference {
+  double fraction = 0;
+  int min_col = 1 << 30, min_row = 1 << 30, max_col = -1, max_row = -1;
+};
+
+Difference Compare(const std::vector<uint8_t>& a, const std::vector<uint8_t>& b, int width) {
+  Difference d;
+  const size_t pixels = a.size() / 3;
+  size_t differing = 0;
+  for (size_t i = 0; i < pixels; ++i) {
+    if (std::memcmp(&a[3 * i], &b[3 * i], 3) == 0) continue;
+    ++differing;
+    int col = static_cast<int>(i % width), row = static_cast<int>(i / width);
+    d.min_col = std::min(d.min_col, col);
+    d.max_col = std::max(d.max_col, col);
+    d.min_row = std::min(d.min_row, row);
+    d.max_row = std::max(d.max_row, row);
+  }
+  d.fraction = static_cast<double>(differing) / pixels;
+  return d;
+}
+
+class RendererTest : public ::testing::TestWithParam<const char*> {
+ protected:
+  void SetUp() override {
+    unsetenv("DISPLAY");
+    mju_user_error = OnMujocoError;
+    fs::path path = ModelPath(GetParam());
+    if (path.empty() || !fs::exists(path)) GTEST_SKIP() << GetParam() << " model is absent";
+    char error[1000] = "";
+    model_.reset(mj_loadXML(path.string().c_str(), nullptr, error, sizeof(error)));
+    if (!model_) GTEST_SKIP() << path << " does not compile (yet?): " << error;
+    data_.reset(mj_makeData(model_.get()));
+
+    // The robot where the Fetch env's initial_qpos puts it, the block on the table.
+    SetJoint("robot0:slide0", {0.405});
+    SetJoint("robot0:slide1", {0.48});
+    SetJoint("robot0:slide2", {0.0});
+    SetJoint("object0:joint", {1.3, 0.75, 0.425, 1, 0, 0, 0});
+    mj_forward(model_.get(), data_.get());
+
+    info_.title = "FetchPickAndPlace-v4";
+    info_.goal = {1.4, 0.8, 0.6};  // in the air above the table, in view of the default camera
+    const int object = mj_name2id(model_.get(), mjOBJ_SITE, "object0");
+    ASSERT_GE(object, 0);
+    for (int k = 0; k < 3; ++k) info_.achieved[k] = data_->site_xpos[3 * object + k];
+    info_.distance = std::sqrt(std::pow(info_.achieved[0] - info_.goal[0], 2) +
+                               std::pow(info_.achieved[1] - info_.goal[1], 2) +
+                               std::pow(info_.achieved[2] - info_.goal[2], 2));
+    info_.step = 1;
+    info_.reward = -info_.distance;
+    info_.has_action = true;
+    info_.action = {0.5, -0.5, 1.0, -1.0};
+  }
+
+  void SetJoint(const char* name, std::vector<double> values) {
+    int id = mj_name2id(model_.get(), mjOBJ_JOINT, name);
+    ASSERT_GE(id, 0) << name;
+    for (size_t k = 0; k < values.size(); ++k) {
+      data_->qpos[model_->jnt_qposadr[id] + k] = values[k];
+    }
+  }
+
+  // A context of `backend`, or nullptr (and the test skipped) when this machine lacks it.
+  std::unique_ptr<GlContext> Context(const std::string& backend = "auto") {
+    try {
+      return CreateGlContext(backend);
+    } catch (const RunError& e) {
+      std::cout << "[  SKIPPED ] " << backend << " unavailable: " << e.what() << "\n";
+      return nullptr;
+    }
+  }
+
+  std::vector<uint8_t> RenderWith(GlContext& gl, const RenderOptions& options) {
+    Renderer renderer(gl, model_.get(), options);
+    std::vector<uint8_t> rgb(static_cast<size_t>(options.width) * options.height * 3);
+    renderer.Render(data_.get(), info_, rgb.data());
+    Dump(options, rgb);
+    return rgb;
+  }
+
+  // With FETCHSCOPE_TEST_DUMP=DIR, frames are also written there to look at.
+  void Dump(const RenderOptions& options, const std::vector<uint8_t>& rgb) {
+    const char* dir = std::getenv("FETCHSCOPE_TEST_DUMP");
+    if (!dir) return;
+    const auto* test = ::testing::UnitTest::GetInstance()->current_test_info();
+    std::string name = std::string(test->name()) + "_" + std::to_string(dumped_++) + ".png";
+    for (char& c : name) {
+      if (c == '/') c = '_';
+    }
+    WritePng((fs::path(dir) / name).string(), options.width, options.height, 3, 8, rgb.data());
+  }
+
+  static RenderOptions Options(const std::string& overlays, int width = kSize, int height = kSize) {
+    RenderOptions options;
+    options.width = width;
+    options.height = height;
+    options.overlays = ParseOverlays(overlays);
+    return options;
+  }
+
+  double Fovy() const { return model_->vis.global.fovy; }
+
+  MjModelPtr model_;
+  MjDataPtr data_;
+  FrameInfo info_;
+  int dumped_ = 0;
+};
+
+TEST_P(RendererTest, BothBackendsAgree) {
+  auto osmesa = Context("osmesa");
+  auto egl = Context("egl");
+  if (!osmesa || !egl) GTEST_SKIP() << "needs both backends";
+  std::vector<uint8_t> a = RenderWith(*osmesa, Options("default"));
+  std::vector<uint8_t> b = RenderWith(*egl, Options("default"));
+  EXPECT_LT(MeanAbsDiff(a, b), 3.0);
+  // and again in the other order, on the same contexts
+  std::vector<uint8_t> c = RenderWith(*osmesa, Options("default"));
+  EXPECT_LT(MeanAbsDiff(a, c), 3.0);
+}
+
+TEST_P(RendererTest, BothBackendsAgreeEglFirst) {
+  // MuJoCo binds its GL functions at the first mjr_makeContext of the process; either order
+  // must work (when the whole binary runs in one process, the first test decides).
+  auto egl = Context("egl");
+  auto osmesa = Context("osmesa");
+  if (!osmesa || !egl) GTEST_SKIP() << "needs both backends";
+  std::vector<uint8_t> a = RenderWith(*egl, Options("default"));
+  std::vector<uint8_t> b = RenderWith(*osmesa, Options("default"));
+  EXPECT_LT(MeanAbsDiff(a, b), 3.0);
+}
+
+TEST_P(RendererTest, FrameIsTheRightWayUp) {
+  auto gl = Context();
+  if (!gl) GTEST_SKIP();
+  std::vector<uint8_t> rgb = RenderWith(*gl, Options("none"));
+  const FreeCamera cam = DefaultFreeCamera();
+
+  // the goal sphere (target0, moved to the goal) is where the camera projects the goal
+  Pixel goal = Project(cam, info_.goal, kSize, kSize, Fovy());
+  Rgb at_goal = At(rgb, kSize, goal);
+  EXPECT_TRUE(IsRed(at_goal)) << "goal pixel (" << goal.col << "," << goal.row
+                              << ") = " << at_goal.r << "," << at_goal.g << "," << at_goal.b;
+  // the table top is light, the floor dark, the sky at the top
+  Pixel table = Project(cam, {1.2, 0.6, 0.4}, kSize, kSize, Fovy());
+  Rgb at_table = At(rgb, kSize, table);
+  EXPECT_TRUE(IsLightGray(at_table)) << at_table.r << "," << at_table.g << "," << at_table.b;
+  Pixel floor = Project(cam, {1.5, 0.2, 0.0}, kSize, kSize, Fovy());
+  Rgb at_floor = At(rgb, kSize, floor);
+  EXPECT_TRUE(IsDarkGray(at_floor)) << at_floor.r << "," << at_floor.g << "," << at_floor.b;
+  EXPECT_GT(table.row, goal.row);  // the table is below the goal
+  EXPECT_GT(floor.row, table.row);
+  for (int col = 0; col < kSize; col += 8) {
+    Rgb top = At(rgb, kSize, Pixel{col, 0});
+    ASSERT_TRUE(IsSky(top)) << "top row, column " << col;
+  }
+}
+
+TEST_P(RendererTest, GoalMarkerFollowsTheGoal) {
+  auto gl = Context();
+  if (!gl) GTEST_SKIP();
+  Renderer renderer(*gl, model_.get(), Options("none"));
+  std::vector<uint8_t> rgb(kSize * kSize * 3);
+  for (const std::array<double, 3>& goal :
+       {std::array<double, 3>{1.25, 0.65, 0.7}, std::array<double, 3>{1.5, 0.95, 0.5}}) {
+    info_.goal = goal;
+    renderer.Render(data_.get(), info_, rgb.data());
+    Dump(Options("none"), rgb);
+    Pixel p = Project(DefaultFreeCamera(), goal, kSize, kSize, Fovy());
+    EXPECT_TRUE(IsRed(At(rgb, kSize, p))) << goal[0] << "," << goal[1] << "," << goal[2];
+  }
+}
+
+TEST_P(RendererTest, OverlaysStayLocal) {
+  auto gl = Context();
+  if (!gl) GTEST_SKIP();
+  std::vector<uint8_t> none = RenderWith(*gl, Options("none"));
+  const Pixel goal = Project(DefaultFreeCamera(), info_.goal, kSize, kSize, Fovy());
+
+  // scene overlays: a small part of the frame, including the goal (the translucent shell)
+  std::vector<uint8_t> markers = RenderWith(*gl, Options("goal,achieved"));
+  Difference d = Compare(none, markers, kSize);
+  EXPECT_GT(d.fraction, 0.0005);
+  EXPECT_LT(d.fraction, 0.10);
+  Rgb a = At(none, kSize, goal), b = At(markers, kSize, goal);
+  EXPECT_TRUE(a.r != b.r || a.g != b.g || a.b != b.b) << "the shell should tint the goal";
+
+  // the HUD: only the top-left corner
+  std::vector<uint8_t> hud = RenderWith(*gl, Options("hud"));
+  d = Compare(none, hud, kSize);
+  EXPECT_GT(d.fraction, 0.01);
+  EXPECT_LT(d.min_col, 20);
+  EXPECT_LT(d.min_row, 20);
+  EXPECT_LT(d.max_col, kSize * 3 / 4);
+  EXPECT_LT(d.max_row, kSize * 2 / 5);
+
+  // the action arrow draws something, and only near the gripper
+  std::vector<uint8_t> arrow = RenderWith(*gl, Options("action"));
+  d = Compare(none, arrow, kSize);
+  EXPECT_GT(d.fraction, 0.0001);
+  EXPECT_LT(d.fraction, 0.05);
+  info_.has_action = false;  // at reset there is no arrow
+  EXPECT_EQ(Compare(none, RenderWith(*gl, Options("action")), kSize).fraction, 0.0);
+}
+
+TEST_P(RendererTest, TrailGrowsWithStepsAndResets) {
+  auto gl = Context();
+  if (!gl) GTEST_SKIP();
+  Renderer renderer(*gl, model_.get(), Options("trail"));
+  std::vector<uint8_t> first(kSize * kSize * 3), later(kSize * kSize * 3);
+  const std::array<double, 3> start = info_.achieved;
+  for (int step = 0; step <= 5; ++step) {
+    info_.step = step;
+    info_.achieved = {start[0] - 0.04 * step, start[1] + 0.03 * step, start[2] + 0.03 * step};
+    renderer.Render(data_.get(), info_, step == 0 ? first.data() : later.data());
+  }
+  Dump(Options("trail"), later);
+  EXPECT_GT(Compare(first, later, kSize).fraction, 0.0002);  // a polyline appeared
+  // a new episode's first frame shows no trail again
+  renderer.ResetTrail();
+  info_.step = 0;
+  info_.achieved = start;
+  std::vector<uint8_t> reset(kSize * kSize * 3);
+  renderer.Render(data_.get(), info_, reset.data());
+  EXPECT_EQ(reset, first);
+}
+
+TEST_P(RendererTest, RendersFullHd) {
+  auto gl = Context();
+  if (!gl) GTEST_SKIP();
+  std::vector<uint8_t> rgb = RenderWith(*gl, Options("default", 1920, 1080));
+  ASSERT_EQ(rgb.size(), 1920u * 1080 * 3);
+  Pixel goal = Project(DefaultFreeCamera(), info_.goal, 1920, 1080, Fovy());
+  // the shell tints the sphere but it stays red
+  Rgb c = At(rgb, 1920, goal);
+  EXPECT_TRUE(c.r > 150 && c.g < 110 && c.b < 110) << c.r << "," << c.g << "," << c.b;
+  EXPECT_TRUE(IsSky(At(rgb, 1920, Pixel{1900, 5})));
+}
+
+TEST_P(RendererTest, RejectsBadSizes) {
+  auto gl = Context();
+  if (!gl) GTEST_SKIP();
+  for (auto [w, h] : {std::pair{0, 480}, std::pair{480, 0}, std::pair{-1, 480},
+                      std::pair{100000, 480}, std::pair{480, 100000}}) {
+    try {
+      Renderer renderer(*gl, model_.get(), Options("none", w, h));
+      ADD_FAILURE() << w << "x" << h << " should be rejected";
+    } catch (const UsageError& e) {
+      std::string message = e.what();
+      EXPECT_NE(message.find(std::to_string(w) + "x" + std::to_string(h)), std::string::npos)
+          << message;
+      EXPECT_NE(message.find("accepted: 1.."), std::string::npos) << message;
+    }
+  }
+  // a rejected size leaves the model's offscreen size alone
+  EXPECT_LT(model_->vis.global.offwidth, 100000);
+}
+
+TEST_P(RendererTest, RenderingTwiceGivesTheSamePixels) {
+  auto gl = Context();
+  if (!gl) GTEST_SKIP();
+  RenderOptions options = Options("goal,achieved,hud,action,trail");
+  options.cameras = ParseCameraList("default,track", model_.get());
+  Renderer renderer(*gl, model_.get(), options);
+  std::vector<uint8_t> a(kSize * kSize * 3), b(kSize * kSize * 3);
+  renderer.Render(data_.get(), info_, a.data());
+  renderer.Render(data_.get(), info_, b.data());
+  EXPECT_EQ(a, b);
+}
+
+TEST_P(RendererTest, RenderingDoesNotTouchTheSimulation) {
+  auto gl = Context();
+  if (!gl) GTEST_SKIP();
+  const mjModel* m = model_.get();
+  const mjData* d = data_.get();
+  // a moving state: warmstart and velocities are not zero
+  for (int i = 0; i < 5; ++i) mj_step(model_.get(), data_.get());
+  auto snapshot = [&] {
+    std::vector<double> s;
+    auto add = [&](const mjtNum* p, int n) { s.insert(s.end(), p, p + n); };
+    add(d->qpos, m->nq);
+    add(d->qvel, m->nv);
+    add(d->qacc_warmstart, m->nv);
+    add(d->xpos, 3 * m->nbody);
+    add(d->xquat, 4 * m->nbody);
+    add(d->site_xpos, 3 * m->nsite);
+    add(d->mocap_pos, 3 * m->nmocap);
+    add(d->ctrl, m->nu);
+    add(d->subtree_com, 3 * m->nbody);
+    add(m->site_pos, 3 * m->nsite);  // Gymnasium moves target0 here; we must not
+    s.push_back(d->time);
+    return s;
+  };
+  const std::vector<double> before = snapshot();
+  RenderOptions options = Options("goal,achieved,hud,action,trail");
+  options.cameras = ParseCameraList("default,track,external_camera_0", model_.get());
+  Renderer renderer(*gl, model_.get(), options);
+  std::vector<uint8_t> rgb(kSize * kSize * 3), layer;
+  renderer.Render(data_.get(), info_, rgb.data());
+  renderer.RenderLayer(data_.get(), info_, Layer::kDepth, &layer);
+  renderer.RenderLayer(data_.get(), info_, Layer::kSegmentation, &layer);
+  EXPECT_EQ(snapshot(), before);
+}
+
+TEST_P(RendererTest, DepthIsMillimetresAlongTheViewAxis) {
+  auto gl = Context();
+  if (!gl) GTEST_SKIP();
+  Renderer renderer(*gl, model_.get(), Options("default"));
+  std::vector<uint8_t> layer;
+  renderer.RenderLayer(data_.get(), info_, Layer::kDepth, &layer);
+  ASSERT_EQ(layer.size(), kSize * kSize * 2u);
+  std::vector<uint16_t> mm(kSize * kSize);
+  std::memcpy(mm.data(), layer.data(), layer.size());
+
+  const FreeCamera cam = DefaultFreeCamera();
+  Pixel goal = Project(cam, info_.goal, kSize, kSize, Fovy());
+  // the sphere's near surface: its centre's depth less about its radius (0.02 m)
+  const double expected = 1000 * ViewDepth(cam, info_.goal) - 20;
+  EXPECT_NEAR(mm[goal.row * kSize + goal.col], expected, 8);
+  Pixel table = Project(cam, {1.2, 0.6, 0.4}, kSize, kSize, Fovy());
+  EXPECT_NEAR(mm[table.row * kSize + table.col], 1000 * ViewDepth(cam, {1.2, 0.6, 0.4}), 15);
+  EXPECT_EQ(mm[0], 0) << "the sky has no depth";
+}
+
+TEST_P(RendererTest, SegmentationNamesObjects) {
+  auto gl = Context();
+  if (!gl) GTEST_SKIP();
+  Renderer renderer(*gl, model_.get(), Options("default"));
+  std::vector<uint8_t> layer;
+  renderer.RenderLayer(data_.get(), info_, Layer::kSegmentation, &layer);
+  ASSERT_EQ(layer.size(), kSize * kSize * 3u);
+  const mjvScene& scene = renderer.scene();
+  auto geom_at = [&](Pixel p) -> const mjvGeom* {
+    Rgb c = At(layer, kSize, p);
+    int id = c.r + 256 * c.g + 65536 * c.b;  // segid + 1
+    for (int i = 0; i < scene.ngeom; ++i) {
+      if (scene.geoms[i].segid == id - 1) return &scene.geoms[i];
+    }
+    return nullptr;
+  };
+  const FreeCamera cam = DefaultFreeCamera();
+  const mjvGeom* goal = geom_at(Project(cam, info_.goal, kSize, kSize, Fovy()));
+  ASSERT_NE(goal, nullptr);
+  EXPECT_EQ(goal->objtype, mjOBJ_SITE);
+  EXPECT_EQ(goal->objid, mj_name2id(model_.get(), mjOBJ_SITE, "target0"));
+  const mjvGeom* table = geom_at(Project(cam, {1.2, 0.6, 0.4}, kSize, kSize, Fovy()));
+  ASSERT_NE(table, nullptr);
+  ASSERT_EQ(table->objtype, mjOBJ_GEOM);
+  EXPECT_EQ(model_->geom_bodyid[table->objid], mj_name2id(model_.get(), mjOBJ_BODY, "table0"));
+  EXPECT_EQ(geom_at(Pixel{0, 0}), nullptr) << "the sky is background";
+  // every pixel is background or one scene geom: no blended ids at edges
+  for (size_t i = 0; i < layer.size(); i += 3) {
+    int id = layer[i] + 256 * layer[i + 1] + 65536 * layer[i + 2];
+    ASSERT_LE(id, scene.ngeom) << "pixel " << i / 3;
+  }
+}
+
+TEST_P(RendererTest, CamerasTileOneFrame) {
+  auto gl = Context();
+  if (!gl) GTEST_SKIP();
+  std::vector<uint8_t> single = RenderWith(*gl, Options("none"));
+  RenderOptions options = Options("none", 2 * kSize, kSize);
+  options.cameras = ParseCameraList("default,default", model_.get());
+  Renderer renderer(*gl, model_.get(), options);
+  ASSERT_EQ(renderer.tiles().size(), 2u);
+  EXPECT_EQ(renderer.tiles()[1].left, kSize);
+  EXPECT_EQ(renderer.tiles()[1].width, kSize);
+  std::vector<uint8_t> pair(2 * kSize * kSize * 3);
+  renderer.Render(data_.get(), info_, pair.data());
+  Dump(options, pair);
+  std::vector<uint8_t> left(kSize * kSize * 3), right(kSize * kSize * 3);
+  for (int row = 0; row < kSize; ++row) {
+    std::memcpy(&left[row * kSize * 3], &pair[row * 2 * kSize * 3], kSize * 3);
+    std::memcpy(&right[row * kSize * 3], &pair[(row * 2 + 1) * kSize * 3], kSize * 3);
+  }
+  EXPECT_LT(MeanAbsDiff(left, single), 1.0);
+  EXPECT_LT(MeanAbsDiff(right, single), 1.0);
+
+  // named and tracking cameras see something else than the default view
+  for (const char* spec : {"external_camera_0", "track"}) {
+    RenderOptions other = Options("none");
+    other.cameras = ParseCameraList(spec, model_.get());
+    EXPECT_GT(Compare(single, RenderWith(*gl, other), kSize).fraction, 0.2) << spec;
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Models, RendererTest, ::testing::Values("genuine", "bundled"));
+
+// Overlay helpers that need no GL.
+TEST(Trail, KeepsOnePointPerStepAndRestartsAtZero) {
+  Trail trail;
+  trail.Add(0, {0, 0, 0});
+  trail.Add(1, {1, 0, 0});
+  trail.Add(1, {2, 0, 0});  // the same step rendered again replaces its point
+  trail.Add(2, {3, 0, 0});
+  ASSERT_EQ(trail.points().size(), 3u);
+  EXPECT_EQ(trail.points()[1][0], 2);
+  trail.Add(0, {9, 9, 9});  // a new episode
+  ASSERT_EQ(trail.points().size(), 1u);
+  for (int step = 1; step < 1000; ++step) trail.Add(step, {0, 0, 0});
+  EXPECT_EQ(trail.points().size(), Trail::kMaxPoints);
+  trail.Clear();
+  EXPECT_TRUE(trail.points().empty());
+}
+
+TEST(Hud, ShowsTheFrameInfo) {
+  FrameInfo info;
+  info.title = "FetchReach-v4";
+  HudText reset = FormatHud(info, OverlaySet{});
+  EXPECT_NE(reset.labels.find("reward"), std::string::npos);
+  EXPECT_NE(reset.values.find("FetchReach-v4"), std::string::npos);
+  EXPECT_NE(reset.values.find("\n-\n"), std::string::npos) << "no reward at reset";
+  info.step = 12;
+  info.reward = -1;
+  info.success = true;
+  info.distance = 0.0123;
+  info.has_action = true;
+  info.action = {1, -0.5, 0, 0.25};
+  OverlaySet with_arrow;
+  with_arrow.action = true;
+  HudText step = FormatHud(info, with_arrow);
+  EXPECT_NE(step.values.find("12"), std::string::npos);
+  EXPECT_NE(step.values.find("-1.0000"), std::string::npos);
+  EXPECT_NE(step.values.find("0.0123 m"), std::string::npos);
+  EXPECT_NE(step.values.find("yes"), std::string::npos);
+  EXPECT_NE(step.values.find("+1.00 -0.50 +0.00 +0.25"), std::string::npos);
+  EXPECT_NE(step.labels.find("arrow"), std::string::npos);
+  // one value per label
+  EXPECT_EQ(std::count(step.labels.begin(), step.labels.end(), '\n'),
+            std::count(step.values.begin(), step.values.end(), '\n'));
+}
+
+}  // namespace
+}  // namespace fetchscope
