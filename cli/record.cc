@@ -159,6 +159,7 @@ void RunRecord(const RecordOptions& o, const std::string& command_line) {
   video.codec = o.codec;
   video.crf = o.crf;
   video.preset = o.preset;
+  ValidateVideoOptions(video);
   PolicyContext context;
   context.seed = seed;
   context.steps_per_episode = o.steps;

@@ -13,8 +13,8 @@ void AddViewOptions(CLI::App* sub, ViewOptions* o) {
   sub->add_option("--overlay", o->overlay,
                   "Comma list of goal, achieved, hud, action, trail; or none")
       ->capture_default_str();
-  sub->add_option("--width", o->width, "Frame width in pixels")->capture_default_str();
-  sub->add_option("--height", o->height, "Frame height in pixels")->capture_default_str();
+  sub->add_option("--width", o->width, "Frame width in pixels")->capture_default_str()->check(CLI::Range(1, 8192));
+  sub->add_option("--height", o->height, "Frame height in pixels")->capture_default_str()->check(CLI::Range(1, 8192));
   sub->add_option("--backend", o->backend,
                   "auto (EGL, then OSMesa), egl or osmesa; default: $MUJOCO_GL, else auto");
   sub->add_option("--gpu", o->gpu, "EGL device index (default: $MUJOCO_EGL_DEVICE_ID, else the first)");
