@@ -113,13 +113,14 @@ nlohmann::json BenchRender(const AssetSource& assets, const std::string& backend
       std::printf("%-26s skipped: %s\n", backend.c_str(), e.what());
       continue;
     }
+    for (int msaa : {-1, 0})
     for (auto [w, h] : sizes) {
       FetchEnv env(spec, assets);
-      RenderOptions options;
-      options.width = w;
-      options.height = h;
-      options.cameras = ParseCameraList("default", env.model());
-      options.overlays = ParseOverlays("goal,achieved,hud");
+      ViewOptions view;
+      view.width = w;
+      view.height = h;
+      view.msaa = msaa;
+      const RenderOptions options = MakeRenderOptions(view, env.model());
       Renderer renderer(*gl, env.model(), options);
       PolicyContext context;
       auto policy = MakePolicy("scripted", spec, context);
@@ -142,9 +143,10 @@ nlohmann::json BenchRender(const AssetSource& assets, const std::string& backend
         });
         ++episode;
       }
-      const std::string label = gl->info().backend + " (" + gl->info().renderer + ")";
-      std::printf("%-26s %4dx%-5d %.1f\n", gl->info().backend.c_str(), w, h, frames / busy);
-      rows.push_back({{"backend", gl->info().backend}, {"gl_renderer", gl->info().renderer},
+      const int samples = env.model()->vis.quality.offsamples;
+      std::printf("%-26s %4dx%-5d %.1f\n", (gl->info().backend + " msaa " + std::to_string(samples)).c_str(), w, h,
+                  frames / busy);
+      rows.push_back({{"backend", gl->info().backend}, {"gl_renderer", gl->info().renderer}, {"msaa", samples},
                       {"width", w}, {"height", h}, {"frames", frames}, {"frames_per_s", frames / busy}});
     }
   }
@@ -215,19 +217,25 @@ nlohmann::json BenchRecord(const AssetSource& assets, const std::string& backend
   nlohmann::json rows = nlohmann::json::array();
   std::printf("%-26s %-10s %s\n", "record (whole process)", "size", "ms/frame   peak RSS");
   for (const std::string& backend : Split(backends)) {
-    const std::string cmd = "'" + self + "' record --quiet --env-id FetchPush-v4 --policy scripted --episodes " +
-                            std::to_string(episodes) + " --width 640 --height 480 --backend " + backend +
-                            " --assets '" + assets.root + "' --out '" + dir.string() + "'";
-    const ChildRun run = RunChild(assets.kind == "bundled" ? cmd.substr(0, cmd.find(" --assets")) + " --out '" + dir.string() + "'" : cmd);
-    fs::remove_all(dir);
-    if (run.exit_code != 0) {
-      rows.push_back({{"backend", backend}, {"skipped", "record failed (exit " + std::to_string(run.exit_code) + ")"}});
-      continue;
+    for (const std::string msaa : {"", "0"}) {
+      const std::string cmd = "'" + self + "' record --quiet --env-id FetchPush-v4 --policy scripted --episodes " +
+                              std::to_string(episodes) + " --width 640 --height 480 --backend " + backend +
+                              (msaa.empty() ? "" : " --msaa " + msaa) + " --assets '" +
+                              (assets.kind == "bundled" ? std::string("bundled") : assets.root) + "' --out '" +
+                              dir.string() + "'";
+      const ChildRun run = RunChild(cmd);
+      fs::remove_all(dir);
+      const std::string label = "fetchscope " + backend + (msaa.empty() ? " msaa 4" : " msaa " + msaa);
+      if (run.exit_code != 0) {
+        rows.push_back({{"backend", backend}, {"skipped", "record failed (exit " + std::to_string(run.exit_code) + ")"}});
+        continue;
+      }
+      std::printf("%-26s %4dx%-5d %7.2f   %.0f MiB\n", label.c_str(), 640, 480, 1000 * run.wall_s / frames,
+                  run.peak_rss_mib);
+      rows.push_back({{"backend", backend}, {"msaa", msaa.empty() ? 4 : std::stoi(msaa)}, {"episodes", episodes},
+                      {"frames", frames}, {"wall_s", run.wall_s}, {"s_per_frame", run.wall_s / frames},
+                      {"peak_rss_mib", run.peak_rss_mib}});
     }
-    std::printf("%-26s %4dx%-5d %7.2f   %.0f MiB\n", ("fetchscope " + backend).c_str(), 640, 480,
-                1000 * run.wall_s / frames, run.peak_rss_mib);
-    rows.push_back({{"backend", backend}, {"episodes", episodes}, {"frames", frames}, {"wall_s", run.wall_s},
-                    {"s_per_frame", run.wall_s / frames}, {"peak_rss_mib", run.peak_rss_mib}});
   }
   result["fetchscope"] = rows;
   if (peers) {

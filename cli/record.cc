@@ -167,11 +167,7 @@ void RunRecord(const RecordOptions& o, const std::string& command_line) {
   context.exec_timeout_s = o.exec_timeout;
   auto policy = MakePolicy(o.policy, spec, context);
   FetchEnv env(spec, ResolveAssets(o.env.assets));
-  RenderOptions render_options;
-  render_options.width = o.view.width;
-  render_options.height = o.view.height;
-  render_options.cameras = ParseCameraList(o.view.camera, env.model());
-  render_options.overlays = overlays;
+  const RenderOptions render_options = MakeRenderOptions(o.view, env.model());
 
   std::error_code ec;
   fs::create_directories(o.out, ec);

@@ -57,17 +57,13 @@ void RegisterRender(CLI::App& app) {
     }
     const EnvSpec& spec = FindEnvSpec(env->env_id);
     const uint64_t seed = ParseSeed(env->seed);
-    const OverlaySet overlays = ParseOverlays(view->overlay);
+    ParseOverlays(view->overlay);  // reject a bad --overlay before any work
     PolicyContext context;
     context.seed = seed;
     context.steps_per_episode = *steps;
     auto policy = MakePolicy(*policy_spec, spec, context);
     FetchEnv fetch(spec, ResolveAssets(env->assets));
-    RenderOptions options;
-    options.width = view->width;
-    options.height = view->height;
-    options.cameras = ParseCameraList(view->camera, fetch.model());
-    options.overlays = overlays;
+    const RenderOptions options = MakeRenderOptions(*view, fetch.model());
     const EpisodeRecord episode = RunEpisode(fetch, *policy, 0, seed, *steps);
     auto gl = CreateGlContext(view->backend, view->gpu);
     Renderer renderer(*gl, fetch.model(), options);

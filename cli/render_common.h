@@ -6,6 +6,7 @@
 #include <string>
 
 #include "render/overlay.h"
+#include "render/renderer.h"
 #include "src/episode.h"
 #include "src/fetch_env.h"
 
@@ -19,7 +20,11 @@ struct ViewOptions {
   int height = 480;                               ///< pixels
   std::string backend;                            ///< auto|egl|osmesa; empty: $MUJOCO_GL or auto
   int gpu = -1;                                   ///< EGL device index; -1: $MUJOCO_EGL_DEVICE_ID or first
+  int msaa = -1;                                  ///< multisample count; -1: the model's (4)
 };
+
+/// The renderer options for `view` on `model` (parses --camera and --overlay).
+RenderOptions MakeRenderOptions(const ViewOptions& view, const mjModel* model);
 
 /// Adds the view options to `sub`.
 void AddViewOptions(CLI::App* sub, ViewOptions* options);

@@ -96,6 +96,7 @@ Renderer::Renderer(GlContext& gl, mjModel* model, const RenderOptions& options)
   mjVisual& vis = model_->vis;
   vis.global.offwidth = std::max(vis.global.offwidth, w);
   vis.global.offheight = std::max(vis.global.offheight, h);
+  if (options_.msaa_samples >= 0) vis.quality.offsamples = options_.msaa_samples;
   if (limits.max_samples > 0) {  // a driver without 4x multisampling still renders
     vis.quality.offsamples = std::min(vis.quality.offsamples, limits.max_samples);
   }

@@ -29,6 +29,7 @@ struct RenderOptions {
   int height = 480;                 ///< pixels
   std::vector<CameraSpec> cameras;  ///< tiled left to right (grid from 4 on); empty = default
   OverlaySet overlays;              ///< drawn by Render (not by the depth/segmentation layers)
+  int msaa_samples = -1;            ///< multisampling; -1 = the model's offsamples (4, as Gymnasium)
 };
 
 /// Off-screen renderer for one model on one GL context (one per thread).
