@@ -35,11 +35,7 @@ void RegisterRandomEpisodes(CLI::App& app) {
       const EpisodeRecord ep = RunEpisode(fetch, *policy, e, e == 0 ? std::optional<uint64_t>(seed) : std::nullopt,
                                           spec.max_episode_steps);
       const StepRecord& last = ep.steps.back();
-      double d2 = 0;
-      for (int i = 0; i < 3; ++i) {
-        d2 += (last.obs.achieved_goal[i] - last.obs.desired_goal[i]) * (last.obs.achieved_goal[i] - last.obs.desired_goal[i]);
-      }
-      const double final_distance = std::sqrt(d2);
+      const double final_distance = GoalDistance(last.obs.achieved_goal, last.obs.desired_goal);
       returns.push_back(ep.episode_return);
       finals.push_back(final_distance);
       successes += last.is_success;

@@ -40,8 +40,7 @@ FrameInfo MakeFrameInfo(const FetchEnv& env, const StepRecord& record) {
   info.reward = record.reward ? *record.reward : NAN;
   const auto& a = record.obs.achieved_goal;
   const auto& g = record.obs.desired_goal;
-  info.distance = std::sqrt((a[0] - g[0]) * (a[0] - g[0]) + (a[1] - g[1]) * (a[1] - g[1]) +
-                            (a[2] - g[2]) * (a[2] - g[2]));
+  info.distance = GoalDistance(a, g);
   info.success = record.is_success;
   info.has_action = record.action.has_value();
   if (record.action) info.action = record.action->value;

@@ -40,6 +40,10 @@ void WarningHandler(const char* msg) {
 
 }  // namespace
 
+double GoalDistance(const std::array<double, 3>& a, const std::array<double, 3>& b) {
+  return Norm3(a[0] - b[0], a[1] - b[1], a[2] - b[2]);
+}
+
 void InstallMujocoHandlers() {
   mju_user_error = ErrorHandler;
   mju_user_warning = WarningHandler;
@@ -235,13 +239,13 @@ StepResult FetchEnv::Step(const Action& action) {
 }
 
 double FetchEnv::ComputeReward(const std::array<double, 3>& a, const std::array<double, 3>& b) const {
-  const double dist = Norm3(a[0] - b[0], a[1] - b[1], a[2] - b[2]);
+  const double dist = GoalDistance(a, b);
   if (spec_.dense) return -dist;
   return dist > spec_.distance_threshold ? -1.0 : -0.0;
 }
 
 bool FetchEnv::IsSuccess(const std::array<double, 3>& a, const std::array<double, 3>& b) const {
-  return Norm3(a[0] - b[0], a[1] - b[1], a[2] - b[2]) < spec_.distance_threshold;
+  return GoalDistance(a, b) < spec_.distance_threshold;
 }
 
 Observation FetchEnv::Observe() const {

@@ -106,6 +106,9 @@ class FetchEnv {
 /// are printed once each on stderr). Call once at program start.
 void InstallMujocoHandlers();
 
+/// || a - b ||, summed in numpy's order: the distance every reward and success flag uses.
+double GoalDistance(const std::array<double, 3>& a, const std::array<double, 3>& b);
+
 /// rotations.mat2euler of Gymnasium-Robotics for one row-major 3x3 matrix.
 std::array<double, 3> Mat2Euler(const double* mat);
 

@@ -153,6 +153,9 @@ struct BadInput {
   std::string message;  // substring of the one-line error
 };
 
+// gtest prints the command line instead of the bytes of the struct
+void PrintTo(const BadInput& c, std::ostream* os) { *os << c.args; }
+
 class BadInputTest : public ::testing::TestWithParam<BadInput> {};
 
 TEST_P(BadInputTest, OneClearLineAndNoOutputFile) {

@@ -175,6 +175,9 @@ struct BadRender {
   std::string message;
 };
 
+// gtest prints the command line instead of the bytes of the struct
+void PrintTo(const BadRender& c, std::ostream* os) { *os << c.args; }
+
 class BadRenderTest : public ::testing::TestWithParam<BadRender> {};
 
 TEST_P(BadRenderTest, OneClearLineNothingWritten) {
