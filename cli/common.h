@@ -48,5 +48,6 @@ void RegisterRender(CLI::App& app);
 void RegisterListCameras(CLI::App& app);
 void RegisterRecord(CLI::App& app);
 void RegisterBench(CLI::App& app);
+void RegisterProbeActions(CLI::App& app);
 
 }  // namespace fetchscope::cli

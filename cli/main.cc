@@ -27,6 +27,7 @@ int main(int argc, char** argv) {
   cli::RegisterListCameras(app);
   cli::RegisterRecord(app);
   cli::RegisterBench(app);
+  cli::RegisterProbeActions(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
