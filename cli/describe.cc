@@ -84,7 +84,7 @@ nlohmann::json Describe(const FetchEnv& env) {
             "the fingers, < 0 closes them; |action[3]| above about 0.05 already drives a finger to "
             "its limit";
   nlohmann::json actions = nlohmann::json::array({
-      {{"index", 0}, {"name", "dx"}, {"meaning", "displace the mocap target of the gripper by 0.05 m * action[0] along world x per step (position, not velocity; re-anchored on the gripper each step)"}, {"unit", "0.05 m"}},
+      {{"index", 0}, {"name", "dx"}, {"meaning", "displace the mocap target of the gripper by 0.05 m * action[0] along world x per step (position, not velocity; re-anchored on the gripper each step, so the gripper itself lags: probe-actions measures about 0.02-0.03 m per step at |a| = 1)"}, {"unit", "0.05 m"}},
       {{"index", 1}, {"name", "dy"}, {"meaning", "displace the gripper target by 0.05 m * action[1] along world y per step"}, {"unit", "0.05 m"}},
       {{"index", 2}, {"name", "dz"}, {"meaning", "displace the gripper target by 0.05 m * action[2] along world z per step"}, {"unit", "0.05 m"}},
       {{"index", 3}, {"name", "gripper"}, {"meaning", gripper_meaning}, {"unit", "m (finger target offset)"}}});
