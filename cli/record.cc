@@ -56,6 +56,7 @@ struct Frame {
   int t = 0;
   std::string label;
   bool last = false;
+  bool empty = false;  // an end marker that carries no picture (episode failed before its first frame)
 };
 
 // A fixed pool of frame buffers passed between two threads: no per-frame allocation.
@@ -212,7 +213,7 @@ void RunRecord(const RecordOptions& o, const std::string& command_line) {
       while (true) {
         Frame* f = ring.AcquireFilled();
         const bool last = f->last;
-        if (!failed) {
+        if (!failed && !f->empty) {
           try {
             const auto t0 = Clock::now();
             writer.AddFrame(f->rgb.data());
@@ -242,6 +243,7 @@ void RunRecord(const RecordOptions& o, const std::string& command_line) {
       f->t = record.t;
       f->label = TileLabel(info);
       f->last = false;
+      f->empty = false;
       timings.render += Since(t0);
       if (pending) ring.PushFilled(pending);
       pending = f;
@@ -254,10 +256,12 @@ void RunRecord(const RecordOptions& o, const std::string& command_line) {
       episode = RunEpisode(env, *policy, k, k == 0 ? std::optional<uint64_t>(seed) : std::nullopt,
                            o.steps, on_step);
     } catch (...) {
-      if (pending) {
-        pending->last = true;
-        ring.PushFilled(pending);
+      if (!pending) {
+        pending = ring.AcquireFree();
+        pending->empty = true;
       }
+      pending->last = true;
+      ring.PushFilled(pending);
       encoder.join();
       throw;  // the writer's destructor removes the partial video
     }
