@@ -152,7 +152,6 @@ void RunRecord(const RecordOptions& o, const std::string& command_line) {
   const auto wall_start = Clock::now();
   const EnvSpec& spec = FindEnvSpec(o.env.env_id);
   const uint64_t seed = ParseSeed(o.env.seed);
-  const OverlaySet overlays = ParseOverlays(o.view.overlay);
   VideoOptions video;
   video.width = o.view.width;
   video.height = o.view.height;
