@@ -3,6 +3,8 @@
 
 #include <chrono>
 #include <cstdio>
+#include <sstream>
+#include <string>
 
 #include "cli/bench.h"
 #include "cli/common.h"
@@ -88,12 +90,31 @@ void RegisterBench(CLI::App& app) {
   auto backends = std::make_shared<std::string>("egl,osmesa");
   auto peers = std::make_shared<bool>(true);
   CLI::App* sub = app.add_subcommand("bench", "Measure simulation, rendering, encoding and record throughput");
-  sub->add_option("--what", *what, "sim, render, encode, record or all")
+  auto soak_frames = std::make_shared<int>(10000);
+  sub->add_option("--what", *what,
+                  "sim, render, encode, record, all (those four), or soak: one long record run "
+                  "(--soak-frames, minutes) with its memory sampled every second; not part of all")
       ->capture_default_str()
-      ->check(CLI::IsMember({"sim", "render", "encode", "record", "all"}));
+      ->check(CLI::IsMember({"sim", "render", "encode", "record", "all", "soak"}));
+  sub->add_option("--soak-frames", *soak_frames, "Frames of the soak run (whole 51-frame episodes)")
+      ->capture_default_str()
+      ->check(CLI::Range(51, 1000000));
   sub->add_option("--assets", *assets, "bundled, auto or a Gymnasium-Robotics assets folder")->capture_default_str();
   sub->add_option("--seconds", *seconds, "Time budget per measurement group")->capture_default_str()->check(CLI::Range(0.1, 600.0));
-  sub->add_option("--backends", *backends, "Render backends to measure")->capture_default_str();
+  sub->add_option("--backends", *backends, "Render backends to measure: a comma list of egl, osmesa")
+      ->capture_default_str()
+      ->check(
+          [](const std::string& list) -> std::string {
+            std::string item;
+            std::stringstream stream(list);
+            while (std::getline(stream, item, ',')) {
+              if (item != "egl" && item != "osmesa") {
+                return "backend '" + item + "' is not known; accepted: egl, osmesa (comma list)";
+              }
+            }
+            return "";
+          },
+          "egl,osmesa");
   sub->add_flag("!--no-peers", *peers, "Skip the peer measurements (mujoco-record, ffmpeg)");
   sub->add_option("--json-out", *json_out, "Write the results as JSON (P.json or P_bench.json)");
   sub->callback([=]() {
@@ -107,6 +128,7 @@ void RegisterBench(CLI::App& app) {
     if (all || *what == "render") j["render"] = BenchRender(source, *backends, *seconds, *peers);
     if (all || *what == "encode") j["encode"] = BenchEncode(*seconds);
     if (all || *what == "record") j["record"] = BenchRecord(source, *backends, *seconds, *peers);
+    if (*what == "soak") j["soak"] = BenchSoak(source, *backends, *soak_frames, 1.0);
     j["peak_rss_mib"] = PeakRssMiB();
     std::printf("peak RSS %.1f MiB\n", PeakRssMiB());
     if (!json_out->empty()) {

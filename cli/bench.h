@@ -19,7 +19,12 @@ nlohmann::json BenchSim(const AssetSource& assets, double budget_s);
 nlohmann::json BenchRender(const AssetSource& assets, const std::string& backends, double budget_s, bool peers);
 /// Encode frames/s per codec.
 nlohmann::json BenchEncode(double budget_s);
-/// Record seconds per frame, beside mujoco-record + ffmpeg.
+/// Record seconds per frame (msaa auto beside 4), --jobs 1 against --jobs 2 where record has
+/// --jobs, beside mujoco-record + ffmpeg.
 nlohmann::json BenchRecord(const AssetSource& assets, const std::string& backends, double budget_s, bool peers);
+/// One record run of about `target_frames` frames at 640x480 on the first of `backends`, its
+/// resident set sampled every `interval_s`: whether memory stays flat over a long run.
+nlohmann::json BenchSoak(const AssetSource& assets, const std::string& backends, int target_frames,
+                         double interval_s);
 
 }  // namespace fetchscope::cli

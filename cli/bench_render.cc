@@ -5,9 +5,12 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <sstream>
 
 #include "cli/bench.h"
@@ -16,6 +19,7 @@
 #include "render/renderer.h"
 #include "render/video_writer.h"
 #include "src/episode.h"
+#include "src/errors.h"
 #include "src/fetch_env.h"
 
 namespace fetchscope::cli {
@@ -51,6 +55,24 @@ ChildRun RunChild(const std::string& command) {
   run.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
   run.peak_rss_mib = usage.ru_maxrss / 1024.0;
   return run;
+}
+
+// The whole of a text file; "" when it cannot be read.
+std::string ReadText(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return in ? ss.str() : std::string();
+}
+
+// A manifest.json as JSON; not an object when absent or not JSON.
+nlohmann::json ReadManifest(const fs::path& dir) {
+  return nlohmann::json::parse(ReadText((dir / "manifest.json").string()), nullptr, /*allow_exceptions=*/false);
+}
+
+// "msaa auto (0)", "msaa 4": the table label for a requested and a resolved sample count.
+std::string MsaaLabel(const std::string& requested, int samples) {
+  return requested == "auto" ? "msaa auto (" + std::to_string(samples) + ")" : "msaa " + requested;
 }
 
 bool HaveProgram(const std::string& name) {
@@ -113,8 +135,11 @@ nlohmann::json BenchRender(const AssetSource& assets, const std::string& backend
       std::printf("%-26s skipped: %s\n", backend.c_str(), e.what());
       continue;
     }
-    for (int msaa : {-1, 0})
+    // the default (auto) beside Gymnasium's 4; 0 too where auto did not already pick it
+    std::vector<std::string> msaa_values = {"auto", "4"};
+    for (size_t m = 0; m < msaa_values.size(); ++m)
     for (auto [w, h] : sizes) {
+      const std::string msaa = msaa_values[m];  // a copy: the list may grow below
       FetchEnv env(spec, assets);
       ViewOptions view;
       view.width = w;
@@ -122,6 +147,7 @@ nlohmann::json BenchRender(const AssetSource& assets, const std::string& backend
       view.msaa = msaa;
       const RenderOptions options = MakeRenderOptions(view, env.model());
       Renderer renderer(*gl, env.model(), options);
+      if (msaa == "auto" && renderer.msaa_samples() != 0 && msaa_values.size() == 2) msaa_values.push_back("0");
       PolicyContext context;
       auto policy = MakePolicy("scripted", spec, context);
       std::vector<uint8_t> rgb(static_cast<size_t>(w) * h * 3);
@@ -143,11 +169,12 @@ nlohmann::json BenchRender(const AssetSource& assets, const std::string& backend
         });
         ++episode;
       }
-      const int samples = env.model()->vis.quality.offsamples;
-      std::printf("%-26s %4dx%-5d %.1f\n", (gl->info().backend + " msaa " + std::to_string(samples)).c_str(), w, h,
+      const int samples = renderer.msaa_samples();
+      std::printf("%-26s %4dx%-5d %.1f\n", (gl->info().backend + " " + MsaaLabel(msaa, samples)).c_str(), w, h,
                   frames / busy);
-      rows.push_back({{"backend", gl->info().backend}, {"gl_renderer", gl->info().renderer}, {"msaa", samples},
-                      {"width", w}, {"height", h}, {"frames", frames}, {"frames_per_s", frames / busy}});
+      rows.push_back({{"backend", gl->info().backend}, {"gl_renderer", gl->info().renderer}, {"msaa_requested", msaa},
+                      {"msaa", samples}, {"msaa_reason", renderer.msaa_reason()}, {"width", w}, {"height", h},
+                      {"frames", frames}, {"frames_per_s", frames / busy}});
     }
   }
   result["fetchscope"] = rows;
@@ -208,36 +235,123 @@ nlohmann::json BenchEncode(double budget_s) {
   return rows;
 }
 
+namespace {
+
+// One `fetchscope record` child: its process figures and the manifest it wrote.
+struct RecordRun {
+  ChildRun child;
+  nlohmann::json manifest;  // null when the run wrote none
+};
+
+// Runs this binary's `record` with `args` into `dir` (removed afterwards).
+RecordRun RunRecordChild(const std::string& self, const std::string& args, const fs::path& dir) {
+  RecordRun run;
+  run.child = RunChild("'" + self + "' record --quiet " + args + " --out '" + dir.string() + "'");
+  run.manifest = ReadManifest(dir);
+  std::error_code ec;
+  fs::remove_all(dir, ec);
+  return run;
+}
+
+// The samples a record run used: the manifest's "msaa" where it has one, else what auto picks
+// for the manifest's GL renderer, else -1 (unknown).
+int ManifestMsaa(const nlohmann::json& manifest, const std::string& requested) {
+  if (manifest.is_object() && manifest.contains("msaa")) return manifest["msaa"].get<int>();
+  if (requested != "auto") return std::stoi(requested);
+  if (!manifest.is_object() || !manifest.contains("backend")) return -1;
+  const std::string renderer = manifest["backend"].value("gl_renderer", "");
+  return SoftwareRendererName(renderer).empty() ? 4 : 0;
+}
+
+std::string AssetsArg(const AssetSource& assets) {
+  return " --assets '" + (assets.kind == "bundled" ? std::string("bundled") : assets.root) + "'";
+}
+
+// True when this binary's record takes --jobs.
+bool RecordHasJobs(const std::string& self) {
+  return RunChild("'" + self + "' record --help | grep -q -- --jobs").exit_code == 0;
+}
+
+// Resident set size (VmRSS) of process `pid` in MiB, or -1 once it has gone.
+double ReadRssMiB(pid_t pid) {
+  const std::string status = ReadText("/proc/" + std::to_string(pid) + "/status");
+  const size_t at = status.find("VmRSS:");
+  if (at == std::string::npos) return -1;  // a zombie has no memory lines
+  return std::strtod(status.c_str() + at + 6, nullptr) / 1024.0;
+}
+
+}  // namespace
+
 nlohmann::json BenchRecord(const AssetSource& assets, const std::string& backends, double budget_s, bool peers) {
   (void)budget_s;
   nlohmann::json result;
   const std::string self = fs::read_symlink("/proc/self/exe").string();
   const fs::path dir = fs::temp_directory_path() / ("fetchscope_bench_record_" + std::to_string(getpid()));
   const int episodes = 4, frames = episodes * 51;
+  const std::string common = "--env-id FetchPush-v4 --policy scripted --episodes " + std::to_string(episodes) +
+                             " --width 640 --height 480" + AssetsArg(assets);
   nlohmann::json rows = nlohmann::json::array();
-  std::printf("%-26s %-10s %s\n", "record (whole process)", "size", "ms/frame   peak RSS");
+  std::string first_backend;
+  std::printf("%-30s %-10s %s\n", "record (whole process)", "size", "ms/frame   peak RSS");
   for (const std::string& backend : Split(backends)) {
-    for (const std::string msaa : {"", "0"}) {
-      const std::string cmd = "'" + self + "' record --quiet --env-id FetchPush-v4 --policy scripted --episodes " +
-                              std::to_string(episodes) + " --width 640 --height 480 --backend " + backend +
-                              (msaa.empty() ? "" : " --msaa " + msaa) + " --assets '" +
-                              (assets.kind == "bundled" ? std::string("bundled") : assets.root) + "' --out '" +
-                              dir.string() + "'";
-      const ChildRun run = RunChild(cmd);
-      fs::remove_all(dir);
-      const std::string label = "fetchscope " + backend + (msaa.empty() ? " msaa 4" : " msaa " + msaa);
-      if (run.exit_code != 0) {
-        rows.push_back({{"backend", backend}, {"skipped", "record failed (exit " + std::to_string(run.exit_code) + ")"}});
-        continue;
+    // the default (auto) beside Gymnasium's 4; 0 too where auto did not already pick it
+    std::vector<std::string> msaa_values = {"auto", "4"};
+    for (size_t m = 0; m < msaa_values.size(); ++m) {
+      const std::string msaa = msaa_values[m];  // a copy: the list may grow below
+      const RecordRun run = RunRecordChild(self, common + " --backend " + backend + " --msaa " + msaa, dir);
+      if (run.child.exit_code != 0) {
+        rows.push_back({{"backend", backend}, {"msaa_requested", msaa},
+                        {"skipped", "record failed (exit " + std::to_string(run.child.exit_code) + ")"}});
+        std::printf("%-30s skipped: record failed (exit %d)\n", ("fetchscope " + backend).c_str(), run.child.exit_code);
+        break;
       }
-      std::printf("%-26s %4dx%-5d %7.2f   %.0f MiB\n", label.c_str(), 640, 480, 1000 * run.wall_s / frames,
-                  run.peak_rss_mib);
-      rows.push_back({{"backend", backend}, {"msaa", msaa.empty() ? 4 : std::stoi(msaa)}, {"episodes", episodes},
-                      {"frames", frames}, {"wall_s", run.wall_s}, {"s_per_frame", run.wall_s / frames},
-                      {"peak_rss_mib", run.peak_rss_mib}});
+      if (first_backend.empty()) first_backend = backend;
+      const int samples = ManifestMsaa(run.manifest, msaa);
+      if (msaa == "auto" && samples != 0 && msaa_values.size() == 2) msaa_values.push_back("0");
+      const std::string label = "fetchscope " + backend + " " + MsaaLabel(msaa, samples);
+      std::printf("%-30s %4dx%-5d %7.2f   %.0f MiB\n", label.c_str(), 640, 480, 1000 * run.child.wall_s / frames,
+                  run.child.peak_rss_mib);
+      nlohmann::json row = {{"backend", backend}, {"msaa_requested", msaa}, {"msaa", samples},
+                            {"episodes", episodes}, {"frames", frames}, {"wall_s", run.child.wall_s},
+                            {"s_per_frame", run.child.wall_s / frames}, {"peak_rss_mib", run.child.peak_rss_mib}};
+      if (run.manifest.is_object() && run.manifest.contains("msaa_reason")) row["msaa_reason"] = run.manifest["msaa_reason"];
+      rows.push_back(row);
     }
   }
   result["fetchscope"] = rows;
+
+  // --jobs 1 against --jobs 2: the same episodes, whole process, the default msaa
+  nlohmann::json jobs_rows = nlohmann::json::array();
+  if (first_backend.empty()) {
+    result["jobs"] = {{"skipped", "no backend recorded"}};
+  } else if (!RecordHasJobs(self)) {
+    result["jobs"] = {{"skipped", "this build's record has no --jobs"}};
+    std::printf("record --jobs: skipped (this build's record has no --jobs)\n");
+  } else {
+    const int job_episodes = 8;
+    double base = 0;
+    for (int jobs : {1, 2}) {
+      const RecordRun run = RunRecordChild(self, "--env-id FetchPush-v4 --policy scripted --episodes " +
+                                                     std::to_string(job_episodes) + " --width 640 --height 480" +
+                                                     AssetsArg(assets) + " --backend " + first_backend +
+                                                     " --jobs " + std::to_string(jobs), dir);
+      if (run.child.exit_code != 0) {
+        jobs_rows.push_back({{"jobs", jobs}, {"skipped", "record failed (exit " + std::to_string(run.child.exit_code) + ")"}});
+        continue;
+      }
+      const double eps = job_episodes / run.child.wall_s;
+      if (jobs == 1) base = eps;
+      const std::string label = "fetchscope " + first_backend + " --jobs " + std::to_string(jobs);
+      std::printf("%-30s %4dx%-5d %7.2f episodes/s (x%.2f)   %.0f MiB\n", label.c_str(), 640, 480, eps,
+                  base > 0 ? eps / base : 0.0, run.child.peak_rss_mib);
+      jobs_rows.push_back({{"backend", first_backend}, {"jobs", jobs}, {"episodes", job_episodes},
+                           {"frames", job_episodes * 51}, {"wall_s", run.child.wall_s}, {"episodes_per_s", eps},
+                           {"speedup_vs_jobs_1", base > 0 ? nlohmann::json(eps / base) : nlohmann::json(nullptr)},
+                           {"msaa", ManifestMsaa(run.manifest, "auto")}, {"peak_rss_mib", run.child.peak_rss_mib}});
+    }
+    result["jobs"] = jobs_rows;
+  }
+
   if (peers) {
     const std::string rgb = dir.string() + ".rgb", mp4 = dir.string() + ".mp4";
     nlohmann::json peer = PeerMujocoRecord(GenuineModel(assets, "push.xml"), frames, rgb);
@@ -259,6 +373,80 @@ nlohmann::json BenchRecord(const AssetSource& assets, const std::string& backend
     result["mujoco_record_plus_ffmpeg"] = peer;
   }
   return result;
+}
+
+nlohmann::json BenchSoak(const AssetSource& assets, const std::string& backends, int target_frames,
+                         double interval_s) {
+  const std::string self = fs::read_symlink("/proc/self/exe").string();
+  const fs::path dir = fs::temp_directory_path() / ("fetchscope_bench_soak_" + std::to_string(getpid()));
+  const std::vector<std::string> backend_list = Split(backends);
+  const std::string backend = backend_list.empty() ? "auto" : backend_list.front();
+  const int episodes = std::max(1, (target_frames + 50) / 51);  // 51 frames each, reset included
+  const std::string assets_dir = assets.kind == "bundled" ? std::string("bundled") : assets.root;
+  const std::vector<std::string> args = {self, "record", "--quiet", "--env-id", "FetchPush-v4", "--policy", "scripted",
+                                         "--episodes", std::to_string(episodes), "--width", "640", "--height", "480",
+                                         "--backend", backend, "--assets", assets_dir, "--out", dir.string()};
+  std::printf("soak: record of %d episodes (%d frames) at 640x480 on %s, RSS every %.1f s\n", episodes,
+              episodes * 51, backend.c_str(), interval_s);
+  const auto start = Clock::now();
+  pid_t pid = fork();
+  if (pid == 0) {
+    int devnull = open("/dev/null", O_WRONLY);
+    dup2(devnull, STDOUT_FILENO);
+    dup2(devnull, STDERR_FILENO);
+    std::vector<char*> argv;
+    for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+    argv.push_back(nullptr);
+    execv(self.c_str(), argv.data());
+    _exit(127);
+  }
+  if (pid < 0) throw RunError("bench soak: cannot start record: fork failed");
+  // sample the child's resident set until it exits (sampled directly: it is not a shell)
+  nlohmann::json samples = nlohmann::json::array();
+  int status = 0;
+  rusage usage{};
+  double next = 0;
+  while (wait4(pid, &status, WNOHANG, &usage) == 0) {
+    const double t = Since(start);
+    if (t >= next) {
+      const double rss = ReadRssMiB(pid);
+      if (rss >= 0) samples.push_back({{"t_s", t}, {"rss_mib", rss}});
+      next += interval_s;
+    }
+    usleep(20000);
+  }
+  const double wall = Since(start);
+  const int exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  const nlohmann::json manifest = ReadManifest(dir);
+  std::error_code ec;
+  fs::remove_all(dir, ec);
+  if (exit_code != 0) {
+    std::printf("soak: record failed (exit %d)\n", exit_code);
+    return {{"skipped", "record failed (exit " + std::to_string(exit_code) + ")"}, {"backend", backend}};
+  }
+  const long frames = manifest.is_object() ? manifest.value("frames", 0L) : 0L;
+  // flatness: the resident set once the first episodes have warmed up (after a tenth of the
+  // run) against its largest later value and the last sample
+  double settled = -1, later_max = 0, last = 0;
+  for (const auto& s : samples) {
+    const double t = s["t_s"].get<double>(), rss = s["rss_mib"].get<double>();
+    if (t >= wall / 10 && settled < 0) settled = rss;
+    if (settled >= 0) later_max = std::max(later_max, rss);
+    last = rss;
+  }
+  const double peak = usage.ru_maxrss / 1024.0;
+  std::printf("%-10s %s\n", "t (s)", "RSS (MiB)");
+  const size_t step = std::max<size_t>(1, samples.size() / 20);  // about 20 table rows
+  for (size_t i = 0; i < samples.size(); i += step) {
+    std::printf("%-10.1f %.1f\n", samples[i]["t_s"].get<double>(), samples[i]["rss_mib"].get<double>());
+  }
+  std::printf("soak: %ld frames in %.1f s; RSS %.1f MiB after a tenth of the run, at most %.1f later, %.1f at the "
+              "end (growth %+.1f MiB); peak RSS %.1f MiB\n",
+              frames, wall, settled, later_max, last, later_max - settled, peak);
+  return {{"backend", backend}, {"width", 640}, {"height", 480}, {"episodes", episodes}, {"frames", frames},
+          {"msaa", ManifestMsaa(manifest, "auto")}, {"wall_s", wall}, {"interval_s", interval_s},
+          {"rss_settled_mib", settled}, {"rss_max_after_settled_mib", later_max}, {"rss_last_mib", last},
+          {"rss_growth_mib", later_max - settled}, {"peak_rss_mib", peak}, {"samples", samples}};
 }
 
 }  // namespace fetchscope::cli

@@ -40,7 +40,7 @@ void RegisterRender(CLI::App& app) {
                   "object); extra layers go to NAME_depth.png, NAME_segmentation.png")
       ->capture_default_str();
   sub->add_option("-o,--output", *output, "Output PNG")->required();
-  sub->add_flag("-v,--verbose", *verbose, "Print the GL vendor, renderer and version");
+  sub->add_flag("-v,--verbose", *verbose, "Print the GL vendor, renderer and version, and the MSAA samples used and why");
   sub->callback([=]() {
     bool want_rgb = false, want_depth = false, want_seg = false;
     std::stringstream ss(*layers);
@@ -71,6 +71,7 @@ void RegisterRender(CLI::App& app) {
       const GlInfo& i = gl->info();
       std::fprintf(stderr, "GL: backend %s (%s), vendor %s, renderer %s, version %s\n", i.backend.c_str(),
                    i.device.c_str(), i.vendor.c_str(), i.renderer.c_str(), i.version.c_str());
+      std::fprintf(stderr, "MSAA: %d samples (%s)\n", renderer.msaa_samples(), renderer.msaa_reason().c_str());
     }
     const FrameInfo info = MakeFrameInfo(fetch, episode.steps.back());
     if (want_rgb) {

@@ -1,6 +1,9 @@
 #include "cli/render_common.h"
 
 #include <cmath>
+#include <vector>
+
+#include "src/errors.h"
 
 namespace fetchscope::cli {
 
@@ -18,10 +21,23 @@ void AddViewOptions(CLI::App* sub, ViewOptions* o) {
   sub->add_option("--backend", o->backend,
                   "auto (EGL, then OSMesa), egl or osmesa; default: $MUJOCO_GL, else auto");
   sub->add_option("--msaa", o->msaa,
-                  "Multisample anti-aliasing samples: 0 (about 2x faster on software GL), 2, 4, 8; "
-                  "default: the model's (4, as Gymnasium renders)")
-      ->check(CLI::IsMember({0, 1, 2, 4, 8, 16}));
-  sub->add_option("--gpu", o->gpu, "EGL device index (default: $MUJOCO_EGL_DEVICE_ID, else the first)");
+                  "Multisample anti-aliasing samples: auto, 0, 1, 2, 4, 8 or 16. auto: the "
+                  "model's 4 (as Gymnasium renders) on hardware GL, 0 on a software rasterizer "
+                  "(llvmpipe, softpipe, swrast), where multisampling is about half the frame time")
+      ->capture_default_str()
+      ->check(CLI::IsMember(std::vector<std::string>(std::begin(kMsaaValues), std::end(kMsaaValues))));
+  sub->add_option("--gpu", o->gpu, "EGL device index (default: $MUJOCO_EGL_DEVICE_ID, else the first)")
+      ->check(CLI::Range(0, 4096));
+}
+
+int ParseMsaa(const std::string& value) {
+  if (value == "auto") return kMsaaAuto;
+  for (const char* accepted : kMsaaValues) {
+    if (value == accepted) return std::stoi(value);
+  }
+  std::string list;
+  for (const char* accepted : kMsaaValues) list += std::string(list.empty() ? "" : ", ") + accepted;
+  throw UsageError("--msaa '" + value + "' is not accepted; use " + list);
 }
 
 RenderOptions MakeRenderOptions(const ViewOptions& view, const mjModel* model) {
@@ -30,7 +46,7 @@ RenderOptions MakeRenderOptions(const ViewOptions& view, const mjModel* model) {
   options.height = view.height;
   options.cameras = ParseCameraList(view.camera, model);
   options.overlays = ParseOverlays(view.overlay);
-  options.msaa_samples = view.msaa;
+  options.msaa_samples = ParseMsaa(view.msaa);
   return options;
 }
 

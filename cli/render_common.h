@@ -12,7 +12,7 @@
 
 namespace fetchscope::cli {
 
-/// --camera, --overlay, --width, --height, --backend, --gpu.
+/// --camera, --overlay, --width, --height, --backend, --gpu, --msaa.
 struct ViewOptions {
   std::string camera = "default";                 ///< see ParseCameraList
   std::string overlay = "goal,achieved,hud";      ///< see ParseOverlays
@@ -20,8 +20,16 @@ struct ViewOptions {
   int height = 480;                               ///< pixels
   std::string backend;                            ///< auto|egl|osmesa; empty: $MUJOCO_GL or auto
   int gpu = -1;                                   ///< EGL device index; -1: $MUJOCO_EGL_DEVICE_ID or first
-  int msaa = -1;                                  ///< multisample count; -1: the model's (4)
+  std::string msaa = "auto";                      ///< see ParseMsaa
 };
+
+/// The accepted --msaa values, in the order the help and errors list them.
+inline constexpr const char* kMsaaValues[] = {"auto", "0", "1", "2", "4", "8", "16"};
+
+/// RenderOptions::msaa_samples for an --msaa value: "auto" (kMsaaAuto: the model's 4 on
+/// hardware GL, 0 on a software rasterizer) or a sample count. Throws UsageError naming the
+/// value and listing kMsaaValues.
+int ParseMsaa(const std::string& value);
 
 /// The renderer options for `view` on `model` (parses --camera and --overlay).
 RenderOptions MakeRenderOptions(const ViewOptions& view, const mjModel* model);

@@ -1,7 +1,11 @@
 #include "render/renderer.h"
 
 #include <algorithm>
+#include <cctype>
+#include <chrono>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <string>
 
@@ -21,6 +25,16 @@ constexpr unsigned kGlMaxSamples = 0x8D57;
 constexpr int kMaxFrameSide = 16384;
 
 constexpr int kMinSceneGeoms = 1000;  // Gymnasium's maxgeom
+
+constexpr int kMaxMsaaSamples = 16;
+
+using Clock = std::chrono::steady_clock;
+
+double MsSince(Clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
+
+bool IsPowerOfTwoUpTo16(int n) { return n == 1 || n == 2 || n == 4 || n == 8 || n == 16; }
 
 struct GlLimits {
   int max_side = kMaxFrameSide;
@@ -61,6 +75,50 @@ std::vector<mjrRect> TileFrame(int n, int width, int height) {
 
 }  // namespace
 
+std::string SoftwareRendererName(const std::string& gl_renderer) {
+  std::string lower = gl_renderer;
+  for (char& c : lower) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  // Mesa's CPU drivers: gallium llvmpipe and softpipe, classic swrast (GL_RENDERER "Software
+  // Rasterizer", or "Mesa OffScreen" from classic OSMesa), and OpenSWR ("SWR ...").
+  for (const char* name : {"llvmpipe", "softpipe", "swrast"}) {
+    if (lower.find(name) != std::string::npos) return name;
+  }
+  if (lower.find("software rasterizer") != std::string::npos ||
+      lower.find("mesa offscreen") != std::string::npos) {
+    return "swrast";
+  }
+  if (lower.rfind("swr", 0) == 0 || lower.find(" swr") != std::string::npos) return "SWR";
+  return "";
+}
+
+int Renderer::ResolveMsaa(int max_samples) {
+  const int requested = options_.msaa_samples;
+  const int model_samples = model_->vis.quality.offsamples;
+  int samples = 0;
+  if (requested == kMsaaAuto) {
+    const std::string software = SoftwareRendererName(gl_.info().renderer);
+    if (!software.empty()) {
+      samples = 0;
+      msaa_reason_ = "auto: software renderer " + software;
+    } else {
+      samples = model_samples;
+      msaa_reason_ = "auto: hardware renderer, the model's offsamples";
+    }
+  } else if (requested == kMsaaModel) {
+    samples = model_samples;
+    msaa_reason_ = "the model's offsamples";
+  } else {
+    samples = requested;
+    msaa_reason_ = "requested";
+  }
+  if (max_samples > 0 && samples > max_samples) {  // a driver without 4x multisampling still renders
+    msaa_reason_ += "; " + std::to_string(samples) + " capped at the driver's maximum " +
+                    std::to_string(max_samples);
+    samples = max_samples;
+  }
+  return samples;
+}
+
 Renderer::Renderer(GlContext& gl, mjModel* model, const RenderOptions& options)
     : gl_(gl), model_(model), options_(options) {
   const int w = options_.width, h = options_.height;
@@ -68,6 +126,11 @@ Renderer::Renderer(GlContext& gl, mjModel* model, const RenderOptions& options)
     throw UsageError("frame size " + std::to_string(w) + "x" + std::to_string(h) +
                      " is not positive; accepted: 1.." + std::to_string(kMaxFrameSide) +
                      " pixels per side");
+  }
+  const int msaa = options_.msaa_samples;
+  if (msaa != kMsaaAuto && msaa != kMsaaModel && msaa != 0 && !IsPowerOfTwoUpTo16(msaa)) {
+    throw UsageError("msaa " + std::to_string(msaa) + " is not accepted; use auto, 0, 1, 2, 4, 8 or " +
+                     std::to_string(kMaxMsaaSamples));
   }
   gl_.MakeCurrent();
   GlLimits limits = QueryLimits(gl_);
@@ -96,10 +159,11 @@ Renderer::Renderer(GlContext& gl, mjModel* model, const RenderOptions& options)
   mjVisual& vis = model_->vis;
   vis.global.offwidth = std::max(vis.global.offwidth, w);
   vis.global.offheight = std::max(vis.global.offheight, h);
-  if (options_.msaa_samples >= 0) vis.quality.offsamples = options_.msaa_samples;
-  if (limits.max_samples > 0) {  // a driver without 4x multisampling still renders
-    vis.quality.offsamples = std::min(vis.quality.offsamples, limits.max_samples);
-  }
+  // offsamples too is read only there; it is put back afterwards, so that a later renderer's
+  // kMsaaModel still means the model's own value
+  msaa_samples_ = ResolveMsaa(limits.max_samples);
+  const int model_samples = vis.quality.offsamples;
+  vis.quality.offsamples = msaa_samples_;
 
   const int model_geoms = model_->ngeom + model_->nsite + model_->ntendon + model_->nskin;
   scene_.emplace(model_, std::max(kMinSceneGeoms, 2 * model_geoms) + kMaxOverlayGeoms);
@@ -107,16 +171,37 @@ Renderer::Renderer(GlContext& gl, mjModel* model, const RenderOptions& options)
   // Text stays about the same fraction of the frame: 100% font up to 600 rows.
   int fontscale = h <= 600 ? mjFONTSCALE_100 : h <= 1200 ? mjFONTSCALE_150 : mjFONTSCALE_200;
   context_.emplace(model_, fontscale);
+  vis.quality.offsamples = model_samples;
   mjrContext* con = context_->get();
+  if (con->offSamples != msaa_samples_) {  // llvmpipe, for one, makes 4 where 2 is asked
+    msaa_reason_ += "; " + std::to_string(msaa_samples_) + " asked, the driver gave " +
+                    std::to_string(con->offSamples);
+    msaa_samples_ = con->offSamples;
+  }
   mjr_setBuffer(mjFB_OFFSCREEN, con);
   if (con->currentBuffer != mjFB_OFFSCREEN || con->offWidth < w || con->offHeight < h) {
     throw RunError("MuJoCo could not make its " + std::to_string(w) + "x" + std::to_string(h) +
                    " offscreen buffer on " + gl_.info().renderer);
   }
   rgb_bottom_up_.resize(static_cast<size_t>(w) * h * 3);
+
+  if (std::getenv("FETCHSCOPE_PROFILE")) {
+    gl_finish_ = reinterpret_cast<void (*)()>(gl_.GetProcAddress("glFinish"));
+    if (gl_finish_) profile_.emplace();
+  }
 }
 
 Renderer::~Renderer() {
+  if (profile_ && profile_->frames > 0) {
+    const Profile& p = *profile_;
+    const double n = static_cast<double>(p.frames);
+    std::fprintf(stderr,
+                 "fetchscope profile: %ld frames %dx%d msaa %d on %s, ms/frame: scene %.2f, "
+                 "submit %.2f, raster %.2f, readback %.2f, flip %.2f\n",
+                 p.frames, options_.width, options_.height, msaa_samples_,
+                 gl_.info().renderer.c_str(), p.scene_ms / n, p.submit_ms / n, p.raster_ms / n,
+                 p.readback_ms / n, p.flip_ms / n);
+  }
   // mjr_freeContext deletes GL objects: our context must be the current one.
   try {
     gl_.MakeCurrent();
@@ -144,7 +229,9 @@ void Renderer::Draw(const mjData* data, const FrameInfo& info, bool overlays) {
       for (int k = 0; k < 3; ++k) cam.lookat[k] = data->subtree_com[3 * cam.trackbodyid + k];
     }
   }
+  double scene_ms = 0, submit_ms = 0;
   for (size_t i = 0; i < cameras_.size(); ++i) {
+    const auto scene_start = Clock::now();
     if (i == 0) {
       mjv_updateScene(model_, readonly, &option_, &perturb_, &cameras_[0], mjCAT_ALL, scene);
       bool placed = PlaceSiteGeom(scene, target_site_, info.goal);
@@ -162,11 +249,42 @@ void Renderer::Draw(const mjData* data, const FrameInfo& info, bool overlays) {
     } else {
       mjv_updateCamera(model_, readonly, &cameras_[i], scene);  // same geoms, next view
     }
+    const auto submit_start = Clock::now();
+    scene_ms += std::chrono::duration<double, std::milli>(submit_start - scene_start).count();
     mjr_render(tiles_[i], scene, con);
+    submit_ms += MsSince(submit_start);
   }
+  const auto hud_start = Clock::now();
   if (overlays && options_.overlays.hud) {
     HudText hud = FormatHud(info, options_.overlays);
     mjr_overlay(mjFONT_NORMAL, mjGRID_TOPLEFT, frame, hud.labels.c_str(), hud.values.c_str(), con);
+  }
+  if (profile_) {
+    // GL queues the drawing; finishing here separates rasterisation from the readback
+    // (only while profiling: it costs the overlap of the two)
+    const auto raster_start = Clock::now();
+    submit_ms += std::chrono::duration<double, std::milli>(raster_start - hud_start).count();
+    gl_finish_();
+    profile_->raster_ms += MsSince(raster_start);
+    profile_->scene_ms += scene_ms;
+    profile_->submit_ms += submit_ms;
+    ++profile_->frames;
+  }
+}
+
+void Renderer::ReadRgb(uint8_t* rgb) {
+  const mjrRect frame{0, 0, options_.width, options_.height};
+  const auto start = Clock::now();
+  // MuJoCo resolves the multisampled buffer (a blit) and reads GL_RGB rows bottom-up. Reading
+  // through a pixel buffer object on the next frame, GL_RGBA, or a colour-only blit measured
+  // no faster on llvmpipe: the readback is ~0.5 ms of a 15-40 ms frame (README, "Where a
+  // frame's time goes").
+  mjr_readPixels(rgb_bottom_up_.data(), nullptr, frame, context_->get());
+  const auto flip_start = Clock::now();
+  FlipRows(rgb_bottom_up_.data(), static_cast<size_t>(options_.width) * 3, rgb);
+  if (profile_) {
+    profile_->readback_ms += std::chrono::duration<double, std::milli>(flip_start - start).count();
+    profile_->flip_ms += MsSince(flip_start);
   }
 }
 
@@ -179,9 +297,7 @@ void Renderer::FlipRows(const uint8_t* src, size_t row_bytes, uint8_t* dst) cons
 
 void Renderer::Render(const mjData* data, const FrameInfo& info, uint8_t* rgb) {
   Draw(data, info, /*overlays=*/true);
-  const mjrRect frame{0, 0, options_.width, options_.height};
-  mjr_readPixels(rgb_bottom_up_.data(), nullptr, frame, context_->get());  // rows bottom-up
-  FlipRows(rgb_bottom_up_.data(), static_cast<size_t>(options_.width) * 3, rgb);
+  ReadRgb(rgb);
 }
 
 void Renderer::RenderLayer(const mjData* data, const FrameInfo& info, Layer layer,
@@ -200,9 +316,8 @@ void Renderer::RenderLayer(const mjData* data, const FrameInfo& info, Layer laye
     Draw(data, info, /*overlays=*/false);
     scene->flags[mjRND_SEGMENT] = 0;
     scene->flags[mjRND_IDCOLOR] = 0;
-    mjr_readPixels(rgb_bottom_up_.data(), nullptr, frame, context_->get());
     out->resize(pixels * 3);
-    FlipRows(rgb_bottom_up_.data(), static_cast<size_t>(options_.width) * 3, out->data());
+    ReadRgb(out->data());
     return;
   }
 

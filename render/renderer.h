@@ -6,6 +6,7 @@
 
 #include <cstdint>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include "render/camera.h"
@@ -23,14 +24,25 @@ enum class Layer {
   kSegmentation,  ///< width*height*3 bytes: r + 256 g + 65536 b = scene geom segid + 1, 0 = none
 };
 
+/// RenderOptions::msaa_samples: the model's offsamples (4 in the Fetch models, as Gymnasium).
+inline constexpr int kMsaaModel = -1;
+/// RenderOptions::msaa_samples: kMsaaModel on hardware GL, 0 on a software rasterizer, where
+/// multisampling costs about half the frame time.
+inline constexpr int kMsaaAuto = -2;
+
 /// Frame size, cameras and overlays of a renderer.
 struct RenderOptions {
   int width = 480;                  ///< pixels
   int height = 480;                 ///< pixels
   std::vector<CameraSpec> cameras;  ///< tiled left to right (grid from 4 on); empty = default
   OverlaySet overlays;              ///< drawn by Render (not by the depth/segmentation layers)
-  int msaa_samples = -1;            ///< multisampling; -1 = the model's offsamples (4, as Gymnasium)
+  int msaa_samples = kMsaaModel;    ///< samples per pixel: 0 (off), 1, 2, 4, 8, 16, kMsaaModel
+                                    ///< or kMsaaAuto; capped at the driver's maximum
 };
+
+/// The CPU rasterizer a GL_RENDERER string names ("llvmpipe", "softpipe", "swrast", "SWR",
+/// Mesa's classic "Software Rasterizer"), or "" for hardware GL.
+std::string SoftwareRendererName(const std::string& gl_renderer);
 
 /// Off-screen renderer for one model on one GL context (one per thread).
 class Renderer {
@@ -38,8 +50,10 @@ class Renderer {
   /// Makes the MuJoCo scene and context on `gl` (which must outlive the renderer and is made
   /// current here) for `model`. Raises model->vis.global.offwidth/offheight to at least the
   /// frame size (hence the non-const model). Throws UsageError for a frame size that is not
-  /// positive or exceeds the GL limits (the message gives the accepted range), or for a camera
-  /// the model lacks; RunError when MuJoCo cannot make its offscreen buffer.
+  /// positive or exceeds the GL limits (the message gives the accepted range), for a camera
+  /// the model lacks, or for an msaa_samples value not listed on RenderOptions; RunError when
+  /// MuJoCo cannot make its offscreen buffer. With FETCHSCOPE_PROFILE set in the environment, the destructor
+  /// prints a per-phase time breakdown to stderr (see README: "Where a frame's time goes").
   Renderer(GlContext& gl, mjModel* model, const RenderOptions& options);
   ~Renderer();
   Renderer(const Renderer&) = delete;
@@ -60,14 +74,32 @@ class Renderer {
 
   int width() const { return options_.width; }    ///< frame width in pixels
   int height() const { return options_.height; }  ///< frame height in pixels
+  /// Multisamples per pixel actually used (auto and the driver's maximum resolved).
+  int msaa_samples() const { return msaa_samples_; }
+  /// Why msaa_samples() has its value, e.g. "auto: software renderer llvmpipe".
+  const std::string& msaa_reason() const { return msaa_reason_; }
   /// The viewport of each camera within the frame (OpenGL convention: bottom-left origin).
   const std::vector<mjrRect>& tiles() const { return tiles_; }
   /// The scene of the last frame: maps segmentation ids (segid) to model objects.
   const mjvScene& scene() const { return *scene_->get(); }
 
  private:
+  // Per-phase wall time, summed over frames (FETCHSCOPE_PROFILE only).
+  struct Profile {
+    long frames = 0;
+    double scene_ms = 0;     // mjv_updateScene, goal marker and overlay geoms
+    double submit_ms = 0;    // mjr_render and mjr_overlay calls (GL command submission)
+    double raster_ms = 0;    // glFinish after drawing: the rasterisation itself
+    double readback_ms = 0;  // mjr_readPixels: multisample resolve and glReadPixels
+    double flip_ms = 0;      // FlipRows
+  };
+
+  // Picks the sample count for options_.msaa_samples on this GL; sets msaa_reason_.
+  int ResolveMsaa(int max_samples);
   // Updates the scene for `data` and draws every tile into the offscreen buffer.
   void Draw(const mjData* data, const FrameInfo& info, bool overlays);
+  // Reads the rgb of the whole frame, row 0 at the top.
+  void ReadRgb(uint8_t* rgb);
   // Copies the bottom-up rows of `src` (row_bytes each) into `dst` top-down.
   void FlipRows(const uint8_t* src, size_t row_bytes, uint8_t* dst) const;
 
@@ -81,6 +113,10 @@ class Renderer {
   mjvPerturb perturb_;
   int target_site_ = -1;  // target0, the goal marker
   int grip_site_ = -1;    // robot0:grip, where the action arrow starts
+  int msaa_samples_ = 0;
+  std::string msaa_reason_;
+  std::optional<Profile> profile_;  // set when FETCHSCOPE_PROFILE is
+  void (*gl_finish_)() = nullptr;   // glFinish, for the profile
   Trail trail_;
   // Made in the constructor body, after the size checks. Lifetime order: the GL context (gl_)
   // outlives both; the MuJoCo context is freed first, with gl_ current (see ~Renderer).
