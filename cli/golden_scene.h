@@ -1,0 +1,94 @@
+// Golden-image scenes: golden/manifest.json, rendering one scene (its image and its state), and
+// comparing a state with its golden. The `golden check|update` subcommands (cli/golden.cc) are
+// built from these.
+//
+// manifest.json:
+//   {"version": 1,
+//    "defaults": {"msaa": 4, "state_atol": 1e-6,
+//                 "tolerance": {"threshold": 32, "max_fraction": 0.002, "max_rms": 2.0}},
+//    "scenes": [{"name": "reach_reset", "env_id": "FetchReach-v4", "assets": "bundled",
+//                "seed": 0, "policy": "zero", "steps": 0, "camera": "default",
+//                "overlay": "none", "width": 320, "height": 240, "msaa": 4,
+//                "tolerance": {"max_fraction": 0.002}}, ...]}
+// A scene's tolerance members override the defaults one by one. Its goldens are NAME.png and
+// NAME_state.json beside the manifest.
+#pragma once
+
+#include <cstdint>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "render/gl_context.h"
+#include "render/image_diff.h"
+
+namespace fetchscope::cli {
+
+/// How close an image must be to its golden.
+struct GoldenTolerance {
+  int threshold = 32;  ///< a pixel differs when its largest channel difference exceeds this
+  double max_fraction = 0.002;  ///< at most this fraction of pixels may differ
+  double max_rms = 2.0;         ///< RMS error over all channels, levels
+};
+
+/// One canonical scene.
+struct GoldenScene {
+  std::string name;             ///< file stem of its goldens; [A-Za-z0-9_-]+
+  std::string env_id;           ///< a v4 id
+  std::string assets;           ///< "bundled", "genuine" or a folder relative to the golden dir
+  uint64_t seed = 0;            ///< env.reset(seed=...)
+  std::string policy = "zero";  ///< zero | scripted | random | replay:FILE (FILE in the golden dir)
+  int steps = 0;                ///< policy steps before the frame (0 = the reset frame)
+  std::string camera = "default";  ///< as --camera
+  std::string overlay = "none";    ///< as --overlay
+  int width = 320;                 ///< pixels
+  int height = 240;                ///< pixels
+  int msaa = 4;                    ///< multisample count, pinned so goldens never follow a default
+  GoldenTolerance tolerance;       ///< image tolerance
+  double state_atol = 1e-6;        ///< absolute tolerance on every state number
+};
+
+/// A parsed manifest.
+struct GoldenManifest {
+  std::string dir;                  ///< the golden folder holding manifest.json
+  std::vector<GoldenScene> scenes;  ///< in manifest order
+};
+
+/// Reads DIR/manifest.json. Throws UsageError for a missing folder or manifest, RunError naming
+/// the scene and member for a malformed one (unknown env id, bad size, duplicate name, ...).
+GoldenManifest ReadGoldenManifest(const std::string& dir);
+
+/// The scenes named in `only` (each entry a name or a comma list), or all when `only` is empty.
+/// Throws UsageError for an unknown name, listing the valid ones.
+std::vector<const GoldenScene*> SelectScenes(const GoldenManifest& manifest,
+                                             const std::vector<std::string>& only);
+
+/// What one scene gives: its frame and the trajectory up to it.
+struct SceneResult {
+  std::vector<uint8_t> rgb;  ///< width * height * 3 bytes, row 0 = top
+  nlohmann::json state;      ///< see StateJson
+};
+
+/// Runs the scene's episode and renders its last frame on `gl` (current on this thread).
+/// `assets_root` is what ResolveAssets accepts: "bundled" or a folder.
+SceneResult RenderScene(GlContext& gl, const GoldenScene& scene, const std::string& golden_dir,
+                        const std::string& assets_root);
+
+/// Where a scene's assets come from: "bundled", `genuine_dir` for "genuine", else the folder
+/// relative to `golden_dir`.
+std::string SceneAssets(const GoldenScene& scene, const std::string& golden_dir,
+                        const std::string& genuine_dir);
+
+/// Result of comparing two state JSON documents.
+struct StateComparison {
+  bool equal = true;   ///< every number within the tolerance, everything else identical
+  double max_abs = 0;  ///< largest absolute difference of two numbers
+  std::string first;   ///< where they first differ, e.g. "steps[0].desired_goal[1]: 0.75 vs 0.76"
+};
+
+/// Compares `golden` with `actual` member by member: numbers within `atol`, strings, booleans
+/// and nulls exactly, arrays and objects by shape.
+StateComparison CompareStates(const nlohmann::json& golden, const nlohmann::json& actual,
+                              double atol);
+
+}  // namespace fetchscope::cli
