@@ -49,5 +49,7 @@ void RegisterListCameras(CLI::App& app);
 void RegisterRecord(CLI::App& app);
 void RegisterBench(CLI::App& app);
 void RegisterProbeActions(CLI::App& app);
+void RegisterMergeManifests(CLI::App& app);
+void RegisterGolden(CLI::App& app);
 
 }  // namespace fetchscope::cli

@@ -3,6 +3,7 @@
 
 #include <cstdio>
 #include <exception>
+#include <string>
 
 #include "cli/common.h"
 #include "src/errors.h"
@@ -28,6 +29,8 @@ int main(int argc, char** argv) {
   cli::RegisterRecord(app);
   cli::RegisterBench(app);
   cli::RegisterProbeActions(app);
+  cli::RegisterMergeManifests(app);
+  cli::RegisterGolden(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -37,6 +40,26 @@ int main(int argc, char** argv) {
   } catch (const CLI::CallForVersion& e) {
     return app.exit(e);
   } catch (const CLI::ParseError& e) {
+    // CLI11 reports a misspelt command as "A subcommand is required": name it instead
+    const CLI::App* parent = &app;
+    int i = 1;
+    for (; i < argc && argv[i][0] != '-'; ++i) {
+      const CLI::App* next = nullptr;
+      for (const CLI::App* sub : parent->get_subcommands({})) {
+        if (sub->get_name() == argv[i]) next = sub;
+      }
+      if (!next) break;
+      parent = next;
+    }
+    if (i < argc && argv[i][0] != '-' && !parent->get_subcommands({}).empty()) {
+      std::string names;
+      for (const CLI::App* sub : parent->get_subcommands({})) {
+        names += (names.empty() ? "" : ", ") + sub->get_name();
+      }
+      std::fprintf(stderr, "fetchscope: error: unknown command '%s': accepted: %s\n", argv[i],
+                   names.c_str());
+      return 2;
+    }
     std::fprintf(stderr, "fetchscope: error: %s (see fetchscope --help)\n", e.what());
     return 2;
   } catch (const UsageError& e) {

@@ -21,6 +21,9 @@ class RandomPolicy : public Policy {
     return action;
   }
   std::string name() const override { return "random"; }
+  void SkipEpisode(int steps) override {
+    for (int t = 0; t < steps; ++t) rng_.SampleActionBox();  // the same draws Act would make
+  }
 
  private:
   NumpyGenerator rng_;

@@ -25,6 +25,12 @@ class Policy {
   virtual Action Act(const Observation& obs, int t) = 0;
   /// The spec as given, e.g. "replay:run.csv".
   virtual std::string name() const = 0;
+  /// Advances whatever this policy carries from one episode to the next as if an episode of
+  /// `steps` steps had been played, without playing it, so that a worker starting at episode k
+  /// acts exactly as a sequential run does at k. Random draws 4 numbers per step; the others
+  /// start every episode afresh (replay indexes its rows by episode) and do nothing. An exec:
+  /// child is not told: it sees only the episodes its own worker plays.
+  virtual void SkipEpisode(int steps) { (void)steps; }
 };
 
 /// Options shared by policy construction.

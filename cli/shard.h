@@ -1,0 +1,49 @@
+// Splitting a batch of episodes across machines: --shard I/N, Slurm job arrays and
+// Kubernetes Indexed Jobs. Episode k belongs to shard k mod N, so the shards of one run never
+// overlap and together hold every episode; names and seeds derive from k alone.
+#pragma once
+
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace fetchscope::cli {
+
+/// One shard of a run: `index` of `count`, and where that came from.
+struct Shard {
+  int index = 0;       ///< 0 .. count-1
+  int count = 1;       ///< number of shards; 1 = the whole run
+  std::string source;  ///< "--shard", "JOB_COMPLETION_INDEX", "SLURM_ARRAY_TASK_ID" or "" (none)
+
+  /// True when the run is split (count > 1).
+  bool sharded() const { return count > 1; }
+  /// True when episode k belongs to this shard.
+  bool Owns(long k) const { return k % count == index; }
+};
+
+/// Looks up an environment variable (nullptr when unset); std::getenv by default.
+using EnvLookup = std::function<const char*(const char*)>;
+
+/// Parses "I/N" (0 <= I < N). Throws UsageError naming the text and the accepted form.
+Shard ParseShard(const std::string& text);
+
+/// The shard of this process. In order: `flag` (--shard I/N) if not empty; else
+/// JOB_COMPLETION_INDEX with `shard_count` (--shard-count N, 0 = not given); else
+/// SLURM_ARRAY_TASK_ID and SLURM_ARRAY_TASK_COUNT (offset by SLURM_ARRAY_TASK_MIN and divided
+/// by SLURM_ARRAY_TASK_STEP when those are set); else the whole run (0/1).
+/// Throws UsageError, naming the variable and its value, for a malformed or out-of-range value,
+/// for JOB_COMPLETION_INDEX without --shard-count, and for --shard-count without
+/// JOB_COMPLETION_INDEX or disagreeing with --shard.
+Shard ResolveShard(const std::string& flag, int shard_count, const EnvLookup& env = nullptr);
+
+/// The episodes of `shard` among 0 .. episodes-1, ascending.
+std::vector<int> ShardEpisodes(const Shard& shard, int episodes);
+
+/// Manifest file name: "manifest.json" for an unsplit run, else
+/// "manifest_shard_IIII_of_NNNN.json" (so shards writing into one folder never collide).
+std::string ShardManifestName(const Shard& shard);
+
+/// "I/N" for messages.
+std::string ShardLabel(const Shard& shard);
+
+}  // namespace fetchscope::cli

@@ -1,0 +1,355 @@
+// --shard I/N and its environment variables, and merge-manifests: the shards of a run together
+// equal the unsharded run, file for file.
+#include "cli/shard.h"
+
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <nlohmann/json.hpp>
+
+#include "src/errors.h"
+#include "tests/test_util.h"
+
+namespace fetchscope {
+namespace {
+
+using cli::ResolveShard;
+using cli::Shard;
+using testing::ReadFile;
+using testing::RunCommand;
+using testing::RunFetchscope;
+using testing::TempDir;
+namespace fs = std::filesystem;
+using Env = std::map<std::string, std::string>;
+
+// The machine running the tests may itself be a Slurm task or a Kubernetes pod.
+void ClearShardEnvironment() {
+  for (const char* name : {"SLURM_ARRAY_TASK_ID", "SLURM_ARRAY_TASK_COUNT", "SLURM_ARRAY_TASK_MIN",
+                           "SLURM_ARRAY_TASK_STEP", "JOB_COMPLETION_INDEX", "DISPLAY"}) {
+    unsetenv(name);
+  }
+}
+
+struct ShardCase {
+  std::string flag;  // --shard
+  int shard_count;   // --shard-count (0: not given)
+  Env env;           // the environment
+  int index, count;  // expected shard, when `error` is empty
+  std::string source;
+  std::string error;  // expected in the UsageError's message
+};
+
+void PrintTo(const ShardCase& c, std::ostream* os) {
+  *os << "--shard '" << c.flag << "' --shard-count " << c.shard_count;
+  for (const auto& [k, v] : c.env) *os << " " << k << "=" << v;
+}
+
+class ResolveShardTest : public ::testing::TestWithParam<ShardCase> {};
+
+TEST_P(ResolveShardTest, ResolvesOrNamesTheBadValue) {
+  const ShardCase& c = GetParam();
+  auto lookup = [&](const char* name) -> const char* {
+    auto it = c.env.find(name);
+    return it == c.env.end() ? nullptr : it->second.c_str();
+  };
+  if (!c.error.empty()) {
+    try {
+      ResolveShard(c.flag, c.shard_count, lookup);
+      FAIL() << "accepted";
+    } catch (const UsageError& e) {
+      EXPECT_NE(std::string(e.what()).find(c.error), std::string::npos) << e.what();
+    }
+    return;
+  }
+  const Shard s = ResolveShard(c.flag, c.shard_count, lookup);
+  EXPECT_EQ(s.index, c.index);
+  EXPECT_EQ(s.count, c.count);
+  EXPECT_EQ(s.source, c.source);
+}
+
+const Env kSlurm = {{"SLURM_ARRAY_TASK_ID", "5"}, {"SLURM_ARRAY_TASK_COUNT", "16"}};
+
+INSTANTIATE_TEST_SUITE_P(
+    Cases, ResolveShardTest,
+    ::testing::Values(
+        ShardCase{"", 0, {}, 0, 1, "", ""}, ShardCase{"0/1", 0, {}, 0, 1, "--shard", ""},
+        ShardCase{"2/3", 0, {}, 2, 3, "--shard", ""},
+        ShardCase{"15/16", 16, {}, 15, 16, "--shard", ""},
+        ShardCase{"3/3", 0, {}, 0, 0, "", "I must be below N"},
+        ShardCase{"1/0", 0, {}, 0, 0, "", "N must be at least 1"},
+        ShardCase{"1", 0, {}, 0, 0, "", "'1' is not of the form I/N"},
+        ShardCase{"-1/3", 0, {}, 0, 0, "", "'-1/3' is not of the form I/N"},
+        ShardCase{"a/b", 0, {}, 0, 0, "", "'a/b'"}, ShardCase{"1/3/5", 0, {}, 0, 0, "", "'1/3/5'"},
+        ShardCase{"1/3", 4, {}, 0, 0, "", "--shard-count 4 disagrees"},
+        // the flag wins over the environment
+        ShardCase{"1/2", 0, kSlurm, 1, 2, "--shard", ""},
+        ShardCase{"", 0, kSlurm, 5, 16, "SLURM_ARRAY_TASK_ID", ""},
+        ShardCase{"",
+                  0,
+                  {{"SLURM_ARRAY_TASK_ID", "3"},
+                   {"SLURM_ARRAY_TASK_COUNT", "4"},
+                   {"SLURM_ARRAY_TASK_MIN", "1"}},
+                  2,
+                  4,
+                  "SLURM_ARRAY_TASK_ID",
+                  ""},
+        ShardCase{"",
+                  0,
+                  {{"SLURM_ARRAY_TASK_ID", "6"},
+                   {"SLURM_ARRAY_TASK_COUNT", "4"},
+                   {"SLURM_ARRAY_TASK_MIN", "0"},
+                   {"SLURM_ARRAY_TASK_STEP", "2"}},
+                  3,
+                  4,
+                  "SLURM_ARRAY_TASK_ID",
+                  ""},
+        ShardCase{"",
+                  0,
+                  {{"SLURM_ARRAY_TASK_ID", "16"}, {"SLURM_ARRAY_TASK_COUNT", "16"}},
+                  0,
+                  0,
+                  "",
+                  "SLURM_ARRAY_TASK_ID=16 does not fit"},
+        ShardCase{"",
+                  0,
+                  {{"SLURM_ARRAY_TASK_ID", "x1"}, {"SLURM_ARRAY_TASK_COUNT", "16"}},
+                  0,
+                  0,
+                  "",
+                  "SLURM_ARRAY_TASK_ID='x1' is not a non-negative whole number"},
+        ShardCase{"",
+                  0,
+                  {{"SLURM_ARRAY_TASK_ID", "1"}, {"SLURM_ARRAY_TASK_COUNT", ""}},
+                  0,
+                  0,
+                  "",
+                  "SLURM_ARRAY_TASK_COUNT=''"},
+        ShardCase{"", 0, {{"SLURM_ARRAY_TASK_ID", "1"}}, 0, 0, "", "SLURM_ARRAY_TASK_COUNT is not"},
+        ShardCase{"",
+                  0,
+                  {{"SLURM_ARRAY_TASK_ID", "0"}, {"SLURM_ARRAY_TASK_COUNT", "0"}},
+                  0,
+                  0,
+                  "",
+                  "SLURM_ARRAY_TASK_COUNT=0 must be at least 1"},
+        ShardCase{"", 8, {{"JOB_COMPLETION_INDEX", "7"}}, 7, 8, "JOB_COMPLETION_INDEX", ""},
+        // Kubernetes wins over Slurm: --shard-count says which the user meant
+        ShardCase{"",
+                  8,
+                  {{"JOB_COMPLETION_INDEX", "7"}, {"SLURM_ARRAY_TASK_ID", "5"}},
+                  7,
+                  8,
+                  "JOB_COMPLETION_INDEX",
+                  ""},
+        ShardCase{
+            "", 0, {{"JOB_COMPLETION_INDEX", "3"}}, 0, 0, "", "JOB_COMPLETION_INDEX=3 is set but"},
+        ShardCase{"",
+                  8,
+                  {{"JOB_COMPLETION_INDEX", "8"}},
+                  0,
+                  0,
+                  "",
+                  "JOB_COMPLETION_INDEX=8 must be below --shard-count 8"},
+        ShardCase{"", 8, {{"JOB_COMPLETION_INDEX", " 2"}}, 0, 0, "", "JOB_COMPLETION_INDEX=' 2'"},
+        ShardCase{"", 8, {}, 0, 0, "", "--shard-count 8 needs JOB_COMPLETION_INDEX"},
+        ShardCase{"", -2, {}, 0, 0, "", "--shard-count -2"}));
+
+TEST(ShardTest, EpisodesAndManifestNames) {
+  EXPECT_EQ(cli::ShardEpisodes({1, 3, ""}, 8), (std::vector<int>{1, 4, 7}));
+  EXPECT_EQ(cli::ShardEpisodes({0, 1, ""}, 3), (std::vector<int>{0, 1, 2}));
+  EXPECT_TRUE(cli::ShardEpisodes({5, 6, ""}, 5).empty());
+  EXPECT_EQ(cli::ShardManifestName({0, 1, ""}), "manifest.json");
+  EXPECT_EQ(cli::ShardManifestName({2, 16, ""}), "manifest_shard_0002_of_0016.json");
+}
+
+// -- black box: the real binary ------------------------------------------------------------
+
+// A small record run; the random policy's generator runs across episodes, and Push draws for
+// the object and the goal at every reset, so a shard must replay both for the episodes it skips.
+std::string Record(int episodes = 7, int seed = 11) {
+  return "record --quiet --env-id FetchPush-v4 --policy random --steps 4 --width 64 --height 48 "
+         "--backend osmesa --episodes " +
+         std::to_string(episodes) + " --seed " + std::to_string(seed);
+}
+const std::string kRun = Record();
+
+// The output files of a run folder (not manifests), name -> bytes.
+std::map<std::string, std::string> EpisodeFiles(const fs::path& dir) {
+  std::map<std::string, std::string> files;
+  for (const auto& e : fs::directory_iterator(dir)) {
+    const std::string name = e.path().filename().string();
+    if (name.rfind("episode_", 0) == 0) files[name] = ReadFile(e.path());
+  }
+  return files;
+}
+
+class ShardRunTest : public ::testing::Test {
+ protected:
+  void SetUp() override { ClearShardEnvironment(); }
+};
+
+TEST_F(ShardRunTest, ShardsTogetherEqualTheUnshardedRunAndMerge) {
+  TempDir tmp;
+  const fs::path whole = tmp.path() / "whole", shared = tmp.path() / "shards";
+  auto r = RunFetchscope(kRun + " --out " + whole.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  for (int i = 0; i < 3; ++i) {
+    r = RunFetchscope(kRun + " --shard " + std::to_string(i) + "/3 --out " + shared.string());
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+  }
+  // the same files, byte for byte: trajectories, sheets and videos
+  const auto expected = EpisodeFiles(whole), actual = EpisodeFiles(shared);
+  ASSERT_EQ(expected.size(), 21u);
+  ASSERT_EQ(actual.size(), expected.size());
+  for (const auto& [name, bytes] : expected) {
+    ASSERT_TRUE(actual.count(name)) << name;
+    EXPECT_TRUE(actual.at(name) == bytes) << name << " differs";
+  }
+  auto shard1 = nlohmann::json::parse(ReadFile(shared / "manifest_shard_0001_of_0003.json"));
+  EXPECT_EQ(shard1["shard"]["index"], 1);
+  EXPECT_EQ(shard1["shard"]["count"], 3);
+  EXPECT_EQ(shard1["shard"]["episodes"], nlohmann::json({1, 4}));
+  EXPECT_EQ(shard1["episodes"].size(), 2u);
+  EXPECT_FALSE(fs::exists(shared / "manifest.json"));
+
+  r = RunFetchscope("merge-manifests " + shared.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  auto merged = nlohmann::json::parse(ReadFile(shared / "manifest.json"));
+  auto single = nlohmann::json::parse(ReadFile(whole / "manifest.json"));
+  EXPECT_EQ(merged["episodes"], single["episodes"]);  // all seven, in order, same returns
+  EXPECT_EQ(merged["shards"].size(), 3u);
+  EXPECT_EQ(merged["merged"], true);
+  EXPECT_EQ(merged["interrupted"], false);
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_EQ(merged["shards"][i]["index"], i);
+    EXPECT_TRUE(merged["shards"][i]["timings_s"].contains("wall"));
+  }
+  // merging again reads the shard manifests, not the merged one
+  EXPECT_EQ(RunFetchscope("merge-manifests --quiet " + shared.string()).exit_code, 0);
+}
+
+TEST_F(ShardRunTest, MergeAcrossFoldersWritesRelativePaths) {
+  TempDir tmp;
+  for (int i = 0; i < 2; ++i) {
+    auto r = RunFetchscope(Record(3) + " --shard " + std::to_string(i) + "/2 --out " +
+                           (tmp.path() / ("m" + std::to_string(i))).string());
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+  }
+  const fs::path out = tmp.path() / "merged.json";
+  auto r = RunFetchscope("merge-manifests " + (tmp.path() / "m0").string() + " " +
+                         (tmp.path() / "m1").string() + " --out " + out.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  auto merged = nlohmann::json::parse(ReadFile(out));
+  ASSERT_EQ(merged["episodes"].size(), 3u);
+  EXPECT_EQ(merged["episodes"][0]["video"], "m0/episode_000.mp4");
+  EXPECT_EQ(merged["episodes"][1]["trajectory"], "m1/episode_001.json");
+  EXPECT_EQ(merged["episodes"][2]["sheet"], "m0/episode_002_sheet.png");
+}
+
+TEST_F(ShardRunTest, MergeNamesMissingInterruptedAndForeignShards) {
+  TempDir tmp;
+  const fs::path dir = tmp.path() / "run";
+  for (int i : {0, 1}) {
+    auto r = RunFetchscope(kRun + " --shard " + std::to_string(i) + "/3 --out " + dir.string());
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+  }
+  auto r = RunFetchscope("merge-manifests " + dir.string());
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("shard 2/3 has no manifest (episodes 2, 5)"), std::string::npos)
+      << r.output;
+  EXPECT_FALSE(fs::exists(dir / "manifest.json"));
+
+  // shard 2 ran but was cut short: its manifest says so and lacks episode 5
+  ASSERT_EQ(RunFetchscope(kRun + " --shard 2/3 --out " + dir.string()).exit_code, 0);
+  const fs::path m2 = dir / "manifest_shard_0002_of_0003.json";
+  auto manifest = nlohmann::json::parse(ReadFile(m2));
+  manifest["interrupted"] = true;
+  manifest["signal"] = "SIGTERM";
+  manifest["episodes"].erase(1);
+  std::ofstream(m2) << manifest.dump(2);
+  r = RunFetchscope("merge-manifests " + dir.string());
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("shard 2/3 was interrupted by SIGTERM (episodes 5 missing"),
+            std::string::npos)
+      << r.output;
+
+  // a deleted video is named
+  ASSERT_EQ(RunFetchscope(kRun + " --shard 2/3 --out " + dir.string()).exit_code, 0);
+  fs::remove(dir / "episode_004.mp4");
+  r = RunFetchscope("merge-manifests " + dir.string());
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("episode 4: video"), std::string::npos) << r.output;
+
+  // a shard of another run (another seed) is refused
+  const fs::path other = tmp.path() / "other";
+  ASSERT_EQ(RunFetchscope(Record(7, 12) + " --shard 0/3 --out " + other.string()).exit_code, 0);
+  r = RunFetchscope("merge-manifests " + dir.string() + " " + other.string());
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("belongs to another run: seed is 12"), std::string::npos) << r.output;
+
+  r = RunFetchscope("merge-manifests " + (tmp.path() / "nowhere").string());
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("nowhere' is not a folder"), std::string::npos) << r.output;
+}
+
+// The environment of a Slurm array task and of a Kubernetes Indexed Job pod, as the binary sees it.
+TEST_F(ShardRunTest, ShardFromSlurmAndKubernetesEnvironment) {
+  TempDir tmp;
+  const std::string bin = FETCHSCOPE_BIN;
+  auto r = RunCommand("env SLURM_ARRAY_TASK_ID=1 SLURM_ARRAY_TASK_COUNT=3 " + bin + " " + kRun +
+                      " --out " + tmp.path().string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  auto m = nlohmann::json::parse(ReadFile(tmp.path() / "manifest_shard_0001_of_0003.json"));
+  EXPECT_EQ(m["shard"]["source"], "SLURM_ARRAY_TASK_ID");
+  EXPECT_EQ(m["shard"]["episodes"], nlohmann::json({1, 4}));
+
+  r = RunCommand("env JOB_COMPLETION_INDEX=2 " + bin + " " + kRun + " --shard-count 3 --out " +
+                 tmp.path().string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  m = nlohmann::json::parse(ReadFile(tmp.path() / "manifest_shard_0002_of_0003.json"));
+  EXPECT_EQ(m["shard"]["source"], "JOB_COMPLETION_INDEX");
+  EXPECT_EQ(m["shard"]["episodes"], nlohmann::json({2, 5}));
+}
+
+struct BadShard {
+  std::string env;   // assignments for env(1)
+  std::string args;  // after the common record arguments
+  std::string message;
+};
+
+void PrintTo(const BadShard& c, std::ostream* os) { *os << c.env << " " << c.args; }
+
+class BadShardTest : public ::testing::TestWithParam<BadShard> {};
+
+TEST_P(BadShardTest, ExitTwoNamingTheValueNothingWritten) {
+  ClearShardEnvironment();
+  TempDir tmp;
+  auto r = RunCommand("env " + GetParam().env + " " + FETCHSCOPE_BIN + " " + kRun + " " +
+                      GetParam().args + " --out " + (tmp.path() / "run").string());
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("fetchscope: error: "), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find(GetParam().message), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(tmp.path() / "run"));
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Cases, BadShardTest,
+    ::testing::Values(
+        BadShard{"", "--shard 3/3", "--shard '3/3': I must be below N"},
+        BadShard{"", "--shard 0/0", "N must be at least 1"},
+        BadShard{"", "--shard half", "'half' is not of the form I/N"},
+        BadShard{"JOB_COMPLETION_INDEX=4", "", "JOB_COMPLETION_INDEX=4"},
+        BadShard{"JOB_COMPLETION_INDEX=4", "--shard-count 4",
+                 "JOB_COMPLETION_INDEX=4 must be below"},
+        BadShard{"JOB_COMPLETION_INDEX=four", "--shard-count 8", "JOB_COMPLETION_INDEX='four'"},
+        BadShard{"SLURM_ARRAY_TASK_ID=2 SLURM_ARRAY_TASK_COUNT=zz", "",
+                 "SLURM_ARRAY_TASK_COUNT='zz'"},
+        BadShard{"SLURM_ARRAY_TASK_ID=9 SLURM_ARRAY_TASK_COUNT=4", "", "SLURM_ARRAY_TASK_ID=9"},
+        BadShard{"", "--shard-count 3", "needs JOB_COMPLETION_INDEX"},
+        BadShard{"", "--jobs -1", "--jobs"}));
+
+}  // namespace
+}  // namespace fetchscope
