@@ -128,7 +128,11 @@ void WritePng(const std::string& path, int width, int height, int channels, int 
     rows[y] = const_cast<png_bytep>(static_cast<const png_byte*>(pixels) + y * row_bytes);
   }
 
-  std::string temp = path + ".tmp-XXXXXX";
+  // hidden (".NAME.tmp-XXXXXX"), like every other temporary, so a killed run leaves nothing that
+  // looks like an output
+  const size_t slash = path.rfind('/');
+  const size_t name_at = slash == std::string::npos ? 0 : slash + 1;
+  std::string temp = path.substr(0, name_at) + "." + path.substr(name_at) + ".tmp-XXXXXX";
   int fd = mkstemp(temp.data());
   if (fd < 0) throw RunError("cannot write " + path + ": " + std::strerror(errno));
   fchmod(fd, 0644);  // mkstemp makes 0600; images are meant to be shared

@@ -10,7 +10,7 @@ namespace fetchscope {
 
 /// Writes `pixels` (width*height*channels samples, row 0 = top; bit_depth 16: uint16 in host
 /// byte order) as a PNG: channels 1 = gray, 2 = gray+alpha, 3 = RGB, 4 = RGBA; bit_depth 8 or
-/// 16. The file appears complete or not at all: it is written to PATH.tmp-XXXXXX beside it and
+/// 16. The file appears complete or not at all: it is written to .NAME.tmp-XXXXXX beside it and
 /// renamed. Throws UsageError for bad arguments and RunError when the file cannot be written.
 void WritePng(const std::string& path, int width, int height, int channels, int bit_depth,
               const void* pixels);

@@ -86,6 +86,7 @@ class Renderer {
  private:
   // Per-phase wall time, summed over frames (FETCHSCOPE_PROFILE only).
   struct Profile {
+    Profile() {}  // user-provided: clang 14 rejects emplace() of a nested aggregate with initializers
     long frames = 0;
     double scene_ms = 0;     // mjv_updateScene, goal marker and overlay geoms
     double submit_ms = 0;    // mjr_render and mjr_overlay calls (GL command submission)

@@ -180,7 +180,7 @@ struct VideoWriter::Impl {
   FramePtr frame;               // one YUV frame reused for every AddFrame
   PacketPtr packet;             // one packet reused for every encoded output
   SwsContextPtr converter;      // RGB24 -> yuv420p, BT.709 limited range
-  std::vector<uint8_t> padded;  // RGB with the odd row/column repeated; empty when even
+  std::vector<uint8_t> padded;  // swscale's input: the frame (odd row/column repeated) + slack
   int frames_written = 0;
   bool finished = false;
 };
@@ -222,9 +222,11 @@ VideoWriter::Impl::Impl(const std::string& path, const VideoOptions& opts)
   sws_setColorspaceDetails(converter.get(), bt709, /*srcRange=*/1, bt709, /*dstRange=*/0,
                            /*brightness=*/0, /*contrast=*/1 << 16, /*saturation=*/1 << 16);
 
-  if (encoded_width != options.width || encoded_height != options.height) {
-    padded.resize(static_cast<std::size_t>(encoded_width) * encoded_height * 3);
-  }
+  // swscale's SIMD loads read up to 16 bytes past the last input pixel (valgrind: "Invalid read
+  // of size 16" at the end of the caller's frame; a crash when that frame ends at a page
+  // boundary). Converting from our own copy with slack keeps those reads inside our memory.
+  constexpr std::size_t kSwscaleReadSlack = 64;
+  padded.resize(static_cast<std::size_t>(encoded_width) * encoded_height * 3 + kSwscaleReadSlack);
 }
 
 void VideoWriter::Impl::OpenEncoder() {
@@ -321,14 +323,15 @@ void VideoWriter::Impl::OpenOutput() {
   // of the data, so a browser can start playing before the whole file arrives.
   muxer_options.Set("movflags", "+faststart");
   if (int rc = avformat_write_header(muxer.get(), muxer_options.address()); rc < 0) {
-    throw RunError("cannot write the MP4 header of " + Quoted(temp_path.string()) + ": " +
+    throw RunError("cannot write the MP4 header of " + Quoted(final_path) + ": " +
                    DescribeAvError(rc));
   }
 }
 
 void VideoWriter::Impl::ConvertFrame(const uint8_t* rgb) {
-  const uint8_t* source = rgb;
-  if (!padded.empty()) {
+  if (encoded_width == options.width && encoded_height == options.height) {
+    std::memcpy(padded.data(), rgb, static_cast<std::size_t>(options.width) * options.height * 3);
+  } else {
     // yuv420p needs even sizes: repeat the last column and/or row.
     const std::size_t in_row = static_cast<std::size_t>(options.width) * 3;
     const std::size_t out_row = static_cast<std::size_t>(encoded_width) * 3;
@@ -338,14 +341,13 @@ void VideoWriter::Impl::ConvertFrame(const uint8_t* rgb) {
       std::memcpy(out, in, in_row);
       if (encoded_width != options.width) std::memcpy(out + in_row, in + in_row - 3, 3);
     }
-    source = padded.data();
   }
   // The encoder released its reference when it consumed the previous frame,
   // so this normally keeps the same buffers (no per-frame allocation).
   if (int rc = av_frame_make_writable(frame.get()); rc < 0) {
     throw RunError("cannot reuse the video frame buffer: " + DescribeAvError(rc));
   }
-  const uint8_t* const planes[1] = {source};
+  const uint8_t* const planes[1] = {padded.data()};
   const int strides[1] = {encoded_width * 3};
   sws_scale(converter.get(), planes, strides, 0, encoded_height, frame->data, frame->linesize);
 }
@@ -367,7 +369,7 @@ void VideoWriter::Impl::SendFrame(const AVFrame* input) {
     packet->stream_index = stream->index;
     // Takes the packet's reference and leaves it blank for the next one.
     if (int write_rc = av_interleaved_write_frame(muxer.get(), packet.get()); write_rc < 0) {
-      throw RunError("cannot write video " + Quoted(temporary.path().string()) + ": " +
+      throw RunError("cannot write video " + Quoted(final_path) + ": " +
                      DescribeAvError(write_rc));
     }
   }
@@ -381,11 +383,11 @@ void VideoWriter::Impl::Finish() {
   SendFrame(nullptr);
   ClearLastAvError();
   if (int rc = av_write_trailer(muxer.get()); rc < 0) {
-    throw RunError("cannot finish video " + Quoted(temporary.path().string()) + ": " +
+    throw RunError("cannot finish video " + Quoted(final_path) + ": " +
                    DescribeAvError(rc));
   }
   if (int rc = avio_closep(&muxer->pb); rc < 0) {
-    throw RunError("cannot close video " + Quoted(temporary.path().string()) + ": " +
+    throw RunError("cannot close video " + Quoted(final_path) + ": " +
                    DescribeAvError(rc));
   }
   std::error_code error;

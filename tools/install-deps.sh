@@ -2,6 +2,7 @@
 # Installs the Debian 12 packages fetchscope needs (only those missing). Run as root or with sudo.
 #   tools/install-deps.sh           build + test dependencies
 #   tools/install-deps.sh --bench   also the benchmark peers (mujoco-record, xvfb)
+#   tools/install-deps.sh --ci      also what tools/ci-extra.sh needs (clang + libFuzzer, valgrind)
 set -euo pipefail
 packages=(cmake g++ make pkg-config
   libmujoco-dev libqhull-dev
@@ -9,9 +10,14 @@ packages=(cmake g++ make pkg-config
   libeigen3-dev libpng-dev libavcodec-dev libavformat-dev libavutil-dev libswscale-dev
   libcli11-dev nlohmann-json3-dev libgtest-dev
   ffmpeg python3 python3-numpy)
-if [[ "${1:-}" == "--bench" ]]; then
-  packages+=(libmujoco-samples xvfb xauth time)
-fi
+for flag in "$@"; do
+  case "$flag" in
+    --bench) packages+=(libmujoco-samples xvfb xauth time) ;;
+    # libclang-rt-14-dev holds libFuzzer and the clang sanitizer runtimes
+    --ci) packages+=(clang libclang-rt-14-dev valgrind) ;;
+    *) echo "install-deps: unknown option '$flag' (accepted: --bench, --ci)" >&2; exit 2 ;;
+  esac
+done
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

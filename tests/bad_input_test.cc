@@ -1,0 +1,457 @@
+// The bad-input matrix: every subcommand fed unknown names, malformed numbers and specs, bad
+// sizes, seeds Gymnasium rejects, broken assets and replay files, misbehaving exec policies and
+// outputs that cannot be written. Each row runs the real binary and checks the promise to users:
+// exit 2 (usage) or 1 (run time), a short message that names the bad value, no crash or abort
+// text, and no file under a final output name (nor a leftover temporary).
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "tests/test_util.h"
+
+namespace fetchscope {
+namespace {
+
+using testing::CommandResult;
+using testing::GenuineAssetsDir;
+using testing::RunCommand;
+using testing::TempDir;
+namespace fs = std::filesystem;
+
+void WriteBytes(const fs::path& path, const std::string& bytes) {
+  fs::create_directories(path.parent_path());
+  std::ofstream(path, std::ios::binary) << bytes;
+}
+
+// A minimal NPY 1.0 file: header dict padded to 64 bytes, then raw data.
+std::string Npy(const std::string& descr, const std::string& shape, const std::string& data) {
+  std::string dict = "{'descr': '" + descr + "', 'fortran_order': False, 'shape': " + shape + ", }";
+  const size_t unpadded = 10 + dict.size() + 1;
+  dict += std::string((64 - unpadded % 64) % 64, ' ') + "\n";
+  std::string out = "\x93NUMPY";
+  out += '\x01';
+  out += '\x00';
+  out += static_cast<char>(dict.size() & 0xff);
+  out += static_cast<char>(dict.size() >> 8);
+  return out + dict + data;
+}
+
+std::string Doubles(const std::vector<double>& v) {
+  return std::string(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(double));
+}
+
+// `rows` CSV rows of 4 small actions.
+std::string CsvRows(int rows) {
+  std::string s;
+  for (int i = 0; i < rows; ++i) s += "0.1,0.2,-0.3,0\n";
+  return s;
+}
+
+// Copies the genuine assets to DIR/assets and breaks them with `edit`; false if they are absent.
+bool CopyGenuineAssets(const fs::path& dir, const std::function<void(const fs::path&)>& edit) {
+  const fs::path genuine = GenuineAssetsDir();
+  if (genuine.empty()) return false;
+  fs::copy(genuine, dir / "assets", fs::copy_options::recursive);
+  edit(dir / "assets");
+  return true;
+}
+
+// Prefix that runs the binary as an unprivileged user when we are root (root reads any file,
+// so "unreadable" needs another user); empty otherwise.
+std::string Unprivileged() {
+  return geteuid() == 0 ? "setpriv --reuid=65534 --regid=65534 --clear-groups " : "";
+}
+
+struct Case {
+  const char* name;   // test name suffix
+  std::string args;   // after the binary; {tmp}: the case's temp folder, {src}: the sources
+  int exit_code;      // 2 usage, 1 run time
+  std::string needle; // the message must name this (the bad value); {tmp} expanded
+  std::vector<std::string> absent = {};  // final names under {tmp} that must not exist
+  std::function<bool(const fs::path&)> setup = {};  // prepares {tmp}; false: skip (no assets)
+  std::string prefix = {};  // shell text before the binary (ulimit, setpriv)
+  const char* skip = nullptr;  // non-null: a known bug in another engineer's file, see reason
+};
+
+std::string Expand(std::string s, const fs::path& tmp) {
+  const std::pair<std::string, std::string> vars[] = {
+      {"{tmp}", tmp.string()},
+      {"{src}", testing::SourceDir().string()}};
+  for (const auto& [key, value] : vars) {
+    for (size_t p = s.find(key); p != std::string::npos; p = s.find(key, p + value.size())) {
+      s.replace(p, key.size(), value);
+    }
+  }
+  return s;
+}
+
+// Files a record run would write for episode 0.
+const std::vector<std::string> kRecordOutputs = {"out/episode_000.mp4", "out/episode_000_sheet.png",
+                                                 "out/episode_000.json", "out/manifest.json"};
+
+const char kSmall[] = " --width 64 --height 48 --steps 3 ";
+const char kUlimit[] = "trap '' XFSZ; ulimit -f 16; ";  // 8 KiB: SIGXFSZ ignored -> EFBIG
+
+std::vector<Case> Matrix() {
+  auto file = [](const std::string& rel, std::string bytes) {
+    return [rel, bytes](const fs::path& tmp) {
+      WriteBytes(tmp / rel, bytes);
+      return true;
+    };
+  };
+  auto unreadable = [](const std::string& rel) {
+    return [rel](const fs::path& tmp) {
+      WriteBytes(tmp / rel, CsvRows(60));
+      fs::permissions(tmp / rel, fs::perms::none);
+      fs::permissions(tmp, fs::perms::all);  // the unprivileged user may enter and write
+      return true;
+    };
+  };
+  auto assets = [](std::function<void(const fs::path&)> edit) {
+    return [edit](const fs::path& tmp) { return CopyGenuineAssets(tmp, edit); };
+  };
+  auto truncate = [](const fs::path& p, size_t keep) {
+    std::string s = testing::ReadFile(p);
+    std::ofstream(p, std::ios::binary | std::ios::trunc) << s.substr(0, keep);
+  };
+  const std::string rollout = "rollout --env-id FetchReach-v4 --steps 50 --json-out {tmp}/r.json ";
+  const std::vector<std::string> rollout_out = {"r.json"};
+  const std::string record_long = "record --env-id FetchReach-v4 --quiet --width 64 --height 48 "
+                                  "--steps 10 --out {tmp}/out ";
+  const std::string record = std::string("record --env-id FetchReach-v4 --quiet") + kSmall +
+                             "--out {tmp}/out ";
+  return {
+      // ---- unknown subcommands, ids and names
+      {"UnknownSubcommand", "frobnicate", 2, "frobnicate"},
+      {"NoSubcommand", "", 2, "subcommand"},
+      {"UnknownOption", "list-envs --colour", 2, "--colour"},
+      {"DescribeUnknownEnv", "describe --env-id FetchFoo-v4", 2, "FetchFoo-v4"},
+      {"RolloutOldEnvVersion", "rollout --env-id FetchReach-v1", 2, "FetchReach-v1"},
+      {"RewardCheckEmptyEnv", "reward-check --env-id ''", 2, "env"},
+      {"ListCamerasUnknownEnv", "list-cameras --env-id HandReach-v1", 2, "HandReach-v1"},
+      {"RolloutUnknownPolicy", "rollout --policy bogus", 2, "bogus"},
+      {"RolloutEmptyExec", "rollout --policy exec:", 2, "exec"},
+      {"RolloutEmptyReplay", "rollout --policy replay:", 2, "replay"},
+      {"RenderUnknownBackend", "render --backend vulkan -o {tmp}/f.png", 2, "vulkan", {"f.png"}},
+      {"RenderUnknownCamera", "render --camera nosuchcam -o {tmp}/f.png", 2, "nosuchcam", {"f.png"}},
+      {"RenderFreeCameraBadNumber", "render --camera free:distance=abc -o {tmp}/f.png", 2, "abc",
+       {"f.png"}},
+      {"RenderFreeCameraUnknownKey", "render --camera free:zoom=3 -o {tmp}/f.png", 2, "zoom",
+       {"f.png"}},
+      {"RenderFreeCameraShortLookat", "render --camera free:lookat=1,2 -o {tmp}/f.png", 2,
+       "lookat", {"f.png"}},
+      {"RenderFreeCameraNaN", "render --camera free:distance=nan -o {tmp}/f.png", 2, "nan",
+       {"f.png"}},
+      {"RenderEmptyCamera", "render --camera '' -o {tmp}/f.png", 2, "camera", {"f.png"}},
+      {"RenderUnknownOverlay", "render --overlay sparkles -o {tmp}/f.png", 2, "sparkles", {"f.png"}},
+      {"RenderUnknownLayer", "render --layers rgb,heat -o {tmp}/f.png", 2, "heat", {"f.png"}},
+      {"RenderBadMsaa", "render --msaa 3 -o {tmp}/f.png", 2, "3", {"f.png"}},
+      {"RenderNoOutput", "render", 2, "--output"},
+      {"RecordUnknownCodec", record + "--codec prores", 2, "prores", kRecordOutputs},
+      {"RecordUnknownPreset", record + "--preset warp9", 2, "warp9", kRecordOutputs},
+      {"GoldenUnknownSubcommand", "golden frob", 2, "frob"},
+      {"GoldenMissingFolder", "golden check --golden-dir {tmp}/nowhere --out {tmp}/g", 2,
+       "{tmp}/nowhere"},
+      {"GoldenUpdateMissingFolder", "golden update --golden-dir {tmp}/nowhere", 2, "{tmp}/nowhere"},
+      {"GoldenUnknownScene",
+       "golden check --golden-dir {src}/golden --only nosuchscene --out {tmp}/g", 2, "nosuchscene"},
+      {"GoldenMalformedManifest", "golden check --golden-dir {tmp}/gd --out {tmp}/g", 1,
+       "manifest.json", {}, file("gd/manifest.json", "{\"scenes\": [")},
+      {"MergeNoFolder", "merge-manifests", 2, "DIR"},
+      {"MergeMissingFolder", "merge-manifests {tmp}/nowhere", 1, "{tmp}/nowhere",
+       {"nowhere/manifest.json"}},
+      {"MergeMalformedShard", "merge-manifests {tmp}/m", 1, "manifest_shard_0_of_2.json",
+       {"m/manifest.json"}, file("m/manifest_shard_0_of_2.json", "{not json")},
+      {"RecordShardOutOfRange", record + "--shard 3/2", 2, "3/2", kRecordOutputs},
+      {"RecordShardMalformed", record + "--shard half", 2, "half", kRecordOutputs},
+      {"RecordShardZeroShards", record + "--shard 0/0", 2, "0/0", kRecordOutputs},
+      {"RecordJobsNegative", record + "--jobs -1", 2, "-1", kRecordOutputs},
+      {"BenchUnknownWhat", "bench --what everything --no-peers", 2, "everything"},
+      {"BenchUnknownBackend", "bench --what render --backends vulkan --no-peers --seconds 0.1", 2,
+       "vulkan", {}, {}, {}},
+      // ---- malformed numbers, zero / negative / huge sizes and counts
+      {"WidthZero", "render --width 0 -o {tmp}/f.png", 2, "0", {"f.png"}},
+      {"WidthNegative", "render --width -5 -o {tmp}/f.png", 2, "-5", {"f.png"}},
+      {"WidthHuge", "render --width 100000 -o {tmp}/f.png", 2, "100000", {"f.png"}},
+      {"WidthOverflow", "render --width 99999999999999999999 -o {tmp}/f.png", 2,
+       "99999999999999999999", {"f.png"}},
+      {"WidthNotANumber", "render --width wide -o {tmp}/f.png", 2, "wide", {"f.png"}},
+      {"WidthFraction", "render --width 64.5 -o {tmp}/f.png", 2, "64.5", {"f.png"}},
+      {"HeightZero", record + "--height 0", 2, "0", kRecordOutputs},
+      {"RecordEpisodesZero", record + "--episodes 0", 2, "0", kRecordOutputs},
+      {"RecordEpisodesNegative", record + "--episodes -2", 2, "-2", kRecordOutputs},
+      {"RecordEpisodesHuge", record + "--episodes 99999999999", 2, "99999999999", kRecordOutputs},
+      {"RecordStepsZero", "record --steps 0 --out {tmp}/out", 2, "0", kRecordOutputs},
+      {"RecordStepsPastTimeLimit", "record --steps 51 --out {tmp}/out", 2, "51", kRecordOutputs},
+      {"RecordFpsZero", record + "--fps 0", 2, "fps", kRecordOutputs},
+      {"RecordFpsNegative", record + "--fps -25", 2, "-25", kRecordOutputs},
+      {"RecordCrfOutOfRange", record + "--crf 99", 2, "99", kRecordOutputs},
+      {"RecordSheetEveryNegative", record + "--sheet-every -1", 2, "-1", kRecordOutputs},
+      {"RolloutEpisodesText", "rollout --episodes many", 2, "many"},
+      {"RolloutStepsNegative", "rollout --steps -1", 2, "-1"},
+      {"RandomEpisodesZero", "random-episodes --n-episodes 0", 2, "0"},
+      {"RandomEpisodesNegative", "random-episodes --n-episodes -3", 2, "-3"},
+      {"RewardCheckStepsZero", "reward-check --n-steps 0", 2, "0"},
+      {"ProbeStepsZero", "probe-actions --steps 0", 2, "0"},
+      {"ProbeMagnitudesText", "probe-actions --magnitudes 0.5,big", 2, "big"},
+      {"ProbeMagnitudesEmptyItem", "probe-actions --magnitudes 0.5,,1", 2, "magnitudes"},
+      {"ProbeMagnitudesNaN", "probe-actions --magnitudes nan", 2, "nan"},
+      {"BenchSecondsZero", "bench --seconds 0 --no-peers", 2, "0"},
+      {"ExecTimeoutZero", "rollout --policy exec:cat --exec-timeout 0", 2, "0"},
+      {"ExecTimeoutNegative", "rollout --policy exec:cat --exec-timeout -1", 2, "-1"},
+      {"GpuNegativeEgl", "render --backend egl --gpu -7 -o {tmp}/f.png", 2, "-7", {"f.png"}},
+      // ---- seeds outside what Gymnasium accepts (a non-negative integer)
+      {"SeedNegative", "rollout --seed -1", 2, "-1"},
+      {"SeedFraction", "rollout --seed 1.5", 2, "1.5"},
+      {"SeedText", "describe --seed abc", 2, "abc"},
+      {"SeedEmpty", "rollout --seed ''", 2, "seed"},
+      {"SeedHex", "rollout --seed 0x10", 2, "0x10"},
+      {"SeedPlusSign", "rollout --seed +5", 2, "+5"},
+      {"SeedTooLarge", "rollout --seed 18446744073709551616", 2, "18446744073709551616"},
+      {"SeedRecordNegative", record + "--seed -3", 2, "-3", kRecordOutputs},
+      // ---- missing, unreadable and malformed assets
+      {"AssetsMissingFolder", "describe --assets {tmp}/nowhere", 2, "{tmp}/nowhere"},
+      {"AssetsIsAFile", "rollout --assets {tmp}/a.txt", 2, "{tmp}/a.txt", {}, file("a.txt", "x")},
+      {"AssetsEmptyFolder", "rollout --assets {tmp}/empty", 2, "{tmp}/empty", {},
+       [](const fs::path& tmp) { return fs::create_directory(tmp / "empty"); }},
+      {"AssetsTruncatedXml", "rollout --env-id FetchReach-v4 --assets {tmp}/assets", 1,
+       "reach.xml", {}, assets([&](const fs::path& a) { truncate(a / "fetch" / "reach.xml", 300); })},
+      // MuJoCo's include error names the including model and line, not shared.xml itself
+      {"AssetsTruncatedSharedXml", "rollout --env-id FetchPush-v4 --assets {tmp}/assets", 1,
+       "push.xml", {}, assets([&](const fs::path& a) { truncate(a / "fetch" / "shared.xml", 500); })},
+      {"AssetsMissingMesh", "rollout --env-id FetchReach-v4 --assets {tmp}/assets", 1,
+       "gripper_link.stl", {},
+       assets([](const fs::path& a) { fs::remove(a / "stls" / "fetch" / "gripper_link.stl"); })},
+      {"AssetsTruncatedMesh", "rollout --env-id FetchReach-v4 --assets {tmp}/assets", 1,
+       "gripper_link.stl", {},
+       assets([&](const fs::path& a) { truncate(a / "stls" / "fetch" / "gripper_link.stl", 100); })},
+      // MuJoCo names the texture, not its file
+      {"AssetsMissingTexture", "rollout --env-id FetchPush-v4 --assets {tmp}/assets", 1,
+       "texture_block", {}, assets([](const fs::path& a) { fs::remove(a / "textures" / "block.png"); })},
+      {"AssetsCorruptTexture", "rollout --env-id FetchPush-v4 --assets {tmp}/assets", 1,
+       "texture_block", {},
+       assets([&](const fs::path& a) { truncate(a / "textures" / "block.png", 40); })},
+      {"AssetsBrokenRecord", record + "--assets {tmp}/assets", 1, "gripper_link.stl", kRecordOutputs,
+       assets([](const fs::path& a) { fs::remove(a / "stls" / "fetch" / "gripper_link.stl"); })},
+      // ---- replay files: empty, binary, wrong width or shape, NaN/inf, too few rows
+      {"ReplayMissingFile", rollout + "--policy replay:{tmp}/none.csv", 1, "{tmp}/none.csv",
+       rollout_out},
+      {"ReplayUnknownExtension", rollout + "--policy replay:{tmp}/a.txt", 1, ".txt", rollout_out,
+       file("a.txt", CsvRows(60))},
+      {"ReplayIsAFolder", rollout + "--policy replay:{tmp}/d.csv", 1, "{tmp}/d.csv", rollout_out,
+       [](const fs::path& tmp) { return fs::create_directory(tmp / "d.csv"); }},
+      {"ReplayUnreadable", rollout + "--policy replay:{tmp}/u.csv", 1, "{tmp}/u.csv", rollout_out,
+       unreadable("u.csv"), Unprivileged()},
+      {"ReplayEmptyCsv", rollout + "--policy replay:{tmp}/e.csv", 1, "e.csv", rollout_out,
+       file("e.csv", "")},
+      {"ReplayEmptyNpy", rollout + "--policy replay:{tmp}/e.npy", 1, "e.npy", rollout_out,
+       file("e.npy", "")},
+      {"ReplayEmptyJsonl", rollout + "--policy replay:{tmp}/e.jsonl", 1, "e.jsonl", rollout_out,
+       file("e.jsonl", "")},
+      {"ReplayBinaryCsv", rollout + "--policy replay:{tmp}/b.csv", 1, "b.csv", rollout_out,
+       file("b.csv", std::string("\x7f" "ELF\x02\x01\x01\0\0\0\xff\xfe,\x80\n", 16))},
+      {"ReplayBinaryJsonl", rollout + "--policy replay:{tmp}/b.jsonl", 1, "b.jsonl", rollout_out,
+       file("b.jsonl", std::string("\x89PNG\r\n\x1a\n\0\0\0\rIHDR", 16))},
+      {"ReplayNotNpy", rollout + "--policy replay:{tmp}/b.npy", 1, "b.npy", rollout_out,
+       file("b.npy", CsvRows(60))},
+      {"ReplayCsvThreeColumns", rollout + "--policy replay:{tmp}/w.csv", 1, "w.csv", rollout_out,
+       file("w.csv", "0.1,0.2,0.3\n0.1,0.2,0.3\n")},
+      {"ReplayCsvFiveColumns", rollout + "--policy replay:{tmp}/w.csv", 1, "w.csv", rollout_out,
+       file("w.csv", "0.1,0.2,0.3,0.4,0.5\n")},
+      {"ReplayNpyWrongWidth", rollout + "--policy replay:{tmp}/w.npy", 1, "w.npy", rollout_out,
+       file("w.npy", Npy("<f8", "(2, 3)", Doubles({0, 0, 0, 0, 0, 0})))},
+      {"ReplayNpyOneDimension", rollout + "--policy replay:{tmp}/w.npy", 1, "w.npy", rollout_out,
+       file("w.npy", Npy("<f8", "(4,)", Doubles({0, 0, 0, 0})))},
+      {"ReplayNpyIntegers", rollout + "--policy replay:{tmp}/i.npy", 1, "<i4", rollout_out,
+       file("i.npy", Npy("<i4", "(1, 4)", std::string(16, '\0')))},
+      {"ReplayNpyTruncatedData", rollout + "--policy replay:{tmp}/t.npy", 1, "t.npy", rollout_out,
+       file("t.npy", Npy("<f8", "(60, 4)", Doubles({0, 0, 0, 0})))},
+      {"ReplayNpyHugeShape", rollout + "--policy replay:{tmp}/h.npy", 1, "h.npy", rollout_out,
+       file("h.npy", Npy("<f8", "(4611686018427387904, 4)", Doubles({0, 0, 0, 0})))},
+      {"ReplayJsonlWrongWidth", rollout + "--policy replay:{tmp}/w.jsonl", 1, "w.jsonl",
+       rollout_out, file("w.jsonl", "[0.1, 0.2]\n")},
+      {"ReplayJsonlNotArray", rollout + "--policy replay:{tmp}/w.jsonl", 1, "w.jsonl", rollout_out,
+       file("w.jsonl", "{\"dx\": 1}\n")},
+      {"ReplayCsvNaN", rollout + "--policy replay:{tmp}/n.csv", 1, "n.csv", rollout_out,
+       file("n.csv", "0,0,0,0\nnan,0,0,0\n")},
+      {"ReplayCsvInf", rollout + "--policy replay:{tmp}/n.csv", 1, "n.csv", rollout_out,
+       file("n.csv", "0,inf,0,0\n")},
+      {"ReplayCsvOverflow", rollout + "--policy replay:{tmp}/n.csv", 1, "n.csv", rollout_out,
+       file("n.csv", "0,1e999,0,0\n")},
+      {"ReplayNpyNaN", rollout + "--policy replay:{tmp}/n.npy", 1, "n.npy", rollout_out,
+       file("n.npy", Npy("<f8", "(1, 4)", Doubles({0, 0, std::nan(""), 0})))},
+      {"ReplayNpyInf", rollout + "--policy replay:{tmp}/n.npy", 1, "n.npy", rollout_out,
+       file("n.npy", Npy("<f8", "(1, 4)", Doubles({0, -HUGE_VAL, 0, 0})))},
+      {"ReplayJsonlNaN", rollout + "--policy replay:{tmp}/n.jsonl", 1, "n.jsonl", rollout_out,
+       file("n.jsonl", "[NaN, 0, 0, 0]\n")},
+      {"ReplayTooFewRowsCsv", rollout + "--policy replay:{tmp}/few.csv", 1, "10", rollout_out,
+       file("few.csv", CsvRows(10))},
+      {"ReplayTooFewRowsTwoEpisodes", rollout + "--episodes 2 --policy replay:{tmp}/few.csv", 1,
+       "60", rollout_out, file("few.csv", CsvRows(60))},
+      {"ReplayTooFewRowsRecord", record + "--policy replay:{tmp}/few.csv", 1, "2", kRecordOutputs,
+       file("few.csv", CsvRows(2))},
+      // ---- exec policies that exit, hang or answer garbage
+      {"ExecExitsAtOnce", rollout + "--policy exec:true", 1, "exited", rollout_out},
+      {"ExecExitsWithStatus", rollout + "--policy \"exec:read l; exit 3\"", 1, "status 3",
+       rollout_out},
+      {"ExecCommandNotFound", rollout + "--policy exec:/nonexistent/policy", 1, "127", rollout_out},
+      {"ExecHangs", rollout + "--exec-timeout 0.3 --policy \"exec:sleep 30\"", 1, "0.3",
+       rollout_out},
+      {"ExecGarbage", rollout + "--policy \"exec:yes garbage\"", 1, "garbage", rollout_out},
+      {"ExecThreeNumbers", rollout + "--policy \"exec:yes 1 2 3\"", 1, "1 2 3", rollout_out},
+      {"ExecNaN", rollout + "--policy \"exec:yes nan 0 0 0\"", 1, "nan", rollout_out},
+      {"ExecBadJson", rollout + "--policy \"exec:yes '[1, 2, 3,'\"", 1, "[1, 2, 3,", rollout_out},
+      {"ExecEndlessLine",
+       rollout + "--policy \"exec:tr -d '\\n' </dev/zero 2>/dev/null | tr '\\0' 1 2>/dev/null\"", 1,
+       "64 KiB", rollout_out},
+      {"ExecDiesMidEpisode", record_long +
+           "--policy \"exec:for i in 1 2 3 4 5; do read l; echo 0 0 0 0; done\"",
+       1, "step 5", kRecordOutputs},
+      {"ExecHangsInRecord", record_long + "--exec-timeout 0.3 --policy \"exec:sleep 30\"", 1, "0.3",
+       kRecordOutputs},
+      // ---- outputs that cannot be written, or a full disk (ulimit -f: writes fail with EFBIG)
+      {"JsonOutParentIsFile", "describe --json-out {tmp}/f/d.json", 1, "{tmp}/f", {"f/d.json"},
+       file("f", "x")},
+      {"JsonOutMissingFolder", "rollout --json-out {tmp}/no/such/r.json", 1, "{tmp}/no/such",
+       {"no/such/r.json"}},
+      {"RenderOutputParentIsFile", "render -o {tmp}/f/x.png", 1, "{tmp}/f", {"f/x.png"},
+       file("f", "x")},
+      {"RecordOutIsFile", "record --quiet --steps 3 --out {tmp}/f", 1, "{tmp}/f", {}, file("f", "x")},
+      {"RecordOutUnwritable", "record --quiet --steps 3 --out {tmp}/ro/out", 1, "{tmp}/ro",
+       {"ro/out/episode_000.mp4", "ro/out/manifest.json"},
+       [](const fs::path& tmp) {
+         fs::create_directory(tmp / "ro");
+         fs::permissions(tmp / "ro", fs::perms::owner_read | fs::perms::owner_exec |
+                                         fs::perms::others_read | fs::perms::others_exec);
+         fs::permissions(tmp, fs::perms::all);
+         return true;
+       },
+       Unprivileged()},
+      {"JsonOutFileSizeLimit", "rollout --episodes 3 --json-out {tmp}/r.json", 1, "r.json",
+       {"r.json"}, {}, kUlimit},
+      {"DescribeFileSizeLimit", "describe --json-out {tmp}/d.json", 1, "d.json", {"d.json"}, {},
+       "trap '' XFSZ; ulimit -f 1; "},
+      {"RenderFileSizeLimit", "render --width 256 --height 256 -o {tmp}/f.png", 1, "f.png",
+       {"f.png"}, {}, "trap '' XFSZ; ulimit -f 2; "},
+      {"RecordFileSizeLimit", "record --env-id FetchReach-v4 --quiet --width 320 --height 240 "
+                              "--steps 20 --out {tmp}/out",
+       1, "File too large", kRecordOutputs, {}, kUlimit},
+      {"RandomEpisodesFileSizeLimit", "random-episodes --n-episodes 5 --json-out {tmp}/m", 1,
+       "m_random_metrics.json", {"m_random_metrics.json"}, {}, "trap '' XFSZ; ulimit -f 1; "},
+  };
+}
+
+// gtest prints a failing row by this (instead of its bytes).
+void PrintTo(const Case& c, std::ostream* os) { *os << c.name << ": " << c.args; }
+
+class BadInput : public ::testing::TestWithParam<Case> {
+ protected:
+  void SetUp() override { unsetenv("DISPLAY"); }
+};
+
+// Leftover temporaries anywhere under `root`: outputs are written under hidden names
+// (".<name>.tmp-<pid>-<n>", ".episode_000.partial.mp4") and renamed when complete.
+std::vector<std::string> Temporaries(const fs::path& root) {
+  std::vector<std::string> found;
+  std::error_code ec;
+  for (auto it = fs::recursive_directory_iterator(root, ec);
+       !ec && it != fs::recursive_directory_iterator(); it.increment(ec)) {
+    if (it->path().filename().string()[0] == '.') found.push_back(it->path().string());
+  }
+  return found;
+}
+
+TEST_P(BadInput, FailsCleanly) {
+  const Case& c = GetParam();
+  if (c.skip) GTEST_SKIP() << c.skip;
+  TempDir tmp;
+  if (c.setup && !c.setup(tmp.path())) GTEST_SKIP() << "genuine assets absent";
+  const std::string command =
+      c.prefix + std::string(FETCHSCOPE_BIN) + " " + Expand(c.args, tmp.path()) + " </dev/null";
+  const CommandResult r = RunCommand(command);
+  const std::string& out = r.output;
+  SCOPED_TRACE("command: " + command + "\noutput:\n" + out);
+
+  EXPECT_EQ(r.exit_code, c.exit_code);
+  EXPECT_NE(out.find(Expand(c.needle, tmp.path())), std::string::npos)
+      << "the message does not name '" << Expand(c.needle, tmp.path()) << "'";
+  // one clear line, not a dump: a few lines at most, each short enough to read
+  EXPECT_LE(std::count(out.begin(), out.end(), '\n'), 4);
+  EXPECT_LE(out.size(), 1200u);
+  for (const char* crash : {"terminate called", "Aborted", "core dumped", "Segmentation fault",
+                            "AddressSanitizer", "runtime error:", "what():", "Assertion"}) {
+    EXPECT_EQ(out.find(crash), std::string::npos) << "abort text: " << crash;
+  }
+  for (const std::string& rel : c.absent) {
+    EXPECT_FALSE(fs::exists(tmp.path() / rel)) << "a file under a final name: " << rel;
+  }
+  EXPECT_EQ(Temporaries(tmp.path()), std::vector<std::string>{});
+  // restore permissions so that TempDir can clean up
+  std::error_code ec;
+  for (auto it = fs::recursive_directory_iterator(tmp.path(), ec);
+       !ec && it != fs::recursive_directory_iterator(); it.increment(ec)) {
+    fs::permissions(it->path(), fs::perms::owner_all, fs::perm_options::add, ec);
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Matrix, BadInput, ::testing::ValuesIn(Matrix()),
+                         [](const ::testing::TestParamInfo<Case>& info) {
+                           return std::string(info.param.name);
+                         });
+
+// A full disk (a 16 KiB tmpfs in a private mount namespace): the write fails with ENOSPC, the
+// message says so, and the folder holds no file under a final name and no temporary. Needs
+// unshare + mount (root or user namespaces); skipped where they are not allowed.
+struct FullDiskCase {
+  const char* name;
+  std::string args;  // {dir} is the full file system
+  std::string needle;
+};
+
+class FullDisk : public ::testing::TestWithParam<FullDiskCase> {};
+
+TEST_P(FullDisk, FailsCleanly) {
+  unsetenv("DISPLAY");
+  TempDir tmp;
+  const std::string dir = (tmp.path() / "full").string();
+  fs::create_directory(dir);
+  const std::string mount = "unshare -m sh -c 'mount -t tmpfs -o size=16k tmpfs " + dir;
+  if (RunCommand(mount + "'").exit_code != 0) GTEST_SKIP() << "cannot mount a tmpfs here";
+  std::string args = GetParam().args;
+  args.replace(args.find("{dir}"), 5, dir);
+  // list what is left on the tmpfs before the namespace (and the tmpfs) goes away
+  const CommandResult r = RunCommand(mount + " && " + FETCHSCOPE_BIN + " " + args +
+                                     " </dev/null; rc=$?; echo listing:; ls -A " + dir +
+                                     " " + dir + "/out 2>/dev/null; exit $rc'");
+  SCOPED_TRACE(r.output);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.output.find(GetParam().needle), std::string::npos);
+  EXPECT_NE(r.output.find("No space left on device"), std::string::npos);
+  const std::string listing = r.output.substr(r.output.find("listing:") + 8);
+  for (const char* name : {"episode_000", "manifest.json", "r.json", ".tmp-", ".partial"}) {
+    EXPECT_EQ(listing.find(name), std::string::npos) << name << " left on the full disk";
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Matrix, FullDisk,
+    ::testing::Values(
+        FullDiskCase{"Record",
+                     "record --env-id FetchReach-v4 --quiet --width 320 --height 240 --steps 20 "
+                     "--out {dir}/out",
+                     "episode_000"},
+        FullDiskCase{"RolloutJson", "rollout --episodes 3 --json-out {dir}/r.json", "r.json"}),
+    [](const ::testing::TestParamInfo<FullDiskCase>& info) {
+      return std::string(info.param.name);
+    });
+
+}  // namespace
+}  // namespace fetchscope

@@ -1,0 +1,198 @@
+// Signals during `record` and `golden update`: SIGINT/SIGTERM finish or drop the episode (scene)
+// in progress, keep the ones already written whole and say "interrupted" (record: in the
+// manifest); SIGKILL never leaves a truncated file under a final name (outputs are written under
+// temporary names and renamed).
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdlib>
+#include <filesystem>
+#include <set>
+#include <string>
+#include <thread>
+
+#include <nlohmann/json.hpp>
+
+#include "render/png_io.h"
+#include "tests/test_util.h"
+
+namespace fetchscope {
+namespace {
+
+using testing::ReadFile;
+using testing::RunCommand;
+using testing::TempDir;
+namespace fs = std::filesystem;
+
+// Starts `fetchscope ARGS` in the background (output to `log`); returns its pid.
+pid_t Spawn(const std::string& args, const fs::path& log) {
+  const std::string command =
+      "exec " + std::string(FETCHSCOPE_BIN) + " " + args + " </dev/null >" + log.string() + " 2>&1";
+  pid_t pid = fork();
+  if (pid == 0) {
+    execl("/bin/sh", "sh", "-c", command.c_str(), static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  return pid;
+}
+
+// Waits (up to a generous bound, so a hung binary fails the test instead of hanging it) until
+// `path` exists or the process exits. True if the file appeared.
+bool WaitForFile(const fs::path& path, pid_t pid) {
+  for (int i = 0; i < 1200; ++i) {  // 120 s
+    if (fs::exists(path)) return true;
+    if (waitpid(pid, nullptr, WNOHANG) == pid) return fs::exists(path);
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  return false;
+}
+
+// Exit code as a shell reports it (128+signal when killed).
+int WaitExit(pid_t pid) {
+  int status = 0;
+  waitpid(pid, &status, 0);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+}
+
+// Frames ffprobe decodes from `mp4`, or -1 if it does not play.
+int DecodedFrames(const fs::path& mp4) {
+  auto r = RunCommand("ffprobe -v error -count_frames -select_streams v:0 -show_entries "
+                      "stream=nb_read_frames -of csv=p=0 " + mp4.string());
+  if (r.exit_code != 0 || r.output.empty()) return -1;
+  return std::atoi(r.output.c_str());
+}
+
+// Every output under a final name is whole: videos decode, sheets decode, JSON parses.
+void ExpectFinalFilesWhole(const fs::path& out) {
+  for (const auto& e : fs::directory_iterator(out)) {
+    const std::string name = e.path().filename().string();
+    if (name[0] == '.') continue;  // a temporary (SIGKILL leaves those; they are hidden)
+    SCOPED_TRACE(name);
+    if (e.path().extension() == ".mp4") {
+      EXPECT_GT(DecodedFrames(e.path()), 0);
+    } else if (e.path().extension() == ".png") {
+      EXPECT_NO_THROW(ReadPng(e.path().string()));
+    } else if (e.path().extension() == ".json") {
+      EXPECT_NO_THROW(nlohmann::json::parse(ReadFile(e.path())));
+    } else {
+      ADD_FAILURE() << "unexpected file";
+    }
+  }
+}
+
+const char kRecord[] =
+    "record --env-id FetchPush-v4 --policy scripted --episodes 40 --width 96 --height 72 --out ";
+
+class SignalsTest : public ::testing::TestWithParam<int> {
+ protected:
+  void SetUp() override { unsetenv("DISPLAY"); }
+};
+
+TEST_P(SignalsTest, RecordStopsCleanlyAndSaysInterrupted) {
+  const int sig = GetParam();
+  TempDir tmp;
+  const fs::path out = tmp.path() / "run";
+  const pid_t pid = Spawn(kRecord + out.string(), tmp.path() / "log");
+  ASSERT_TRUE(WaitForFile(out / "episode_001.json", pid)) << ReadFile(tmp.path() / "log");
+  kill(pid, sig);
+  const int code = WaitExit(pid);
+  const std::string log = ReadFile(tmp.path() / "log");
+  EXPECT_EQ(code, 128 + sig) << log;
+  EXPECT_EQ(log.find("terminate called"), std::string::npos) << log;
+
+  ASSERT_TRUE(fs::exists(out / "manifest.json")) << log;
+  const auto m = nlohmann::json::parse(ReadFile(out / "manifest.json"));
+  EXPECT_EQ(m["interrupted"], true);
+  EXPECT_EQ(m["signal"], sig == SIGINT ? "SIGINT" : "SIGTERM");
+  ASSERT_GE(m["episodes"].size(), 2u);
+  EXPECT_LT(m["episodes"].size(), 40u);
+  // every episode the manifest lists plays, with as many frames as it says
+  std::set<std::string> listed = {"manifest.json"};
+  for (const auto& e : m["episodes"]) {
+    for (const char* key : {"video", "sheet", "trajectory"}) {
+      listed.insert(e[key].get<std::string>());
+      EXPECT_TRUE(fs::exists(out / e[key].get<std::string>())) << e[key];
+    }
+    EXPECT_EQ(DecodedFrames(out / e["video"].get<std::string>()), e["frames"].get<int>());
+  }
+  // and nothing else is there: the episode in progress was finalized (and listed) or removed
+  for (const auto& f : fs::directory_iterator(out)) {
+    EXPECT_TRUE(listed.count(f.path().filename().string())) << "unlisted or temporary file "
+                                                            << f.path();
+  }
+  ExpectFinalFilesWhole(out);
+}
+
+INSTANTIATE_TEST_SUITE_P(IntAndTerm, SignalsTest, ::testing::Values(SIGINT, SIGTERM),
+                         [](const ::testing::TestParamInfo<int>& info) {
+                           return std::string(info.param == SIGINT ? "SIGINT" : "SIGTERM");
+                         });
+
+// SIGKILL cannot be caught: what protects the user is that every output is written under a
+// temporary name and renamed when complete. Kill at a few moments; final names stay whole.
+TEST(SignalsKill, SigkillLeavesNoTruncatedFileUnderAFinalName) {
+  unsetenv("DISPLAY");
+  for (const char* wait_for : {"episode_000.mp4", "episode_001_sheet.png", "episode_002.json"}) {
+    SCOPED_TRACE(wait_for);
+    TempDir tmp;
+    const fs::path out = tmp.path() / "run";
+    const pid_t pid = Spawn(kRecord + out.string(), tmp.path() / "log");
+    ASSERT_TRUE(WaitForFile(out / wait_for, pid)) << ReadFile(tmp.path() / "log");
+    kill(pid, SIGKILL);
+    EXPECT_EQ(WaitExit(pid), 128 + SIGKILL);
+    EXPECT_FALSE(fs::exists(out / "manifest.json"));
+    ExpectFinalFilesWhole(out);
+    // the videos under final names are complete episodes: reset frame + 50 steps
+    for (const auto& e : fs::directory_iterator(out)) {
+      if (e.path().extension() == ".mp4" && e.path().filename().string()[0] != '.') {
+        EXPECT_EQ(DecodedFrames(e.path()), 51) << e.path();
+      }
+    }
+  }
+}
+
+// `golden update` on a copy of golden/ without its images: SIGINT after the first scene stops
+// after the scene in progress; every scene written has its PNG and its state, both whole.
+TEST(SignalsGolden, GoldenUpdateStopsAfterTheSceneInProgress) {
+  unsetenv("DISPLAY");
+  TempDir tmp;
+  const fs::path golden = tmp.path() / "golden";
+  fs::copy(testing::SourceDir() / "golden", golden, fs::copy_options::recursive);
+  for (const auto& e : fs::directory_iterator(testing::SourceDir() / "golden")) {
+    const std::string name = e.path().filename().string();
+    if (e.path().extension() == ".png" || name.find("_state.json") != std::string::npos) {
+      fs::remove(golden / name);
+    }
+  }
+  const auto manifest = nlohmann::json::parse(ReadFile(golden / "manifest.json"));
+  const size_t scenes = manifest["scenes"].size();
+  const std::string first = manifest["scenes"][0]["name"].get<std::string>();
+  std::string args = "golden update --golden-dir " + golden.string();
+  if (!testing::GenuineAssetsDir().empty()) {
+    args += " --genuine-assets " + testing::GenuineAssetsDir().string();
+  }
+  const pid_t pid = Spawn(args, tmp.path() / "log");
+  ASSERT_TRUE(WaitForFile(golden / (first + "_state.json"), pid)) << ReadFile(tmp.path() / "log");
+  kill(pid, SIGINT);
+  EXPECT_EQ(WaitExit(pid), 128 + SIGINT) << ReadFile(tmp.path() / "log");
+  EXPECT_NE(ReadFile(tmp.path() / "log").find("interrupted by SIGINT"), std::string::npos);
+  size_t written = 0;
+  for (const auto& e : fs::directory_iterator(golden)) {
+    const std::string name = e.path().filename().string();
+    EXPECT_EQ(name.find(".tmp-"), std::string::npos) << "leftover temporary " << name;
+    if (e.path().extension() != ".png") continue;
+    ++written;
+    EXPECT_NO_THROW(ReadPng(e.path().string())) << name;
+    const fs::path state = golden / (e.path().stem().string() + "_state.json");
+    ASSERT_TRUE(fs::exists(state)) << name << " without its state";
+    EXPECT_NO_THROW(nlohmann::json::parse(ReadFile(state))) << state;
+  }
+  EXPECT_GE(written, 1u);
+  EXPECT_LT(written, scenes);
+}
+
+}  // namespace
+}  // namespace fetchscope

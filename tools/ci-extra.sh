@@ -1,0 +1,92 @@
+#!/usr/bin/env bash
+# CI's reliability stages after tools/test.sh (which leaves the Release build in build/):
+#   1. AddressSanitizer + UndefinedBehaviorSanitizer build of everything, whole default ctest suite
+#   2. each libFuzzer target (clang) for FUZZ_SECONDS over its seed corpus; any finding fails
+#   3. valgrind memcheck of one short `record` (build/fetchscope): no definite leaks, no errors
+# Usage: tools/ci-extra.sh [asan|fuzz|valgrind ...]   (default: all three, in that order)
+# Needs tools/install-deps.sh --ci (clang, libclang-rt-14-dev, valgrind). Jobs: $JOBS (nproc).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+root=$(pwd)
+jobs=${JOBS:-$(nproc)}
+fuzz_seconds=${FUZZ_SECONDS:-60}
+stages=("$@")
+[[ ${#stages[@]} -eq 0 ]] && stages=(asan fuzz valgrind)
+supp="$root/tools/sanitizers"
+
+stamp() { echo "ci-extra: $* ($(date -u +%H:%M:%S))"; }
+
+run_asan() {
+  stamp "ASan+UBSan build"
+  local t0=$SECONDS
+  cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG="-O1 -g" \
+    -DFETCHSCOPE_SANITIZE=ON -DBUILD_TESTING=ON >/dev/null
+  cmake --build build-asan -j"$jobs"
+  stamp "ASan+UBSan ctest"
+  # the test binaries and the fetchscope they run inherit these; a report fails the test.
+  # Leak checking is off here: LeakSanitizer's tracer itself crashes (signal 11 while scanning
+  # the main thread's TLS) at the exit of some processes that rendered through llvmpipe, so it
+  # cannot be relied on in GL processes. Leaks are checked by valgrind (stage 3, a whole
+  # record) and by LeakSanitizer in the fuzzers, which load no GL.
+  ASAN_OPTIONS="detect_leaks=0:abort_on_error=0:strict_string_checks=1:check_initialization_order=1" \
+  LSAN_OPTIONS="suppressions=$supp/lsan.supp:print_suppressions=0" \
+  UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1:suppressions=$supp/ubsan.supp" \
+    ctest --test-dir build-asan --output-on-failure -j"$jobs" -LE soak
+  stamp "ASan+UBSan done in $((SECONDS - t0)) s"
+}
+
+run_fuzz() {
+  stamp "fuzz build (clang)"
+  local t0=$SECONDS
+  CC=clang CXX=clang++ cmake -S . -B build-fuzz -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+    -DFETCHSCOPE_FUZZ=ON -DBUILD_TESTING=OFF >/dev/null
+  cmake --build build-fuzz -j"$jobs" --target fuzzers
+  local failed=0
+  for seeds in fuzz/corpus/*/; do
+    local name work
+    name=$(basename "$seeds")
+    work="build-fuzz/corpus/$name"  # grows while fuzzing; the committed seeds stay as they are
+    mkdir -p "$work" build-fuzz/artifacts
+    stamp "fuzz $name for ${fuzz_seconds} s ($(ls "$seeds" | wc -l) seeds)"
+    if ! ASAN_OPTIONS="detect_leaks=1" UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1" \
+        "build-fuzz/fuzz/$name" -max_total_time="$fuzz_seconds" -timeout=10 -rss_limit_mb=2048 \
+        -max_len=4096 -print_final_stats=1 -artifact_prefix="build-fuzz/artifacts/$name-" \
+        "$work" "$seeds" >"build-fuzz/$name.log" 2>&1; then
+      echo "ci-extra: FINDING in $name (crash input in build-fuzz/artifacts/):"
+      tail -40 "build-fuzz/$name.log"
+      failed=1
+    else
+      grep -E "stat::number_of_executed_units|stat::peak_rss_mb" "build-fuzz/$name.log" | tr '\n' ' '
+      echo "corpus now $(ls "$work" | wc -l) files"
+    fi
+  done
+  stamp "fuzzers done in $((SECONDS - t0)) s"
+  return $failed
+}
+
+run_valgrind() {
+  stamp "valgrind memcheck of a short record"
+  local t0=$SECONDS out
+  [[ -x build/fetchscope ]] || { cmake -S . -B build -DCMAKE_BUILD_TYPE=Release >/dev/null;
+                                 cmake --build build -j"$jobs" --target fetchscope; }
+  out=$(mktemp -d)
+  # OSMesa: llvmpipe either way, but without EGL's device probing (fewer uninstrumented paths)
+  valgrind --tool=memcheck --leak-check=full --errors-for-leak-kinds=definite \
+    --show-leak-kinds=definite --error-exitcode=99 --num-callers=30 \
+    --suppressions="$supp/valgrind.supp" --gen-suppressions=all --log-file=build/valgrind.log \
+    build/fetchscope record --env-id FetchReach-v4 --episodes 1 --steps 3 --width 64 \
+    --height 48 --msaa 0 --backend osmesa --quiet --out "$out" || {
+      echo "ci-extra: valgrind found errors:"; tail -80 build/valgrind.log; rm -rf "$out"; return 1; }
+  grep -E "ERROR SUMMARY|definitely lost" build/valgrind.log
+  rm -rf "$out"
+  stamp "valgrind done in $((SECONDS - t0)) s"
+}
+
+for s in "${stages[@]}"; do
+  case "$s" in
+    asan) run_asan ;;
+    fuzz) run_fuzz ;;
+    valgrind) run_valgrind ;;
+    *) echo "ci-extra: unknown stage '$s' (accepted: asan, fuzz, valgrind)" >&2; exit 2 ;;
+  esac
+done
