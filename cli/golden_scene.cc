@@ -99,18 +99,7 @@ bool ValidName(const std::string& name) {
 
 // The trajectory numbers up to the frame: what the state golden holds.
 nlohmann::json StateJson(const GoldenScene& scene, const EpisodeRecord& episode) {
-  nlohmann::json steps = nlohmann::json::array();
-  for (const StepRecord& s : episode.steps) {
-    nlohmann::json row;
-    row["t"] = s.t;
-    row["observation"] = JsonVector(s.obs.observation.data(), s.obs.observation.size());
-    row["achieved_goal"] = JsonVector(s.obs.achieved_goal.data(), 3);
-    row["desired_goal"] = JsonVector(s.obs.desired_goal.data(), 3);
-    row["action"] = s.action ? JsonVector(s.action->value.data(), 4) : nlohmann::json(nullptr);
-    row["reward"] = s.reward ? JsonDouble(*s.reward) : nlohmann::json(nullptr);
-    row["is_success"] = s.is_success;
-    steps.push_back(std::move(row));
-  }
+  const nlohmann::json steps = StepsJson(episode);  // the trajectory JSON's step rows
   return {{"scene", scene.name},
           {"env_id", scene.env_id},
           {"seed", scene.seed},

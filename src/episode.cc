@@ -35,7 +35,7 @@ nlohmann::json AssetsJson(const AssetSource& assets) {
           {"origin", assets.origin}};
 }
 
-nlohmann::json EpisodeJson(const EpisodeRecord& episode) {
+nlohmann::json StepsJson(const EpisodeRecord& episode) {
   nlohmann::json steps = nlohmann::json::array();
   for (const StepRecord& s : episode.steps) {
     nlohmann::json row;
@@ -48,6 +48,11 @@ nlohmann::json EpisodeJson(const EpisodeRecord& episode) {
     row["is_success"] = s.is_success;
     steps.push_back(std::move(row));
   }
+  return steps;
+}
+
+nlohmann::json EpisodeJson(const EpisodeRecord& episode) {
+  nlohmann::json steps = StepsJson(episode);
   std::string dtype = "none";
   if (episode.steps.size() > 1 && episode.steps[1].action) {
     dtype = episode.steps[1].action->is_float32 ? "float32" : "float64";

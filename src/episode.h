@@ -42,6 +42,10 @@ EpisodeRecord RunEpisode(FetchEnv& env, Policy& policy, int index, std::optional
 /// {"path": ..., "sha256": ..., "kind": ..., "origin": ...}
 nlohmann::json AssetsJson(const AssetSource& assets);
 
+/// The step rows of one episode (t, observation, achieved_goal, desired_goal, action, reward,
+/// is_success), as in the trajectory JSON; golden state files hold the same rows.
+nlohmann::json StepsJson(const EpisodeRecord& episode);
+
 /// One episode as JSON: {"index", "length", "return", "is_success", "steps": [...]}.
 nlohmann::json EpisodeJson(const EpisodeRecord& episode);
 
