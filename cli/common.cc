@@ -2,6 +2,9 @@
 
 #include <mujoco/mujoco.h>
 
+#include <signal.h>
+
+#include <atomic>
 #include <cerrno>
 #include <cstdlib>
 
@@ -58,6 +61,22 @@ std::string& CommandLine() {
   static std::string line;
   return line;
 }
+
+namespace {
+std::atomic<int> g_stop_signal{0};
+void OnStopSignal(int sig) { g_stop_signal.store(sig); }
+}  // namespace
+
+void InstallStopSignals() {
+  g_stop_signal.store(0);
+  struct sigaction sa {};
+  sa.sa_handler = OnStopSignal;
+  sigemptyset(&sa.sa_mask);
+  sigaction(SIGINT, &sa, nullptr);
+  sigaction(SIGTERM, &sa, nullptr);
+}
+
+int StopSignal() { return g_stop_signal.load(); }
 
 int& ExitStatus() {
   static int status = 0;

@@ -35,6 +35,13 @@ nlohmann::json VersionsJson();
 /// Exit status a subcommand asks for (0 unless it set one).
 int& ExitStatus();
 
+/// Makes SIGINT and SIGTERM request a stop instead of killing the process, so long commands
+/// (record, golden update) can finish the file in progress; clears any earlier request.
+void InstallStopSignals();
+
+/// The signal that requested a stop (SIGINT or SIGTERM), or 0. Safe from any thread.
+int StopSignal();
+
 /// The command line as typed (set by main), recorded in manifests.
 std::string& CommandLine();
 

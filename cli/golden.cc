@@ -41,20 +41,6 @@ struct GoldenOptions {
   std::string genuine_assets;
 };
 
-std::atomic<int> g_signal{0};
-void OnSignal(int sig) { g_signal.store(sig); }
-
-// Finish the scene in progress on SIGINT/SIGTERM, then stop: every file is written under a
-// temporary name and renamed, so nothing half-written is left under a final name.
-void InstallSignalHandlers() {
-  g_signal.store(0);
-  struct sigaction sa {};
-  sa.sa_handler = OnSignal;
-  sigemptyset(&sa.sa_mask);
-  sigaction(SIGINT, &sa, nullptr);
-  sigaction(SIGTERM, &sa, nullptr);
-}
-
 void AddOptions(CLI::App* sub, GoldenOptions* o) {
   sub->add_option("--golden-dir", o->golden_dir, "Folder holding manifest.json and the goldens")
       ->capture_default_str();
@@ -147,7 +133,7 @@ nlohmann::json ReadState(const std::string& path) {
 
 // Signals end the run after the scene in progress: 130 for SIGINT, 143 for SIGTERM.
 bool Interrupted(const char* command, size_t done, size_t total) {
-  const int sig = g_signal.load();
+  const int sig = StopSignal();
   if (sig == 0) return false;
   std::fprintf(stderr, "golden %s: interrupted by %s after %zu of %zu scenes\n", command,
                sig == SIGINT ? "SIGINT" : "SIGTERM", done, total);
@@ -281,7 +267,7 @@ void RunCheck(const GoldenOptions& o) {
     return;
   }
   auto gl = CreateGlContext(o.backend, o.gpu);
-  InstallSignalHandlers();
+  InstallStopSignals();  // finish the scene in progress, then stop
   std::vector<CheckRow> rows;
   for (const GoldenScene* s : scenes) {
     rows.push_back(CheckScene(*gl, manifest, *s, genuine, o.out));
@@ -320,7 +306,7 @@ void RunUpdate(const GoldenOptions& o) {
     return;
   }
   auto gl = CreateGlContext(o.backend, o.gpu);
-  InstallSignalHandlers();
+  InstallStopSignals();  // finish the scene in progress, then stop
   size_t done = 0;
   for (const GoldenScene* s : scenes) {
     const SceneResult actual =

@@ -36,8 +36,6 @@ namespace {
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 
-std::atomic<int> g_signal{0};
-void OnSignal(int sig) { g_signal.store(sig); }
 
 double Since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
@@ -202,7 +200,7 @@ struct RunState {
   std::string msaa_reason;             // and why ("auto: software renderer llvmpipe")
   std::exception_ptr error;            // the first worker's failure
 
-  bool Stop() const { return g_signal.load() != 0 || failed.load(); }
+  bool Stop() const { return StopSignal() != 0 || failed.load(); }
 };
 
 // MuJoCo 2.2 binds its GL functions at the first mjr_makeContext of the process; contexts and
@@ -340,7 +338,7 @@ class Worker {
     if (encoder_error) std::rethrow_exception(encoder_error);
     // another worker failed: drop this episode (the writer removes its partial video); a
     // signal instead finishes it, so that what was recorded plays
-    if (run_.failed.load() && g_signal.load() == 0) return;
+    if (run_.failed.load() && StopSignal() == 0) return;
 
     const auto t0 = Clock::now();
     writer.Finish();
@@ -442,12 +440,7 @@ void RunRecord(const RecordOptions& o, const std::string& command_line) {
                    (ec ? ec.message() : std::string("a file is in the way")));
   }
 
-  g_signal.store(0);
-  struct sigaction sa {};
-  sa.sa_handler = OnSignal;
-  sigemptyset(&sa.sa_mask);
-  sigaction(SIGINT, &sa, nullptr);
-  sigaction(SIGTERM, &sa, nullptr);
+  InstallStopSignals();
 
   Progress progress(o.quiet, static_cast<int>(run.episodes.size()), o.steps + 1);
   run.progress = &progress;
@@ -459,7 +452,7 @@ void RunRecord(const RecordOptions& o, const std::string& command_line) {
   workers.clear();  // GL contexts, renderers and exec children go now
   if (run.error) std::rethrow_exception(run.error);
 
-  const int sig = g_signal.load();
+  const int sig = StopSignal();
   const double wall = Since(wall_start);
   const GlInfo gi = run.gl_info.value_or(GlInfo{});
   nlohmann::json episodes_json = nlohmann::json::array();

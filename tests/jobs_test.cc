@@ -21,6 +21,7 @@
 namespace fetchscope {
 namespace {
 
+using testing::EpisodeFiles;
 using testing::ReadFile;
 using testing::RunCommand;
 using testing::RunFetchscope;
@@ -37,14 +38,6 @@ bool HasBackend(const std::string& backend) {
   }
 }
 
-std::map<std::string, std::string> EpisodeFiles(const fs::path& dir) {
-  std::map<std::string, std::string> files;
-  for (const auto& e : fs::directory_iterator(dir)) {
-    const std::string name = e.path().filename().string();
-    if (name.rfind("episode_", 0) == 0) files[name] = ReadFile(e.path());
-  }
-  return files;
-}
 
 class JobsTest : public ::testing::TestWithParam<const char*> {
  protected:

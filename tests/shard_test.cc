@@ -18,6 +18,7 @@ namespace {
 
 using cli::ResolveShard;
 using cli::Shard;
+using testing::EpisodeFiles;
 using testing::ReadFile;
 using testing::RunCommand;
 using testing::RunFetchscope;
@@ -176,15 +177,6 @@ std::string Record(int episodes = 7, int seed = 11) {
 }
 const std::string kRun = Record();
 
-// The output files of a run folder (not manifests), name -> bytes.
-std::map<std::string, std::string> EpisodeFiles(const fs::path& dir) {
-  std::map<std::string, std::string> files;
-  for (const auto& e : fs::directory_iterator(dir)) {
-    const std::string name = e.path().filename().string();
-    if (name.rfind("episode_", 0) == 0) files[name] = ReadFile(e.path());
-  }
-  return files;
-}
 
 class ShardRunTest : public ::testing::Test {
  protected:

@@ -65,4 +65,13 @@ std::string ReadFile(const std::filesystem::path& path) {
   return ss.str();
 }
 
+std::map<std::string, std::string> EpisodeFiles(const std::filesystem::path& dir) {
+  std::map<std::string, std::string> files;
+  for (const auto& e : std::filesystem::directory_iterator(dir)) {
+    const std::string name = e.path().filename().string();
+    if (name.rfind("episode_", 0) == 0) files[name] = ReadFile(e.path());
+  }
+  return files;
+}
+
 }  // namespace fetchscope::testing

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <filesystem>
+#include <map>
 #include <string>
 
 namespace fetchscope::testing {
@@ -41,5 +42,8 @@ std::filesystem::path SourceDir();
 
 /// Reads a whole file into a string (empty if missing).
 std::string ReadFile(const std::filesystem::path& path);
+
+/// The per-episode output files of a record run folder (episode_*, not manifests): name -> bytes.
+std::map<std::string, std::string> EpisodeFiles(const std::filesystem::path& dir);
 
 }  // namespace fetchscope::testing
