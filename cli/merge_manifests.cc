@@ -201,7 +201,8 @@ void Merge(const std::vector<std::string>& dirs, std::string out, bool quiet) {
       fs::path(out).parent_path().empty() ? fs::path(".") : fs::path(out).parent_path();
   json merged = first.data;
   for (const char* per_shard :
-       {"shard", "jobs", "backend", "timings_s", "frames", "signal", "command_line", "versions"}) {
+       {"shard", "jobs", "backend", "timings_s", "frames", "signal", "command_line", "versions",
+        "workers", "missing", "failures", "gpu", "worker_mode"}) {
     merged.erase(per_shard);
   }
   json list = json::array();
@@ -230,6 +231,7 @@ void Merge(const std::vector<std::string>& dirs, std::string out, bool quiet) {
                       {"manifest", RelativeTo(m->path, out_dir)},
                       {"episodes", m->data["episodes"].size()},
                       {"jobs", m->data.value("jobs", 1)},
+                      {"workers", m->data.value("workers", json(nullptr))},
                       {"backend", m->data.value("backend", json(nullptr))},
                       {"timings_s", t},
                       {"frames", m->data.value("frames", 0L)},

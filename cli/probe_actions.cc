@@ -375,7 +375,7 @@ void RunProbeActions(const ProbeOptions& o) {
       throw RunError("cannot create output folder '" + o.out + "': " +
                      (ec ? ec.message() : std::string("a file is in the way")));
     }
-    gl = CreateGlContext(o.view.backend, o.view.gpu);
+    gl = CreateViewContext(o.view, ResolveGpuChoice(o.view));
     renderer.emplace(*gl, env.model(), options);
   }
 

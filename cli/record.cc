@@ -1,9 +1,12 @@
 // fetchscope record: episodes -> a run folder of MP4 videos, contact sheets, trajectories and
-// one manifest. Rendering and encoding overlap: each worker steps and renders into a small ring
-// of reused frame buffers while an encoder thread converts and encodes them. --jobs N runs N
-// workers, each with its own env, policy, GL context and renderer; --shard I/N records every
-// N-th episode so that machines split a batch. Either way episode k comes out exactly as in a
-// sequential run: a worker replays the resets and policy draws of the episodes it skips.
+// one manifest. The episodes run on the episode scheduler (cli/episode_scheduler.h): --jobs N
+// worker processes, each with its own env, policy, GL context, renderer and encoders; the
+// parent decides the GPUs and the encoder once (cli/node_probe.h), owns progress and signals,
+// and writes the manifest. In a worker, rendering and encoding overlap: the render thread
+// steps and renders into a pool of reused frame buffers, and each episode is encoded by its
+// own single-threaded encoder thread, up to a few episodes at once (the encoder budget).
+// --shard I/N records every N-th episode so that machines split a batch. Either way episode k
+// comes out exactly as in a sequential run, byte for byte.
 #include <signal.h>
 #include <unistd.h>
 
@@ -21,6 +24,8 @@
 #include <thread>
 
 #include "cli/common.h"
+#include "cli/episode_scheduler.h"
+#include "cli/node_probe.h"
 #include "cli/render_common.h"
 #include "cli/shard.h"
 #include "render/contact_sheet.h"
@@ -35,7 +40,6 @@ namespace {
 
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
-
 
 double Since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
@@ -53,52 +57,61 @@ struct RecordOptions {
   int sheet_every = 0;
   std::string out = "out";
   bool quiet = false;
-  int jobs = 1;                 // workers; 0 = one per core
-  std::string shard;            // "I/N"; empty: from the environment, else the whole run
-  int shard_count = 0;          // with JOB_COMPLETION_INDEX; 0 = not given
+  int jobs = 1;                     // workers; 0 = one per core
+  std::string worker_mode = "process";
+  std::string shard;                // "I/N"; empty: from the environment, else the whole run
+  int shard_count = 0;              // with JOB_COMPLETION_INDEX; 0 = not given
 };
 
-// One rendered frame travelling from the render thread to the encoder thread.
+// Everything the parent decided before the workers start; workers only read it.
+struct RecordPlan {
+  const RecordOptions* o = nullptr;
+  const EnvSpec* spec = nullptr;
+  uint64_t seed = 0;
+  AssetSource assets;
+  PolicyContext policy_context;
+  VideoOptions video;      // codec already decided
+  GpuChoice gpu;           // EGL devices, worker w on devices[w % size]
+  int encoders = 1;        // episodes a worker encodes at once
+};
+
+// One rendered frame travelling from the render thread to an episode's encoder thread.
 struct Frame {
   std::vector<uint8_t> rgb;
   int t = 0;
   std::string label;
-  bool last = false;
-  bool empty = false;  // an end marker that carries no picture (episode failed before its first frame)
 };
 
-// A fixed pool of frame buffers passed between two threads: no per-frame allocation.
-class FrameRing {
+// A fixed pool of frame buffers shared by a worker's render thread and its encoder threads:
+// no per-frame allocation, and a render thread that runs ahead waits for a free one.
+class FramePool {
  public:
-  FrameRing(size_t count, size_t bytes) {
+  FramePool(size_t count, size_t bytes) {
     for (size_t i = 0; i < count; ++i) {
       pool_.push_back(std::make_unique<Frame>());
       pool_.back()->rgb.resize(bytes);
       free_.push_back(pool_.back().get());
     }
   }
-  Frame* AcquireFree() { return Take(free_); }
-  void PushFilled(Frame* f) { Give(filled_, f); }
-  Frame* AcquireFilled() { return Take(filled_); }
-  void Release(Frame* f) { Give(free_, f); }
-
- private:
-  Frame* Take(std::deque<Frame*>& q) {
+  Frame* Acquire() {
     std::unique_lock<std::mutex> lock(mutex_);
-    cv_.wait(lock, [&] { return !q.empty(); });
-    Frame* f = q.front();
-    q.pop_front();
+    cv_.wait(lock, [&] { return !free_.empty(); });
+    Frame* f = free_.front();
+    free_.pop_front();
     return f;
   }
-  void Give(std::deque<Frame*>& q, Frame* f) {
+  void Release(Frame* f) {
+    if (!f) return;
     {
       std::lock_guard<std::mutex> lock(mutex_);
-      q.push_back(f);
+      free_.push_back(f);
     }
-    cv_.notify_all();
+    cv_.notify_one();
   }
+
+ private:
   std::vector<std::unique_ptr<Frame>> pool_;
-  std::deque<Frame*> free_, filled_;
+  std::deque<Frame*> free_;
   std::mutex mutex_;
   std::condition_variable cv_;
 };
@@ -120,41 +133,265 @@ std::string EpisodeName(int k) {
   return name;
 }
 
-struct Timings {
-  double sim = 0, render = 0, encode = 0, write = 0;
-  Timings& operator+=(const Timings& t) {
-    sim += t.sim;
-    render += t.render;
-    encode += t.encode;
-    write += t.write;
-    return *this;
+// One episode's encoding, on its own thread: the video frame by frame as frames arrive, then
+// the contact sheet, the trajectory JSON and the manifest entry, reported to the scheduler.
+class EpisodeEncoder {
+ public:
+  EpisodeEncoder(const RecordPlan& plan, int k, int worker, FramePool* pool, WorkerChannel* channel)
+      : plan_(plan), k_(k), worker_(worker), pool_(*pool), channel_(*channel),
+        name_(EpisodeName(k)) {
+    const std::vector<int> indices = SheetFrameIndices(plan.o->steps + 1, plan.o->sheet_every);
+    on_sheet_.insert(indices.begin(), indices.end());
+    // the writer opens here, on the render thread, so a bad folder fails before any frame
+    writer_.emplace((fs::path(plan.o->out) / (name_ + ".mp4")).string(), plan.video);
+    thread_ = std::thread([this] { Body(); });
   }
+  ~EpisodeEncoder() {
+    if (thread_.joinable()) {
+      Abort();
+      thread_.join();
+    }
+  }
+
+  /// Hands a rendered frame over (render thread); the encoder returns it to the pool.
+  void Push(Frame* f) { Enqueue(f, Command::kFrame); }
+  /// No more frames: finish the files with `episode` as the trajectory; sim_s and render_s
+  /// are the render thread's seconds, for the manifest.
+  void Close(EpisodeRecord episode, double sim_s, double render_s) {
+    episode_ = std::move(episode);
+    sim_s_ = sim_s;
+    render_s_ = render_s;
+    Enqueue(nullptr, Command::kClose);
+  }
+  /// No more frames and no files: the partial video is removed.
+  void Abort() { Enqueue(nullptr, Command::kAbort); }
+  /// Waits for the thread; rethrows its failure.
+  void Join() {
+    if (thread_.joinable()) thread_.join();
+    if (error_) std::rethrow_exception(error_);
+  }
+  bool finished() const { return finished_.load(); }
+
+ private:
+  enum class Command { kFrame, kClose, kAbort };
+
+  void Enqueue(Frame* f, Command c) {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      queue_.push_back({f, c});
+    }
+    cv_.notify_one();
+  }
+
+  void Body() {
+    Frame* held = nullptr;  // the latest frame, kept until the next: the sheet's last tile
+    while (true) {
+      std::pair<Frame*, Command> item;
+      {
+        std::unique_lock<std::mutex> lock(mutex_);
+        cv_.wait(lock, [&] { return !queue_.empty(); });
+        item = queue_.front();
+        queue_.pop_front();
+      }
+      if (item.second == Command::kFrame) {
+        Frame* f = item.first;
+        if (!error_) {
+          try {
+            const auto t0 = Clock::now();
+            writer_->AddFrame(f->rgb.data());
+            encode_s_ += Since(t0);
+            if (on_sheet_.count(f->t)) AddTile(*f);
+          } catch (...) {
+            error_ = std::current_exception();
+          }
+        }
+        pool_.Release(held);  // keeps draining after a failure: the render thread never stalls
+        held = f;
+        continue;
+      }
+      if (item.second == Command::kClose && !error_) {
+        try {
+          if (held && !on_sheet_.count(held->t)) AddTile(*held);
+          pool_.Release(held);
+          held = nullptr;
+          Finalize();
+        } catch (...) {
+          error_ = std::current_exception();
+        }
+      }
+      pool_.Release(held);
+      if (error_ || item.second == Command::kAbort) writer_.reset();  // removes the partial video
+      finished_.store(true);
+      return;
+    }
+  }
+
+  void AddTile(const Frame& f) {
+    tiles_.push_back({f.rgb, plan_.video.width, plan_.video.height, f.label});
+  }
+
+  void Finalize() {
+    const RecordOptions& o = *plan_.o;
+    const auto t0 = Clock::now();
+    writer_->Finish();
+    const int steps = static_cast<int>(episode_.steps.size()) - 1;
+    const bool complete = steps == o.steps;
+    char title[256];
+    std::snprintf(title, sizeof(title), "%s  seed %s  policy %s  episode %d%s",
+                  plan_.spec->id.c_str(), o.env.seed.c_str(), o.policy.c_str(), k_,
+                  complete ? "" : "  (interrupted)");
+    const SheetImage sheet = MakeContactSheet(title, tiles_);
+    WritePng((fs::path(o.out) / (name_ + "_sheet.png")).string(), sheet.width, sheet.height, 3, 8,
+             sheet.rgb.data());
+    // the trajectory's env fields come from the spec and assets, as TrajectoryJson writes them
+    nlohmann::json trajectory = {{"env_id", plan_.spec->id},
+                                 {"seed", plan_.seed},
+                                 {"policy", o.policy},
+                                 {"assets", AssetsJson(plan_.assets)},
+                                 {"episodes", nlohmann::json::array({EpisodeJson(episode_)})}};
+    WriteJson((fs::path(o.out) / (name_ + ".json")).string(), trajectory);
+    const double write_s = Since(t0);
+    const bool success = episode_.steps.back().is_success;
+    channel_.Done(k_, {{"index", k_},
+                       {"video", name_ + ".mp4"},
+                       {"sheet", name_ + "_sheet.png"},
+                       {"trajectory", name_ + ".json"},
+                       {"frames", writer_->frames_written()},
+                       {"steps", steps},
+                       {"complete", complete},
+                       {"return", JsonDouble(episode_.episode_return)},
+                       {"is_success", success},
+                       {"worker", worker_},
+                       {"codec", writer_->codec_name()},
+                       {"encoded_width", writer_->encoded_width()},
+                       {"encoded_height", writer_->encoded_height()},
+                       {"timings_s", {{"sim", sim_s_}, {"render", render_s_},
+                                      {"encode", encode_s_}, {"write", write_s}}}});
+  }
+
+  const RecordPlan& plan_;
+  const int k_;
+  const int worker_;
+  FramePool& pool_;
+  WorkerChannel& channel_;
+  const std::string name_;
+  std::set<int> on_sheet_;
+  std::optional<VideoWriter> writer_;
+  std::vector<SheetTile> tiles_;
+  EpisodeRecord episode_;
+  double sim_s_ = 0, render_s_ = 0, encode_s_ = 0;
+  std::exception_ptr error_;
+  std::atomic<bool> finished_{false};
+  std::mutex mutex_;
+  std::condition_variable cv_;
+  std::deque<std::pair<Frame*, Command>> queue_;
+  std::thread thread_;  // last: starts after every member above exists
 };
 
-// The progress line on stderr, fed by every worker.
+// One worker of a record run: its own environment, policy, GL context, renderer, frame pool
+// and encoders.
+class RecordRunner : public EpisodeRunner {
+ public:
+  RecordRunner(const RecordPlan& plan, int worker)
+      : plan_(plan), worker_(worker),
+        sequence_(std::make_unique<FetchEnv>(*plan.spec, plan.assets),
+                  MakePolicy(plan.o->policy, *plan.spec, plan.policy_context), plan.seed,
+                  plan.o->steps) {}
+
+  ~RecordRunner() override {
+    encoders_.clear();  // aborts and joins whatever is still running (a failure elsewhere)
+    renderer_.reset();  // the renderer's MuJoCo context is freed with its GL context current
+    gl_.reset();
+  }
+
+  nlohmann::json Start() override {
+    gl_ = CreateViewContext(plan_.o->view, plan_.gpu, worker_);
+    renderer_.emplace(*gl_, sequence_.env().model(),
+                      MakeRenderOptions(plan_.o->view, sequence_.env().model()));
+    const size_t frame_bytes = static_cast<size_t>(renderer_->width()) * renderer_->height() * 3;
+    // 4 frames in flight between rendering and encoding, one held by each encoder, and a whole
+    // episode for each further encoder so that the render thread can run an episode ahead
+    const size_t frames = 4 + plan_.encoders + (plan_.encoders - 1) * (plan_.o->steps + 1);
+    pool_.emplace(frames, frame_bytes);
+    const GlInfo& gi = gl_->info();
+    return {{"worker", worker_},
+            {"pid", static_cast<long>(getpid())},
+            {"backend", gi.backend},
+            {"device", gi.device},
+            {"device_selection", gl_->selection()},
+            {"gl_vendor", gi.vendor},
+            {"gl_renderer", gi.renderer},
+            {"gl_version", gi.version},
+            {"msaa", renderer_->msaa_samples()},
+            {"msaa_reason", renderer_->msaa_reason()}};
+  }
+
+  void Run(int k, WorkerChannel& channel) override {
+    // at most plan.encoders episodes encode at once: wait for the oldest beyond that
+    while (!encoders_.empty() &&
+           (encoders_.front()->finished() || static_cast<int>(encoders_.size()) >= plan_.encoders)) {
+      encoders_.front()->Join();
+      encoders_.pop_front();
+    }
+    auto encoder = std::make_unique<EpisodeEncoder>(plan_, k, worker_, &*pool_, &channel);
+    renderer_->ResetTrail();
+    double sim_s = 0, render_s = 0;
+    auto sim_start = Clock::now();
+    auto on_step = [&](const StepRecord& record, const StepResult*) {
+      const auto render_start = Clock::now();
+      sim_s += std::chrono::duration<double>(render_start - sim_start).count();
+      Frame* f = pool_->Acquire();
+      const FrameInfo info = MakeFrameInfo(sequence_.env(), record);
+      renderer_->Render(sequence_.env().data(), info, f->rgb.data());
+      f->t = record.t;
+      f->label = TileLabel(info);
+      encoder->Push(f);
+      channel.Progress(1);
+      sim_start = Clock::now();
+      render_s += std::chrono::duration<double>(sim_start - render_start).count();
+      return !channel.StopRequested();
+    };
+    EpisodeRecord episode = sequence_.Play(k, on_step);  // a throw aborts `encoder`
+    encoder->Close(std::move(episode), sim_s, render_s);
+    encoders_.push_back(std::move(encoder));
+  }
+
+  void Finish(WorkerChannel& channel) override {
+    (void)channel;
+    while (!encoders_.empty()) {
+      encoders_.front()->Join();
+      encoders_.pop_front();
+    }
+  }
+
+ private:
+  const RecordPlan& plan_;
+  const int worker_;
+  EpisodeSequence sequence_;
+  // Lifetime order: the GL context outlives the renderer; encoders go first (they hold frames).
+  std::unique_ptr<GlContext> gl_;
+  std::optional<Renderer> renderer_;
+  std::optional<FramePool> pool_;
+  std::deque<std::unique_ptr<EpisodeEncoder>> encoders_;
+};
+
+// The progress line on stderr, fed by the scheduler in the parent.
 class Progress {
  public:
   Progress(bool quiet, int episodes, int frames_per_episode)
       : quiet_(quiet), tty_(isatty(STDERR_FILENO)), episodes_(episodes), per_(frames_per_episode),
         start_(Clock::now()) {}
-  void Frame() {
-    std::lock_guard<std::mutex> lock(mutex_);
-    ++frames_;
+  void Frames(int n) {
+    frames_ += n;
     Draw();
   }
-  void EpisodeDone() {
-    std::lock_guard<std::mutex> lock(mutex_);
-    ++done_;
-  }
+  void EpisodeDone() { ++done_; }
   void Done(const std::string& summary) {
     if (quiet_) return;
     if (tty_) std::fprintf(stderr, "\r%*s\r", 78, "");
     std::fprintf(stderr, "%s\n", summary.c_str());
   }
-  long frames() {
-    std::lock_guard<std::mutex> lock(mutex_);
-    return frames_;
-  }
+  long frames() const { return frames_; }
 
  private:
   void Draw() {
@@ -169,217 +406,12 @@ class Progress {
                  done_, episodes_, frames_, total, fps, eta);
   }
 
-  std::mutex mutex_;
   bool quiet_, tty_;
   int episodes_, per_;
   Clock::time_point start_;
   long frames_ = 0;
   int done_ = 0;
   double last_ = -1;
-};
-
-// What the workers share: the run's settings, the queue of episodes, and the results.
-struct RunState {
-  const RecordOptions* o = nullptr;
-  const EnvSpec* spec = nullptr;
-  uint64_t seed = 0;
-  VideoOptions video;
-  std::vector<int> episodes;           // this shard's, ascending
-  std::atomic<size_t> next{0};         // index into `episodes` of the next unclaimed one
-  std::atomic<bool> failed{false};     // a worker threw: the others abandon their episode
-  Progress* progress = nullptr;
-
-  std::mutex mutex;                    // guards everything below
-  std::map<int, nlohmann::json> done;  // manifest entries by episode index
-  Timings timings;                     // summed over workers
-  int successes = 0;
-  std::string codec_used;
-  int encoded_w = 0, encoded_h = 0;
-  std::optional<GlInfo> gl_info;       // the first worker's
-  int msaa = 0;                        // the first worker's renderer: samples used
-  std::string msaa_reason;             // and why ("auto: software renderer llvmpipe")
-  std::exception_ptr error;            // the first worker's failure
-
-  bool Stop() const { return StopSignal() != 0 || failed.load(); }
-};
-
-// MuJoCo 2.2 binds its GL functions at the first mjr_makeContext of the process; contexts and
-// renderers are made one at a time so no two threads race through that.
-std::mutex g_setup_mutex;
-
-// One worker: its own environment, policy, GL context, renderer and frame ring. Workers claim
-// episodes in ascending order and bring their generators forward over the episodes others
-// play, so episode k comes out exactly as in a sequential run.
-class Worker {
- public:
-  Worker(RunState* run, std::unique_ptr<FetchEnv> env, std::unique_ptr<Policy> policy,
-         RenderOptions render_options)
-      : run_(*run), env_(std::move(env)), policy_(std::move(policy)),
-        render_options_(std::move(render_options)) {}
-
-  // The thread body: never throws; a failure is stored in the run state.
-  void Run() {
-    try {
-      {
-        std::lock_guard<std::mutex> lock(g_setup_mutex);
-        gl_ = CreateGlContext(run_.o->view.backend, run_.o->view.gpu);
-        renderer_.emplace(*gl_, env_->model(), render_options_);
-      }
-      {
-        std::lock_guard<std::mutex> lock(run_.mutex);
-        if (!run_.gl_info) {
-          run_.gl_info = gl_->info();
-          run_.msaa = renderer_->msaa_samples();
-          run_.msaa_reason = renderer_->msaa_reason();
-        }
-      }
-      const size_t frame_bytes = static_cast<size_t>(run_.o->view.width) * run_.o->view.height * 3;
-      ring_.emplace(4, frame_bytes);
-      while (!run_.Stop()) {
-        const size_t slot = run_.next.fetch_add(1);
-        if (slot >= run_.episodes.size()) break;
-        Record(run_.episodes[slot]);
-      }
-    } catch (...) {
-      std::lock_guard<std::mutex> lock(run_.mutex);
-      if (!run_.error) run_.error = std::current_exception();
-      run_.failed.store(true);
-    }
-    // the renderer's MuJoCo context is freed with this worker's GL context current
-    renderer_.reset();
-    gl_.reset();
-  }
-
- private:
-  // Brings the env's generator and the policy's state to the start of episode k, as the
-  // episodes before it would have left them (a reset draws only from the env's generator).
-  void CatchUp(int k) {
-    for (; next_episode_ < k; ++next_episode_) {
-      env_->Reset(next_episode_ == 0 ? std::optional<uint64_t>(run_.seed) : std::nullopt);
-      policy_->SkipEpisode(run_.o->steps);
-    }
-    next_episode_ = k + 1;
-  }
-
-  void Record(int k) {
-    const RecordOptions& o = *run_.o;
-    CatchUp(k);
-    Timings timings;
-    const std::string name = EpisodeName(k);
-    const std::string video_path = (fs::path(o.out) / (name + ".mp4")).string();
-    VideoWriter writer(video_path, run_.video);
-    const std::vector<int> sheet_index = SheetFrameIndices(o.steps + 1, o.sheet_every);
-    const std::set<int> on_sheet(sheet_index.begin(), sheet_index.end());
-    std::vector<SheetTile> tiles;
-    std::exception_ptr encoder_error;
-    FrameRing& ring = *ring_;
-
-    // encoder thread: frames in order, until the one marked last
-    std::thread encoder([&] {
-      bool failed = false;
-      while (true) {
-        Frame* f = ring.AcquireFilled();
-        const bool last = f->last;
-        if (!failed && !f->empty) {
-          try {
-            const auto t0 = Clock::now();
-            writer.AddFrame(f->rgb.data());
-            timings.encode += Since(t0);
-            if (on_sheet.count(f->t) || last) {
-              tiles.push_back({f->rgb, o.view.width, o.view.height, f->label});
-            }
-          } catch (...) {
-            encoder_error = std::current_exception();
-            failed = true;
-          }
-        }
-        ring.Release(f);
-        if (last) break;
-      }
-    });
-
-    renderer_->ResetTrail();
-    Frame* pending = nullptr;  // rendered, held back until we know whether it is the last
-    auto sim_start = Clock::now();
-    auto on_step = [&](const StepRecord& record, const StepResult*) {
-      timings.sim += Since(sim_start);
-      const auto t0 = Clock::now();
-      Frame* f = ring.AcquireFree();
-      const FrameInfo info = MakeFrameInfo(*env_, record);
-      renderer_->Render(env_->data(), info, f->rgb.data());
-      f->t = record.t;
-      f->label = TileLabel(info);
-      f->last = false;
-      f->empty = false;
-      timings.render += Since(t0);
-      if (pending) ring.PushFilled(pending);
-      pending = f;
-      run_.progress->Frame();
-      sim_start = Clock::now();
-      return !run_.Stop();
-    };
-    EpisodeRecord episode;
-    try {
-      episode = RunEpisode(*env_, *policy_, k, k == 0 ? std::optional<uint64_t>(run_.seed) : std::nullopt,
-                           o.steps, on_step);
-    } catch (...) {
-      if (!pending) {
-        pending = ring.AcquireFree();
-        pending->empty = true;
-      }
-      pending->last = true;
-      ring.PushFilled(pending);
-      encoder.join();
-      throw;  // the writer's destructor removes the partial video
-    }
-    pending->last = true;
-    ring.PushFilled(pending);
-    encoder.join();
-    if (encoder_error) std::rethrow_exception(encoder_error);
-    // another worker failed: drop this episode (the writer removes its partial video); a
-    // signal instead finishes it, so that what was recorded plays
-    if (run_.failed.load() && StopSignal() == 0) return;
-
-    const auto t0 = Clock::now();
-    writer.Finish();
-    char title[256];
-    std::snprintf(title, sizeof(title), "%s  seed %s  policy %s  episode %d%s", run_.spec->id.c_str(),
-                  o.env.seed.c_str(), o.policy.c_str(), k,
-                  static_cast<int>(episode.steps.size()) - 1 < o.steps ? "  (interrupted)" : "");
-    const SheetImage sheet = MakeContactSheet(title, tiles);
-    const std::string sheet_path = (fs::path(o.out) / (name + "_sheet.png")).string();
-    WritePng(sheet_path, sheet.width, sheet.height, 3, 8, sheet.rgb.data());
-    const std::string json_path = (fs::path(o.out) / (name + ".json")).string();
-    WriteJson(json_path, TrajectoryJson(*env_, run_.seed, o.policy, {&episode}));
-    timings.write += Since(t0);
-    const bool success = episode.steps.back().is_success;
-    nlohmann::json entry = {{"index", k},
-                            {"video", name + ".mp4"},
-                            {"sheet", name + "_sheet.png"},
-                            {"trajectory", name + ".json"},
-                            {"frames", writer.frames_written()},
-                            {"steps", static_cast<int>(episode.steps.size()) - 1},
-                            {"return", JsonDouble(episode.episode_return)},
-                            {"is_success", success}};
-    run_.progress->EpisodeDone();
-    std::lock_guard<std::mutex> lock(run_.mutex);
-    run_.done[k] = std::move(entry);
-    run_.timings += timings;
-    run_.successes += success;
-    run_.codec_used = writer.codec_name();
-    run_.encoded_w = writer.encoded_width();
-    run_.encoded_h = writer.encoded_height();
-  }
-
-  RunState& run_;
-  std::unique_ptr<FetchEnv> env_;
-  std::unique_ptr<Policy> policy_;
-  RenderOptions render_options_;
-  int next_episode_ = 0;  // the episode the env's generator and the policy stand at
-  // Lifetime order: the GL context outlives the renderer (reset explicitly in Run).
-  std::unique_ptr<GlContext> gl_;
-  std::optional<Renderer> renderer_;
-  std::optional<FrameRing> ring_;
 };
 
 // llvmpipe starts one rasteriser thread per core in every context; with several workers that
@@ -389,48 +421,58 @@ void LimitLlvmpipeThreads(int jobs) {
   if (jobs > 1) setenv("LP_NUM_THREADS", "0", /*overwrite=*/0);
 }
 
+// Episodes one worker encodes at once: the cores shared out over the workers (each encoder is
+// one thread), at least 1 and at most 4 (beyond that the frames held in memory outweigh it).
+int EncodersPerWorker(int jobs) {
+  const int cores = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  return std::max(1, std::min(4, cores / std::max(1, jobs)));
+}
+
+// Starting an exec: child is the only full check of it, and the workers do that; every other
+// policy is built once here so that a bad one fails before anything is written.
+void ValidatePolicy(const std::string& policy, const EnvSpec& spec, const PolicyContext& context) {
+  if (policy.rfind("exec:", 0) == 0 && policy.size() > 5) return;
+  MakePolicy(policy, spec, context);
+}
+
 void RunRecord(const RecordOptions& o, const std::string& command_line) {
   const auto wall_start = Clock::now();
-  const EnvSpec& spec = FindEnvSpec(o.env.env_id);
-  const uint64_t seed = ParseSeed(o.env.seed);
+  RecordPlan plan;
+  plan.o = &o;
+  plan.spec = &FindEnvSpec(o.env.env_id);
+  plan.seed = ParseSeed(o.env.seed);
   const Shard shard = ResolveShard(o.shard, o.shard_count);
-  RunState run;
-  run.o = &o;
-  run.spec = &spec;
-  run.seed = seed;
-  run.video.width = o.view.width;
-  run.video.height = o.view.height;
-  run.video.fps = o.fps;
-  run.video.codec = o.codec;
-  run.video.crf = o.crf;
-  run.video.preset = o.preset;
-  ValidateVideoOptions(run.video);
-  run.episodes = ShardEpisodes(shard, o.episodes);
-  const int cores = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  const int jobs = std::max(1, std::min(o.jobs == 0 ? cores : o.jobs, static_cast<int>(run.episodes.size())));
+  const WorkerMode mode = ParseWorkerMode(o.worker_mode);
+  plan.video.width = o.view.width;
+  plan.video.height = o.view.height;
+  plan.video.fps = o.fps;
+  plan.video.codec = o.codec;
+  plan.video.crf = o.crf;
+  plan.video.preset = o.preset;
+  ValidateVideoOptions(plan.video);
+  const std::vector<int> episodes = ShardEpisodes(shard, o.episodes);
+  const int jobs = ResolveJobs(o.jobs, static_cast<int>(episodes.size()));
+  plan.encoders = EncodersPerWorker(jobs);
 
-  PolicyContext context;
-  context.seed = seed;
-  context.steps_per_episode = o.steps;
-  context.episodes = o.episodes;
-  context.exec_timeout_s = o.exec_timeout;
-  // Every worker gets its own model (the renderer writes the model's offscreen size), env and
-  // policy (an exec: policy starts one child per worker). Built here, one after another, so
-  // bad options fail before anything is written.
-  std::vector<std::unique_ptr<Worker>> workers;
-  const AssetSource assets = ResolveAssets(o.env.assets);
+  plan.policy_context.seed = plan.seed;
+  plan.policy_context.steps_per_episode = o.steps;
+  plan.policy_context.episodes = o.episodes;
+  plan.policy_context.exec_timeout_s = o.exec_timeout;
+  ValidatePolicy(o.policy, *plan.spec, plan.policy_context);
+  plan.assets = ResolveAssets(o.env.assets);
   std::string model_path;
-  nlohmann::json assets_json;
-  for (int w = 0; w < jobs; ++w) {
-    auto policy = MakePolicy(o.policy, spec, context);
-    auto env = std::make_unique<FetchEnv>(spec, assets);
-    RenderOptions render_options = MakeRenderOptions(o.view, env->model());
-    if (w == 0) {
-      model_path = env->model_path();
-      assets_json = AssetsJson(env->assets());
-    }
-    workers.push_back(std::make_unique<Worker>(&run, std::move(env), std::move(policy),
-                                               std::move(render_options)));
+  {
+    FetchEnv env(*plan.spec, plan.assets);  // bad assets and bad cameras fail here
+    MakeRenderOptions(o.view, env.model());
+    model_path = env.model_path();
+  }
+
+  // The GPUs and the encoder, decided once (driver work in a child process).
+  const NodeProbe node = ProbeNode(o.view, &plan.video);
+  plan.gpu = node.gpu;
+  plan.video.codec = node.codec.codec;
+  if (!node.warnings.empty() && !o.quiet) {
+    std::fprintf(stderr, "fetchscope: warning: %s\n", node.warnings.c_str());
   }
 
   std::error_code ec;
@@ -440,69 +482,130 @@ void RunRecord(const RecordOptions& o, const std::string& command_line) {
                    (ec ? ec.message() : std::string("a file is in the way")));
   }
 
-  InstallStopSignals();
-
-  Progress progress(o.quiet, static_cast<int>(run.episodes.size()), o.steps + 1);
-  run.progress = &progress;
+  Progress progress(o.quiet, static_cast<int>(episodes.size()), o.steps + 1);
+  int successes = 0;
+  ScheduleOptions schedule;
+  schedule.episodes = episodes;
+  schedule.jobs = jobs;
+  schedule.mode = mode;
+  schedule.on_progress = [&](int n) { progress.Frames(n); };
+  schedule.on_done = [&](int, const nlohmann::json& entry) {
+    progress.EpisodeDone();
+    successes += entry.at("is_success").get<bool>();
+  };
   LimitLlvmpipeThreads(jobs);
-  std::vector<std::thread> threads;
-  for (int w = 1; w < jobs; ++w) threads.emplace_back([&workers, w] { workers[w]->Run(); });
-  workers[0]->Run();  // worker 0 on this thread
-  for (std::thread& t : threads) t.join();
-  workers.clear();  // GL contexts, renderers and exec children go now
-  if (run.error) std::rethrow_exception(run.error);
+  const ScheduleResult result = RunEpisodes(schedule, [&plan](int worker) {
+    return std::make_unique<RecordRunner>(plan, worker);
+  });
 
-  const int sig = StopSignal();
   const double wall = Since(wall_start);
-  const GlInfo gi = run.gl_info.value_or(GlInfo{});
   nlohmann::json episodes_json = nlohmann::json::array();
-  for (auto& [k, entry] : run.done) episodes_json.push_back(std::move(entry));
-  nlohmann::json shard_json = {{"index", shard.index},
-                               {"count", shard.count},
-                               {"source", shard.source.empty() ? nlohmann::json(nullptr) : nlohmann::json(shard.source)},
-                               {"episodes", run.episodes}};
-  const Timings& timings = run.timings;
+  std::map<std::string, double> timings = {{"sim", 0}, {"render", 0}, {"encode", 0}, {"write", 0}};
+  std::map<int, std::vector<int>> by_worker;  // the episodes each worker recorded
+  for (const auto& [k, entry] : result.results) {
+    nlohmann::json e = entry;
+    for (auto& [phase, seconds] : timings) seconds += e["timings_s"][phase].get<double>();
+    by_worker[e.at("worker").get<int>()].push_back(k);
+    // what differs with --jobs stays out of the episode entries (they are identical)
+    e.erase("worker");
+    e.erase("timings_s");
+    e.erase("codec");
+    e.erase("encoded_width");
+    e.erase("encoded_height");
+    episodes_json.push_back(std::move(e));
+  }
+  // The first worker that started speaks for the GL setup (all run the same backend).
+  nlohmann::json first_worker;
+  for (const nlohmann::json& w : result.workers) {
+    if (!w.is_null()) {
+      first_worker = w;
+      break;
+    }
+  }
+  if (result.results.empty() && result.signal == 0 && !result.failures.empty()) {
+    // nothing was recorded: leave no manifest behind (the videos were never renamed)
+    const WorkerFailure& first = result.failures.front();
+    if (first.usage) throw UsageError(first.message);
+    throw RunError(DescribeFailures(result));
+  }
+  nlohmann::json workers_json = nlohmann::json::array();
+  for (size_t w = 0; w < result.workers.size(); ++w) {
+    nlohmann::json entry = result.workers[w].is_null() ? nlohmann::json{{"worker", w}}
+                                                       : result.workers[w];
+    entry["episodes"] = by_worker[static_cast<int>(w)];
+    workers_json.push_back(std::move(entry));
+  }
+  nlohmann::json failures_json = nlohmann::json::array();
+  for (const WorkerFailure& f : result.failures) {
+    failures_json.push_back({{"worker", f.worker}, {"episodes", f.episodes}, {"message", f.message}});
+  }
+  const nlohmann::json shard_json = {
+      {"index", shard.index},
+      {"count", shard.count},
+      {"source", shard.source.empty() ? nlohmann::json(nullptr) : nlohmann::json(shard.source)},
+      {"episodes", episodes}};
+  const int sig = result.signal;
+  const std::string codec_used = plan.video.codec;
   nlohmann::json manifest = {
-      {"env_id", spec.id},
-      {"seed", seed},
+      {"env_id", plan.spec->id},
+      {"seed", plan.seed},
       {"policy", o.policy},
       {"episodes_requested", o.episodes},
       {"steps_per_episode", o.steps},
       {"sheet_every", o.sheet_every},
       {"episodes", episodes_json},
+      {"missing", result.missing},
+      {"failures", failures_json},
       {"shard", shard_json},
-      {"jobs", jobs},
-      {"assets", assets_json},
+      {"jobs", result.jobs},
+      {"worker_mode", o.worker_mode},
+      {"workers", workers_json},
+      {"gpu", {{"request", o.view.gpu}, {"choice", plan.gpu.reason}, {"devices", plan.gpu.devices}}},
+      {"assets", AssetsJson(plan.assets)},
       {"model_file", model_path},
       {"camera", o.view.camera},
       {"overlay", o.view.overlay},
-      {"msaa", run.msaa},
-      {"msaa_reason", run.msaa_reason},
-      {"backend", {{"name", gi.backend}, {"device", gi.device}, {"gl_vendor", gi.vendor},
-                   {"gl_renderer", gi.renderer}, {"gl_version", gi.version}}},
-      {"video", {{"codec", run.codec_used}, {"crf", o.crf}, {"preset", o.preset.empty() ? kDefaultVideoPreset : o.preset},
+      {"msaa", first_worker.value("msaa", 0)},
+      {"msaa_reason", first_worker.value("msaa_reason", "")},
+      {"backend", {{"name", first_worker.value("backend", "")},
+                   {"device", first_worker.value("device", "")},
+                   {"gl_vendor", first_worker.value("gl_vendor", "")},
+                   {"gl_renderer", first_worker.value("gl_renderer", "")},
+                   {"gl_version", first_worker.value("gl_version", "")}}},
+      {"video", {{"codec", codec_used}, {"codec_reason", node.codec.reason},
+                 {"crf", o.crf}, {"preset", o.preset.empty() ? kDefaultVideoPreset : o.preset},
                  {"fps", o.fps}, {"width", o.view.width}, {"height", o.view.height},
-                 {"encoded_width", run.encoded_w}, {"encoded_height", run.encoded_h},
+                 {"encoded_width", (o.view.width + 1) & ~1}, {"encoded_height", (o.view.height + 1) & ~1},
+                 {"encoder_threads", plan.video.threads}, {"encoders_per_worker", plan.encoders},
                  {"container", "mp4"}, {"pix_fmt", "yuv420p"}}},
       {"versions", VersionsJson()},
-      {"timings_s", {{"wall", wall}, {"sim", timings.sim}, {"render", timings.render},
-                     {"encode", timings.encode}, {"write", timings.write}}},
+      {"timings_s", {{"wall", wall}, {"sim", timings["sim"]}, {"render", timings["render"]},
+                     {"encode", timings["encode"]}, {"write", timings["write"]}}},
       {"frames", progress.frames()},
       {"interrupted", sig != 0},
       {"signal", sig == 0 ? nlohmann::json(nullptr) : nlohmann::json(sig == SIGINT ? "SIGINT" : "SIGTERM")},
       {"command_line", command_line}};
   WriteJson((fs::path(o.out) / ShardManifestName(shard)).string(), manifest);
   const size_t recorded = episodes_json.size();
-  char summary[640];
+  char summary[768];
   std::snprintf(summary, sizeof(summary),
                 "record: %zu episode(s), %ld frames in %.1f s (%.1f frames/s, %.2f episodes/s, %d "
                 "job(s)%s%s), success %d/%zu, %s via %s, %s -> %s%s",
-                recorded, progress.frames(), wall, progress.frames() / wall, recorded / wall, jobs,
-                shard.sharded() ? ", shard " : "", shard.sharded() ? ShardLabel(shard).c_str() : "",
-                run.successes, recorded, gi.renderer.c_str(), gi.backend.c_str(), run.codec_used.c_str(),
-                o.out.c_str(), sig ? " (interrupted)" : "");
+                recorded, progress.frames(), wall, progress.frames() / wall, recorded / wall,
+                result.jobs, shard.sharded() ? ", shard " : "",
+                shard.sharded() ? ShardLabel(shard).c_str() : "", successes, recorded,
+                first_worker.value("gl_renderer", "?").c_str(),
+                first_worker.value("backend", "?").c_str(), codec_used.c_str(), o.out.c_str(),
+                sig ? " (interrupted)" : "");
   progress.Done(summary);
-  if (sig) ExitStatus() = 128 + sig;
+  if (sig) {
+    ExitStatus() = 128 + sig;
+    return;
+  }
+  if (!result.failures.empty()) {
+    throw RunError(DescribeFailures(result) + "; the manifest lists the missing episodes (" +
+                   std::to_string(result.missing.size()) + ")");
+  }
 }
 
 }  // namespace
@@ -519,17 +622,17 @@ void RegisterRecord(CLI::App& app) {
   sub->add_option("--exec-timeout", o->exec_timeout, "Seconds an exec: policy may take per answer")
       ->capture_default_str()->check(CLI::Range(0.001, 86400.0));
   sub->add_option("--fps", o->fps, "Video frame rate (25 = the control rate: real time)")->capture_default_str();
-  sub->add_option("--codec", o->codec, "auto (h264_nvenc if it opens, else libx264), libx264 or h264_nvenc")->capture_default_str();
+  sub->add_option("--codec", o->codec,
+                  "auto (h264_nvenc where the GPU has NVENC, else libx264; decided once per run), "
+                  "libx264 or h264_nvenc")
+      ->capture_default_str();
   sub->add_option("--crf", o->crf, "H.264 quality, 0 (lossless) .. 51 (worst)")->capture_default_str();
   sub->add_option("--preset", o->preset, std::string("Encoder preset (default ") + kDefaultVideoPreset + ")");
   sub->add_option("--sheet-every", o->sheet_every, "Contact sheet: every K-th frame (0: about 12 tiles); the last frame is always included")
       ->capture_default_str()->check(CLI::Range(0, 1000));
   sub->add_option("--out", o->out, "Output folder")->capture_default_str();
   sub->add_flag("-q,--quiet", o->quiet, "No progress or summary on stderr");
-  sub->add_option("-j,--jobs", o->jobs,
-                  "Episodes recorded in parallel, each worker with its own GL context (0: one per "
-                  "core); outputs are identical to --jobs 1")
-      ->capture_default_str()->check(CLI::Range(0, 256));
+  AddJobsOptions(sub, &o->jobs, &o->worker_mode);
   sub->add_option("--shard", o->shard,
                   "Record only shard I of N (0 <= I < N): episodes k with k mod N = I. Without it: "
                   "JOB_COMPLETION_INDEX (with --shard-count) or SLURM_ARRAY_TASK_ID/COUNT if set");

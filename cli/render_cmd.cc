@@ -65,12 +65,13 @@ void RegisterRender(CLI::App& app) {
     FetchEnv fetch(spec, ResolveAssets(env->assets));
     const RenderOptions options = MakeRenderOptions(*view, fetch.model());
     const EpisodeRecord episode = RunEpisode(fetch, *policy, 0, seed, *steps);
-    auto gl = CreateGlContext(view->backend, view->gpu);
+    auto gl = CreateViewContext(*view, ResolveGpuChoice(*view));
     Renderer renderer(*gl, fetch.model(), options);
     if (*verbose) {
       const GlInfo& i = gl->info();
       std::fprintf(stderr, "GL: backend %s (%s), vendor %s, renderer %s, version %s\n", i.backend.c_str(),
                    i.device.c_str(), i.vendor.c_str(), i.renderer.c_str(), i.version.c_str());
+      std::fprintf(stderr, "GPU: %s\n", gl->selection().c_str());
       std::fprintf(stderr, "MSAA: %d samples (%s)\n", renderer.msaa_samples(), renderer.msaa_reason().c_str());
     }
     const FrameInfo info = MakeFrameInfo(fetch, episode.steps.back());

@@ -1,6 +1,7 @@
 #include "cli/render_common.h"
 
 #include <cmath>
+#include <cstdlib>
 #include <vector>
 
 #include "src/errors.h"
@@ -26,8 +27,19 @@ void AddViewOptions(CLI::App* sub, ViewOptions* o) {
                   "(llvmpipe, softpipe, swrast), where multisampling is about half the frame time")
       ->capture_default_str()
       ->check(CLI::IsMember(std::vector<std::string>(std::begin(kMsaaValues), std::end(kMsaaValues))));
-  sub->add_option("--gpu", o->gpu, "EGL device index (default: $MUJOCO_EGL_DEVICE_ID, else the first)")
-      ->check(CLI::Range(0, 4096));
+  sub->add_option("--gpu", o->gpu,
+                  std::string("GPU(s) to render on: ") + kGpuForms +
+                      ". Default: $MUJOCO_EGL_DEVICE_ID (EGL index), else cuda:0 when "
+                      "$CUDA_VISIBLE_DEVICES is set, else the first GPU. Workers are spread "
+                      "round-robin over the devices named")
+      ->check([](const std::string& text) -> std::string {
+        try {
+          ParseGpuSpec(text);
+        } catch (const UsageError& e) {
+          return e.what();
+        }
+        return "";
+      });
 }
 
 int ParseMsaa(const std::string& value) {
@@ -48,6 +60,33 @@ RenderOptions MakeRenderOptions(const ViewOptions& view, const mjModel* model) {
   options.overlays = ParseOverlays(view.overlay);
   options.msaa_samples = ParseMsaa(view.msaa);
   return options;
+}
+
+GpuChoice ResolveGpuChoice(const ViewOptions& view) {
+  const GpuSpec spec = EffectiveGpuSpec(view.gpu);
+  std::string backend = view.backend;
+  if (backend.empty()) {
+    const char* env = std::getenv("MUJOCO_GL");
+    backend = env && *env ? env : "auto";
+  }
+  if (spec.kind == GpuSpec::Kind::kAuto || backend == "osmesa") return GpuChoice{{}, "auto"};
+  EglDeviceList list;
+  try {
+    list = ListEglDevices();
+  } catch (const RunError& e) {
+    if (spec.soft) return GpuChoice{{}, "auto (" + spec.text + ", but " + e.what() + ")"};
+    throw RunError(spec.source + " " + spec.text + " needs EGL: " + e.what());
+  }
+  return ChooseGpus(spec, list);
+}
+
+std::unique_ptr<GlContext> CreateViewContext(const ViewOptions& view, const GpuChoice& choice,
+                                             int worker) {
+  const int device =
+      choice.devices.empty() ? -1 : choice.devices[worker % choice.devices.size()];
+  auto gl = CreateGlContext(view.backend, device);
+  gl->set_selection(gl->info().backend == "egl" ? choice.reason : "osmesa (no device)");
+  return gl;
 }
 
 FrameInfo MakeFrameInfo(const FetchEnv& env, const StepRecord& record) {

@@ -5,6 +5,7 @@
 
 #include <string>
 
+#include "render/gpu_select.h"
 #include "render/overlay.h"
 #include "render/renderer.h"
 #include "src/episode.h"
@@ -19,7 +20,7 @@ struct ViewOptions {
   int width = 480;                                ///< pixels
   int height = 480;                               ///< pixels
   std::string backend;                            ///< auto|egl|osmesa; empty: $MUJOCO_GL or auto
-  int gpu = -1;                                   ///< EGL device index; -1: $MUJOCO_EGL_DEVICE_ID or first
+  std::string gpu;                                ///< see ParseGpuSpec; empty: from the environment
   std::string msaa = "auto";                      ///< see ParseMsaa
 };
 
@@ -36,6 +37,17 @@ RenderOptions MakeRenderOptions(const ViewOptions& view, const mjModel* model);
 
 /// Adds the view options to `sub`.
 void AddViewOptions(CLI::App* sub, ViewOptions* options);
+
+/// The GPU request of `view` in effect (--gpu, else MUJOCO_EGL_DEVICE_ID, else
+/// CUDA_VISIBLE_DEVICES, else auto) matched against this machine's EGL devices: the EGL indices
+/// to render on, in worker order (empty: auto). Enumerates only when a device is named and the
+/// backend may be EGL. Throws UsageError/RunError as ChooseGpus.
+GpuChoice ResolveGpuChoice(const ViewOptions& view);
+
+/// A GL context for `view` on `choice` (worker w renders on choice.devices[w % size]); its
+/// info().selection says how the device was chosen.
+std::unique_ptr<GlContext> CreateViewContext(const ViewOptions& view, const GpuChoice& choice,
+                                             int worker = 0);
 
 /// The overlay/HUD description of the env's current state after `record`.
 FrameInfo MakeFrameInfo(const FetchEnv& env, const StepRecord& record);

@@ -1,59 +1,110 @@
-// fetchscope rollout: episodes without rendering, written as trajectory JSON.
+// fetchscope rollout: episodes without rendering, written as trajectory JSON. --jobs runs them
+// on the episode scheduler's worker processes; the JSON is byte-identical to --jobs 1.
+#include <signal.h>
+
 #include <cstdio>
 
 #include "cli/common.h"
+#include "cli/episode_scheduler.h"
 #include "src/episode.h"
+#include "src/errors.h"
 #include "src/fetch_env.h"
 #include "src/json_util.h"
 
 namespace fetchscope::cli {
+namespace {
+
+struct RolloutOptions {
+  EnvOptions env;
+  int episodes = 1;
+  int steps = 50;
+  std::string policy = "random";
+  std::string json_out;
+  double exec_timeout = 10.0;
+  int jobs = 1;
+  std::string worker_mode = "process";
+};
+
+// Plays episodes and reports each as its trajectory JSON entry.
+class RolloutRunner : public EpisodeRunner {
+ public:
+  RolloutRunner(const EnvSpec& spec, const AssetSource& assets, const std::string& policy,
+                const PolicyContext& context, int steps)
+      : sequence_(std::make_unique<FetchEnv>(spec, assets), MakePolicy(policy, spec, context),
+                  context.seed, steps) {}
+  void Run(int k, WorkerChannel& channel) override {
+    const EpisodeRecord episode = sequence_.Play(k, [&](const StepRecord&, const StepResult*) {
+      return !channel.StopRequested();
+    });
+    channel.Progress(static_cast<int>(episode.steps.size()) - 1);
+    channel.Done(k, EpisodeJson(episode));
+  }
+
+ private:
+  EpisodeSequence sequence_;
+};
+
+void RunRollout(const RolloutOptions& o) {
+  const EnvSpec& spec = FindEnvSpec(o.env.env_id);
+  const uint64_t seed = ParseSeed(o.env.seed);
+  const WorkerMode mode = ParseWorkerMode(o.worker_mode);
+  const AssetSource assets = ResolveAssets(o.env.assets);
+  PolicyContext context;
+  context.seed = seed;
+  context.steps_per_episode = o.steps;
+  context.episodes = o.episodes;
+  context.exec_timeout_s = o.exec_timeout;
+  { FetchEnv check(spec, assets); }  // bad assets fail here, before any worker starts
+  ScheduleOptions schedule;
+  for (int k = 0; k < o.episodes; ++k) schedule.episodes.push_back(k);
+  schedule.jobs = ResolveJobs(o.jobs, o.episodes);
+  schedule.mode = mode;
+  const ScheduleResult result = RunEpisodes(schedule, [&](int) {
+    return std::make_unique<RolloutRunner>(spec, assets, o.policy, context, o.steps);
+  });
+  if (!result.failures.empty()) {
+    if (result.failures.front().usage) throw UsageError(result.failures.front().message);
+    throw RunError(DescribeFailures(result));
+  }
+  if (result.signal) {
+    std::fprintf(stderr, "rollout: interrupted (%s); nothing written\n",
+                 result.signal == SIGINT ? "SIGINT" : "SIGTERM");
+    ExitStatus() = 128 + result.signal;
+    return;
+  }
+  nlohmann::json episodes = nlohmann::json::array();
+  int successes = 0;
+  for (const auto& [k, episode] : result.results) {
+    successes += episode.at("is_success").get<bool>();
+    episodes.push_back(episode);
+  }
+  const nlohmann::json j = TrajectoryJson(spec, assets, seed, o.policy, std::move(episodes));
+  if (o.json_out.empty()) {
+    std::printf("%s\n", DumpJson(j).c_str());
+    return;
+  }
+  const std::string path = JsonOutPath(o.json_out, "rollout");
+  WriteJson(path, j);
+  std::printf("%s: %d episode(s) of %d steps, policy %s, seed %s: success %d/%d (%.0f%%)\nwrote %s\n",
+              spec.id.c_str(), o.episodes, o.steps, o.policy.c_str(), o.env.seed.c_str(), successes,
+              o.episodes, 100.0 * successes / o.episodes, path.c_str());
+}
+
+}  // namespace
 
 void RegisterRollout(CLI::App& app) {
-  auto env = std::make_shared<EnvOptions>();
-  auto episodes = std::make_shared<int>(1);
-  auto steps = std::make_shared<int>(50);
-  auto policy_spec = std::make_shared<std::string>("random");
-  auto json_out = std::make_shared<std::string>();
-  auto exec_timeout = std::make_shared<double>(10.0);
+  auto o = std::make_shared<RolloutOptions>();
   CLI::App* sub = app.add_subcommand(
       "rollout", "Run episodes without rendering and write the trajectory JSON");
-  AddEnvOptions(sub, env.get());
-  sub->add_option("--episodes", *episodes, "Number of episodes")->capture_default_str()->check(CLI::Range(1, 1000000));
-  sub->add_option("--steps", *steps, "Steps per episode (TimeLimit is 50)")->capture_default_str()->check(CLI::Range(1, 50));
-  sub->add_option("--policy", *policy_spec, kPolicyHelp)->capture_default_str();
-  sub->add_option("--exec-timeout", *exec_timeout, "Seconds an exec: policy may take per answer")
+  AddEnvOptions(sub, &o->env);
+  sub->add_option("--episodes", o->episodes, "Number of episodes")->capture_default_str()->check(CLI::Range(1, 1000000));
+  sub->add_option("--steps", o->steps, "Steps per episode (TimeLimit is 50)")->capture_default_str()->check(CLI::Range(1, 50));
+  sub->add_option("--policy", o->policy, kPolicyHelp)->capture_default_str();
+  sub->add_option("--exec-timeout", o->exec_timeout, "Seconds an exec: policy may take per answer")
       ->capture_default_str()->check(CLI::Range(0.001, 86400.0));
-  sub->add_option("--json-out", *json_out, "Write F (.json) or F_rollout.json; without it JSON goes to stdout");
-  sub->callback([=]() {
-    const EnvSpec& spec = FindEnvSpec(env->env_id);
-    const uint64_t seed = ParseSeed(env->seed);
-    const AssetSource assets = ResolveAssets(env->assets);
-    PolicyContext context;
-    context.seed = seed;
-    context.steps_per_episode = *steps;
-    context.episodes = *episodes;
-    context.exec_timeout_s = *exec_timeout;
-    auto policy = MakePolicy(*policy_spec, spec, context);
-    FetchEnv fetch(spec, assets);
-    std::vector<EpisodeRecord> records;
-    int successes = 0;
-    for (int e = 0; e < *episodes; ++e) {
-      records.push_back(RunEpisode(fetch, *policy, e, e == 0 ? std::optional<uint64_t>(seed) : std::nullopt, *steps));
-      successes += records.back().steps.back().is_success;
-    }
-    std::vector<const EpisodeRecord*> ptrs;
-    for (const auto& r : records) ptrs.push_back(&r);
-    nlohmann::json j = TrajectoryJson(fetch, seed, *policy_spec, ptrs);
-    if (json_out->empty()) {
-      std::printf("%s\n", DumpJson(j).c_str());
-      return;
-    }
-    const std::string path = JsonOutPath(*json_out, "rollout");
-    WriteJson(path, j);
-    std::printf("%s: %d episode(s) of %d steps, policy %s, seed %s: success %d/%d (%.0f%%)\nwrote %s\n",
-                spec.id.c_str(), *episodes, *steps, policy_spec->c_str(), env->seed.c_str(), successes,
-                *episodes, 100.0 * successes / *episodes, path.c_str());
-  });
+  sub->add_option("--json-out", o->json_out, "Write F (.json) or F_rollout.json; without it JSON goes to stdout");
+  AddJobsOptions(sub, &o->jobs, &o->worker_mode);
+  sub->callback([o]() { RunRollout(*o); });
 }
 
 }  // namespace fetchscope::cli

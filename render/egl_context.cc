@@ -5,6 +5,7 @@
 #include <dlfcn.h>
 
 #include <cstdlib>
+#include <algorithm>
 #include <cstring>
 #include <map>
 #include <mutex>
@@ -12,6 +13,7 @@
 #include <vector>
 
 #include "render/gl_context.h"
+#include "render/gpu_select.h"
 #include "src/errors.h"
 
 namespace fetchscope {
@@ -45,6 +47,7 @@ struct EglApi {
   PFNEGLGETPLATFORMDISPLAYEXTPROC GetPlatformDisplayEXT = nullptr;
   PFNEGLQUERYDEVICESEXTPROC QueryDevicesEXT = nullptr;
   PFNEGLQUERYDEVICESTRINGEXTPROC QueryDeviceStringEXT = nullptr;
+  PFNEGLQUERYDEVICEATTRIBEXTPROC QueryDeviceAttribEXT = nullptr;
   std::string load_error;  // non-empty when the library or a core symbol is missing
 };
 
@@ -85,6 +88,7 @@ const EglApi& Egl() {
     ext(&a.GetPlatformDisplayEXT, "eglGetPlatformDisplayEXT");
     ext(&a.QueryDevicesEXT, "eglQueryDevicesEXT");
     ext(&a.QueryDeviceStringEXT, "eglQueryDeviceStringEXT");
+    ext(&a.QueryDeviceAttribEXT, "eglQueryDeviceAttribEXT");
     return a;
   }();
   return api;
@@ -281,21 +285,6 @@ EGLDisplay GetDisplay(EGLenum platform, void* native, std::string* why) {
   return display;
 }
 
-// Device name for messages: the DRM node when the driver says, else the index.
-std::string DeviceDescription(EGLDeviceEXT device, int index, bool software) {
-  std::string d = "EGL device " + std::to_string(index);
-  const EglApi& egl = Egl();
-  if (egl.QueryDeviceStringEXT) {
-    const char* exts = egl.QueryDeviceStringEXT(device, EGL_EXTENSIONS);
-    if (HasExtension(exts, "EGL_EXT_device_drm")) {
-      const char* file = egl.QueryDeviceStringEXT(device, EGL_DRM_DEVICE_FILE_EXT);
-      if (file) d += std::string(" (") + file + ")";
-    }
-  }
-  if (software) d += " (software)";
-  return d;
-}
-
 bool IsSoftwareDevice(EGLDeviceEXT device) {
   const EglApi& egl = Egl();
   if (!egl.QueryDeviceStringEXT) return false;
@@ -307,17 +296,53 @@ std::string WithoutPrefix(const std::string& message) {
   return message.rfind("egl: ", 0) == 0 ? message.substr(5) : message;
 }
 
-// Parses $MUJOCO_EGL_DEVICE_ID; -1 when unset. Throws UsageError when not a number.
-int DeviceIdFromEnvironment() {
-  const char* env = std::getenv("MUJOCO_EGL_DEVICE_ID");
-  if (!env || !*env) return -1;
-  char* end = nullptr;
-  long id = std::strtol(env, &end, 10);
-  if (*end != '\0' || id < 0 || id > 1000000) {
-    throw UsageError(std::string("MUJOCO_EGL_DEVICE_ID '") + env +
-                     "' is not a device index; accepted: an integer >= 0");
+// Whether this EGL lists devices and makes displays of them; `why` says what is missing.
+// NVIDIA's driver advertises EGL_EXT_device_base, which stands for EGL_EXT_device_enumeration
+// and EGL_EXT_device_query together, and not the enumeration token itself.
+bool CanEnumerate(const char* client_extensions, std::string* why) {
+  const EglApi& egl = Egl();
+  const bool listing = HasExtension(client_extensions, "EGL_EXT_device_enumeration") ||
+                       HasExtension(client_extensions, "EGL_EXT_device_base");
+  const bool platform = HasExtension(client_extensions, "EGL_EXT_platform_device");
+  if (listing && platform && egl.QueryDevicesEXT) return true;
+  *why = !listing ? "neither EGL_EXT_device_enumeration nor EGL_EXT_device_base"
+         : !platform ? "no EGL_EXT_platform_device"
+                     : "eglQueryDevicesEXT is missing";
+  return false;
+}
+
+// The driver's device handles, in its order (empty when it lists none).
+std::vector<EGLDeviceEXT> QueryDeviceHandles() {
+  const EglApi& egl = Egl();
+  std::vector<EGLDeviceEXT> devices;
+  EGLint n = 0;
+  if (egl.QueryDevicesEXT(0, nullptr, &n) && n > 0) {
+    devices.resize(n);
+    if (!egl.QueryDevicesEXT(n, devices.data(), &n)) n = 0;
+    devices.resize(std::max<EGLint>(n, 0));
   }
-  return static_cast<int>(id);
+  return devices;
+}
+
+// What the driver says of one device.
+EglDevice DescribeDevice(EGLDeviceEXT handle, int index) {
+  const EglApi& egl = Egl();
+  EglDevice device;
+  device.index = index;
+  if (!egl.QueryDeviceStringEXT) return device;
+  const char* extensions = egl.QueryDeviceStringEXT(handle, EGL_EXTENSIONS);
+  device.extensions = extensions ? extensions : "";
+  device.software = HasExtension(extensions, "EGL_MESA_device_software");
+  if (HasExtension(extensions, "EGL_EXT_device_drm")) {
+    const char* file = egl.QueryDeviceStringEXT(handle, EGL_DRM_DEVICE_FILE_EXT);
+    if (file) device.drm_node = file;
+  }
+  EGLAttrib cuda = -1;
+  if (HasExtension(extensions, "EGL_NV_device_cuda") && egl.QueryDeviceAttribEXT &&
+      egl.QueryDeviceAttribEXT(handle, kEglCudaDeviceNv, &cuda) && cuda >= 0) {
+    device.cuda_id = static_cast<int>(cuda);
+  }
+  return device;
 }
 
 }  // namespace
@@ -329,6 +354,21 @@ void PromoteEglToGlobal() {
 }
 }  // namespace internal
 
+EglDeviceList ListEglDevices() {
+  const EglApi& egl = Egl();
+  if (!egl.load_error.empty()) throw RunError(egl.load_error);
+  EglDeviceList list;
+  const char* client_extensions = egl.QueryString(EGL_NO_DISPLAY, EGL_EXTENSIONS);
+  list.client_extensions = client_extensions ? client_extensions : "";
+  list.enumerable = CanEnumerate(client_extensions, &list.why_not);
+  if (!list.enumerable) return list;
+  const std::vector<EGLDeviceEXT> handles = QueryDeviceHandles();
+  for (size_t i = 0; i < handles.size(); ++i) {
+    list.devices.push_back(DescribeDevice(handles[i], static_cast<int>(i)));
+  }
+  return list;
+}
+
 std::unique_ptr<GlContext> CreateEglContext(int gpu) {
   const EglApi& egl = Egl();
   if (!egl.load_error.empty()) throw RunError(egl.load_error);
@@ -336,23 +376,26 @@ std::unique_ptr<GlContext> CreateEglContext(int gpu) {
   if (!egl.GetPlatformDisplayEXT || !HasExtension(client_extensions, "EGL_EXT_platform_base")) {
     throw RunError("egl: this libEGL lacks EGL_EXT_platform_base, so it needs a display server");
   }
+  std::string why_not_enumerable;
+  const bool enumerable = CanEnumerate(client_extensions, &why_not_enumerable);
+  const std::vector<EGLDeviceEXT> devices =
+      enumerable ? QueryDeviceHandles() : std::vector<EGLDeviceEXT>{};
 
-  std::string source = "--gpu";
+  // Without an explicit index, MUJOCO_EGL_DEVICE_ID or CUDA_VISIBLE_DEVICES may name one.
+  std::string source = "--gpu " + std::to_string(gpu);
   if (gpu < 0) {
-    gpu = DeviceIdFromEnvironment();
-    source = "MUJOCO_EGL_DEVICE_ID";
-  }
-
-  std::vector<EGLDeviceEXT> devices;
-  if (egl.QueryDevicesEXT && HasExtension(client_extensions, "EGL_EXT_device_enumeration")) {
-    EGLint n = 0;
-    if (egl.QueryDevicesEXT(0, nullptr, &n) && n > 0) {
-      devices.resize(n);
-      if (!egl.QueryDevicesEXT(n, devices.data(), &n)) n = 0;
-      devices.resize(n);
+    EglDeviceList list;
+    list.enumerable = enumerable;
+    list.why_not = why_not_enumerable;
+    for (size_t i = 0; i < devices.size(); ++i) {
+      list.devices.push_back(DescribeDevice(devices[i], static_cast<int>(i)));
+    }
+    const GpuChoice choice = ChooseGpus(EffectiveGpuSpec(""), list);
+    if (!choice.devices.empty()) {
+      gpu = choice.devices.front();
+      source = choice.reason;
     }
   }
-  const bool platform_device = HasExtension(client_extensions, "EGL_EXT_platform_device");
 
   std::vector<std::string> failures;
   auto try_display = [&](EGLenum platform, void* native,
@@ -371,20 +414,18 @@ std::unique_ptr<GlContext> CreateEglContext(int gpu) {
     }
   };
   auto try_device = [&](int index) {
-    std::string description =
-        DeviceDescription(devices[index], index, IsSoftwareDevice(devices[index]));
-    return try_display(EGL_PLATFORM_DEVICE_EXT, devices[index], description);
+    return try_display(EGL_PLATFORM_DEVICE_EXT, devices[index],
+                       DescribeDevice(devices[index], index).Describe());
   };
 
   // An explicit index names one device and nothing else will do.
   if (gpu >= 0) {
-    if (!platform_device || devices.empty()) {
-      throw RunError("egl: " + source + " " + std::to_string(gpu) +
-                     " asks for an EGL device, but this EGL enumerates none "
-                     "(EGL_EXT_device_enumeration/EGL_EXT_platform_device missing)");
+    if (!enumerable || devices.empty()) {
+      throw RunError("egl: " + source + " asks for an EGL device, but this EGL enumerates none (" +
+                     (enumerable ? std::string("it lists no devices") : why_not_enumerable) + ")");
     }
     if (gpu >= static_cast<int>(devices.size())) {
-      throw UsageError(source + " " + std::to_string(gpu) + " is out of range; accepted: 0.." +
+      throw UsageError(source + " is out of range; accepted: 0.." +
                        std::to_string(devices.size() - 1) +
                        " (EGL devices on this machine: " + std::to_string(devices.size()) + ")");
     }
@@ -394,14 +435,12 @@ std::unique_ptr<GlContext> CreateEglContext(int gpu) {
 
   // Hardware devices first, then Mesa's surfaceless platform, then a software device.
   std::vector<int> software_devices;
-  if (platform_device) {
-    for (int i = 0; i < static_cast<int>(devices.size()); ++i) {
-      if (IsSoftwareDevice(devices[i])) {
-        software_devices.push_back(i);
-        continue;
-      }
-      if (auto context = try_device(i)) return context;
+  for (int i = 0; i < static_cast<int>(devices.size()); ++i) {
+    if (IsSoftwareDevice(devices[i])) {
+      software_devices.push_back(i);
+      continue;
     }
+    if (auto context = try_device(i)) return context;
   }
   if (HasExtension(client_extensions, "EGL_MESA_platform_surfaceless")) {
     auto context = try_display(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY, "surfaceless");
@@ -412,7 +451,11 @@ std::unique_ptr<GlContext> CreateEglContext(int gpu) {
   for (int i : software_devices) {
     if (auto context = try_device(i)) return context;
   }
-  if (devices.empty()) failures.push_back("no EGL devices enumerated");
+  if (!enumerable) {
+    failures.push_back("no device enumeration (" + why_not_enumerable + ")");
+  } else if (devices.empty()) {
+    failures.push_back("no EGL devices enumerated");
+  }
   std::string message = "egl: no usable display (";
   for (size_t i = 0; i < failures.size(); ++i) message += (i ? "; " : "") + failures[i];
   throw RunError(message + ")");

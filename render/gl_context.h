@@ -5,6 +5,7 @@
 
 #include <memory>
 #include <string>
+#include <utility>
 
 namespace fetchscope {
 
@@ -33,6 +34,11 @@ class GlContext {
   /// Backend, vendor, renderer and version strings, read once at creation.
   virtual const GlInfo& info() const = 0;
 
+  /// How the device was chosen (e.g. "--gpu cuda:1 = EGL device 2"); "" unless set.
+  const std::string& selection() const { return selection_; }
+  /// Records how the device was chosen, for manifests and --verbose.
+  void set_selection(std::string selection) { selection_ = std::move(selection); }
+
   /// Looks up a GL entry point through the backend's GetProcAddress (nullptr if unknown).
   virtual void* GetProcAddress(const char* name) const = 0;
 
@@ -48,11 +54,15 @@ class GlContext {
 
   /// Reads GL_VENDOR/RENDERER/VERSION of the current context into `info`.
   void ReadGlStrings(GlInfo* info) const;
+
+ private:
+  std::string selection_;
 };
 
 /// Creates a context. backend: "auto" (EGL, then OSMesa), "egl", "osmesa"; an empty string
-/// means $MUJOCO_GL if set, else auto. gpu: EGL device index; -1 means $MUJOCO_EGL_DEVICE_ID if
-/// set, else the first hardware device, else Mesa's surfaceless platform.
+/// means $MUJOCO_GL if set, else auto. gpu: EGL device index; -1 means what the environment
+/// names (EffectiveGpuSpec: MUJOCO_EGL_DEVICE_ID, else cuda:0 when CUDA_VISIBLE_DEVICES is
+/// set), else the first hardware device that initialises, else Mesa's surfaceless platform.
 /// Throws UsageError for an unknown backend name or an out-of-range device index, and RunError
 /// when no context can be made (saying why each backend failed and what to install).
 std::unique_ptr<GlContext> CreateGlContext(const std::string& backend, int gpu = -1);

@@ -159,6 +159,14 @@ class TemporaryFile {
 
 struct VideoWriter::Impl {
   Impl(const std::string& path, const VideoOptions& options);
+  // Options and sizes only, no file: for ProbeEncoder.
+  explicit Impl(const VideoOptions& opts)
+      : options(opts), encoded_width((opts.width + 1) & ~1), encoded_height((opts.height + 1) & ~1) {
+    if (options.preset.empty()) options.preset = kDefaultVideoPreset;
+  }
+  // Opens options.codec for options' size and closes it again; throws RunError with FFmpeg's
+  // reason when it cannot open.
+  static void ProbeEncoder(const VideoOptions& options);
   void OpenEncoder();
   bool TryOpenEncoder(const std::string& name, std::string* failure);
   void OpenOutput();
@@ -229,6 +237,13 @@ VideoWriter::Impl::Impl(const std::string& path, const VideoOptions& opts)
   padded.resize(static_cast<std::size_t>(encoded_width) * encoded_height * 3 + kSwscaleReadSlack);
 }
 
+void VideoWriter::Impl::ProbeEncoder(const VideoOptions& options) {
+  InstallAvLogCapture();
+  Impl probe(options);
+  std::string failure;
+  if (!probe.TryOpenEncoder(options.codec, &failure)) throw RunError(failure);
+}
+
 void VideoWriter::Impl::OpenEncoder() {
   const bool automatic = options.codec == "auto";
   std::string failure;
@@ -284,6 +299,7 @@ bool VideoWriter::Impl::TryOpenEncoder(const std::string& name, std::string* fai
   } else {
     codec_options.Set("preset", options.preset);
     codec_options.Set("crf", std::to_string(options.crf));
+    codec_options.Set("threads", options.threads == 0 ? "auto" : std::to_string(options.threads));
   }
   if (int rc = avcodec_open2(context.get(), codec, codec_options.address()); rc < 0) {
     *failure = DescribeAvError(rc);
@@ -432,5 +448,36 @@ int VideoWriter::encoded_height() const { return impl_->encoded_height; }
 const std::string& VideoWriter::path() const { return impl_->final_path; }
 
 void ValidateVideoOptions(const VideoOptions& options) { ValidateOptions(options); }
+
+bool NvidiaDevicePresent() {
+  std::error_code error;
+  return fs::exists("/dev/nvidiactl", error);
+}
+
+VideoCodecDecision DecideVideoCodec(const VideoOptions& options) {
+  ValidateOptions(options);
+  if (options.codec == "libx264") return {"libx264", "requested"};
+  if (options.codec == "auto" && !NvidiaDevicePresent()) {
+    return {"libx264", "auto: no NVIDIA GPU here (no /dev/nvidiactl), so no NVENC"};
+  }
+  // Opening the real encoder is the only reliable test: A100, H100 and H200 have CUDA but no
+  // NVENC, and the driver says so only when a session is opened.
+  VideoOptions probe = options;
+  probe.codec = "h264_nvenc";
+  std::string failure = "no NVIDIA driver node (/dev/nvidiactl)";
+  if (NvidiaDevicePresent()) {
+    try {
+      VideoWriter::Impl::ProbeEncoder(probe);
+      return {"h264_nvenc", options.codec == "auto" ? "auto: h264_nvenc opened" : "requested"};
+    } catch (const RunError& e) {
+      failure = e.what();
+    }
+  }
+  if (options.codec == "h264_nvenc") {
+    throw RunError("video codec h264_nvenc: NVENC is unavailable (" + failure +
+                   "); use --codec libx264");
+  }
+  return {"libx264", "auto: h264_nvenc unavailable (" + failure + ")"};
+}
 
 }  // namespace fetchscope

@@ -21,7 +21,14 @@ struct VideoOptions {
   /// slower veryslow placebo); empty = kDefaultVideoPreset. h264_nvenc gets the
   /// nearest of its p1..p7 (veryfast -> p2, medium -> p4, veryslow -> p7).
   std::string preset = "";
+  /// Encoder threads (libx264 `threads`). 1 by default: x264's bitstream depends on its thread
+  /// count (and names it in the stream), so a fixed count keeps videos byte-identical whatever
+  /// the machine or the number of workers; record runs several single-threaded encoders at
+  /// once instead (one per episode). 0 = libx264's own choice (about 1.5 x cores).
+  int threads = 1;
 };
+
+
 
 /// The preset used when VideoOptions::preset is empty. "veryfast" encodes
 /// several times faster than x264's "medium" at a modest size cost, which
@@ -32,6 +39,23 @@ inline constexpr const char* kDefaultVideoPreset = "veryfast";
 /// Checks codec, crf, fps, preset and size without opening anything (UsageError on a bad one),
 /// so a command can reject bad options before it creates any output.
 void ValidateVideoOptions(const VideoOptions& options);
+
+/// The encoder a run uses and why, decided once per run (record decides in the parent and
+/// hands the result to its workers).
+struct VideoCodecDecision {
+  std::string codec;   ///< "libx264" or "h264_nvenc"
+  std::string reason;  ///< e.g. "auto: h264_nvenc unavailable (No capable devices found)"
+};
+
+/// True when this machine has an NVIDIA driver node (/dev/nvidiactl), the precondition for
+/// NVENC; without it `--codec auto` needs no probe.
+bool NvidiaDevicePresent();
+
+/// Decides options.codec: libx264 as asked; h264_nvenc (or auto) by opening a test encoder of
+/// options' size, which loads CUDA into this process (run it in a child process where workers
+/// will be forked later). auto falls back to libx264 with the reason. Throws RunError when
+/// h264_nvenc was asked for and cannot open, or libx264 is missing.
+VideoCodecDecision DecideVideoCodec(const VideoOptions& options);
 
 /// Writes one H.264 MP4 file, frame by frame.
 ///
@@ -81,6 +105,7 @@ class VideoWriter {
   const std::string& path() const;
 
  private:
+  friend VideoCodecDecision DecideVideoCodec(const VideoOptions& options);
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };

@@ -69,11 +69,16 @@ nlohmann::json TrajectoryJson(const FetchEnv& env, uint64_t seed, const std::str
                               const std::vector<const EpisodeRecord*>& episodes) {
   nlohmann::json eps = nlohmann::json::array();
   for (const EpisodeRecord* e : episodes) eps.push_back(EpisodeJson(*e));
-  return {{"env_id", env.spec().id},
+  return TrajectoryJson(env.spec(), env.assets(), seed, policy, std::move(eps));
+}
+
+nlohmann::json TrajectoryJson(const EnvSpec& spec, const AssetSource& assets, uint64_t seed,
+                              const std::string& policy, nlohmann::json episodes) {
+  return {{"env_id", spec.id},
           {"seed", seed},
           {"policy", policy},
-          {"assets", AssetsJson(env.assets())},
-          {"episodes", std::move(eps)}};
+          {"assets", AssetsJson(assets)},
+          {"episodes", std::move(episodes)}};
 }
 
 }  // namespace fetchscope

@@ -53,4 +53,8 @@ nlohmann::json EpisodeJson(const EpisodeRecord& episode);
 nlohmann::json TrajectoryJson(const FetchEnv& env, uint64_t seed, const std::string& policy,
                               const std::vector<const EpisodeRecord*>& episodes);
 
+/// The trajectory file from episodes already made into JSON (EpisodeJson), in order.
+nlohmann::json TrajectoryJson(const EnvSpec& spec, const AssetSource& assets, uint64_t seed,
+                              const std::string& policy, nlohmann::json episodes);
+
 }  // namespace fetchscope
