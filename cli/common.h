@@ -58,5 +58,6 @@ void RegisterBench(CLI::App& app);
 void RegisterProbeActions(CLI::App& app);
 void RegisterMergeManifests(CLI::App& app);
 void RegisterGolden(CLI::App& app);
+void RegisterListGpus(CLI::App& app);
 
 }  // namespace fetchscope::cli

@@ -31,6 +31,7 @@ int main(int argc, char** argv) {
   cli::RegisterProbeActions(app);
   cli::RegisterMergeManifests(app);
   cli::RegisterGolden(app);
+  cli::RegisterListGpus(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
