@@ -9,7 +9,8 @@ packages=(cmake g++ make pkg-config
   libegl-dev libegl1 libegl-mesa0 libgl1-mesa-dri libosmesa6-dev
   libeigen3-dev libpng-dev libavcodec-dev libavformat-dev libavutil-dev libswscale-dev
   libcli11-dev nlohmann-json3-dev libgtest-dev
-  ffmpeg python3 python3-numpy)
+  ffmpeg python3 python3-numpy
+  binutils xz-utils)
 for flag in "$@"; do
   case "$flag" in
     --bench) packages+=(libmujoco-samples xvfb xauth time) ;;

@@ -1,0 +1,126 @@
+// tools/bundle.sh: the relocatable tarball for nodes without our Debian packages. Unpacked into
+// a temporary folder, every library the binary needs (its ELF dependencies and the GL
+// dispatchers it opens at run time) resolves inside the bundle, except glibc and GL vendor
+// libraries, which must come from the node; and the bundled binary records an episode.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <set>
+#include <sstream>
+#include <string>
+
+#include "tests/test_util.h"
+
+namespace fetchscope {
+namespace {
+
+using testing::CommandResult;
+using testing::RunCommand;
+using testing::TempDir;
+namespace fs = std::filesystem;
+
+// glibc's libraries and the GL vendor/driver ones: never in the bundle.
+const std::set<std::string> kNodeLibraries = {
+    "linux-vdso.so.1", "ld-linux-x86-64.so.2", "libc.so.6", "libm.so.6", "libmvec.so.1",
+    "libpthread.so.0", "libdl.so.2", "librt.so.1", "libresolv.so.2", "libutil.so.1",
+    "libEGL_mesa.so.0", "libGLX_mesa.so.0", "libOSMesa.so.8", "libEGL_nvidia.so.0",
+    "libGLX_nvidia.so.0", "libcuda.so.1"};
+
+class BundleTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    tmp_ = new TempDir;
+    const fs::path build = fs::path(FETCHSCOPE_BIN).parent_path();
+    const CommandResult made = RunCommand("cd " + testing::SourceDir().string() +
+                                          " && DIST_DIR=" + tmp_->path().string() +
+                                          " XZ_LEVEL=0 tools/bundle.sh " + build.string());
+    bundle_output_ = made.output;
+    if (made.exit_code != 0) return;
+    for (const auto& e : fs::directory_iterator(tmp_->path())) {
+      if (e.path().extension() == ".xz") archive_ = e.path();
+    }
+    RunCommand("tar -C " + tmp_->path().string() + " -xf " + archive_.string());
+    root_ = tmp_->path() / archive_.stem().stem();
+  }
+  static void TearDownTestSuite() { delete tmp_; }
+  void SetUp() override {
+    ASSERT_FALSE(archive_.empty()) << bundle_output_;
+    ASSERT_TRUE(fs::is_directory(root_ / "lib")) << root_;
+  }
+  static TempDir* tmp_;
+  static std::string bundle_output_;
+  static fs::path archive_, root_;
+};
+TempDir* BundleTest::tmp_ = nullptr;
+std::string BundleTest::bundle_output_;
+fs::path BundleTest::archive_, BundleTest::root_;
+
+TEST_F(BundleTest, ArchiveNameAndLayout) {
+  EXPECT_EQ(archive_.filename().string().rfind("fetchscope-", 0), 0u) << archive_;
+  EXPECT_NE(archive_.filename().string().find("-linux-x86_64.tar.xz"), std::string::npos);
+  EXPECT_TRUE(fs::exists(root_ / "fetchscope"));
+  EXPECT_TRUE(fs::exists(root_ / "bin" / "fetchscope"));
+  EXPECT_TRUE(fs::exists(root_ / "bin" / "models" / "push.xml"));
+  EXPECT_NE(bundle_output_.find("needs glibc >="), std::string::npos) << bundle_output_;
+}
+
+// The libraries a bare CUDA image lacks are there; glibc and GL vendor libraries are not, and
+// names are compared whole (libcjson.so.1 is not glibc's libc.so.6).
+TEST_F(BundleTest, HoldsWhatANodeLacksAndNothingOfGlibcOrTheDriver) {
+  std::set<std::string> libs;
+  for (const auto& e : fs::directory_iterator(root_ / "lib")) libs.insert(e.path().filename());
+  for (const char* needed : {"libavcodec.so.59", "libavformat.so.59", "libswscale.so.6",
+                             "libmujoco.so.2.2.2", "libpng16.so.16", "libstdc++.so.6",
+                             "libEGL.so.1", "libGLdispatch.so.0", "libOpenGL.so.0", "libGL.so.1",
+                             "libcjson.so.1", "libx264.so.164"}) {
+    EXPECT_TRUE(libs.count(needed)) << needed;
+  }
+  for (const std::string& lib : libs) {
+    EXPECT_FALSE(kNodeLibraries.count(lib)) << lib << " must come from the node";
+    EXPECT_EQ(lib.rfind("libnvidia-", 0), std::string::npos) << lib;
+  }
+}
+
+// ldd of the binary and of every bundled library, with the launcher's library path: every
+// dependency resolves inside the bundle, except glibc's.
+TEST_F(BundleTest, EveryDependencyResolvesInsideTheBundle) {
+  std::vector<fs::path> objects = {root_ / "bin" / "fetchscope"};
+  for (const auto& e : fs::directory_iterator(root_ / "lib")) objects.push_back(e.path());
+  const std::string lib = fs::canonical(root_ / "lib").string();
+  for (const fs::path& object : objects) {
+    const CommandResult ldd = RunCommand("LD_LIBRARY_PATH=" + lib + " ldd " + object.string());
+    std::istringstream lines(ldd.output);
+    for (std::string line; std::getline(lines, line);) {
+      const size_t arrow = line.find("=>");
+      if (arrow == std::string::npos) continue;
+      std::string name = line.substr(0, arrow);
+      name.erase(0, name.find_first_not_of(" \t"));
+      name.erase(name.find_last_not_of(" \t") + 1);
+      EXPECT_EQ(line.find("not found"), std::string::npos) << object << ": " << line;
+      if (kNodeLibraries.count(name)) continue;
+      EXPECT_NE(line.find(lib + "/"), std::string::npos)
+          << object.filename() << " takes " << name << " from outside the bundle: " << line;
+    }
+  }
+}
+
+// The launcher, called through a symbolic link from elsewhere, records an episode that plays.
+TEST_F(BundleTest, BundledBinaryRecordsAnEpisode) {
+  TempDir work;
+  fs::create_symlink(root_ / "fetchscope", work.path() / "fs");
+  const CommandResult r = RunCommand(
+      "cd " + work.path().string() +
+      " && env -u MUJOCO_GL ./fs record --env-id FetchPush-v4 --policy scripted --episodes 1 "
+      "--steps 5 --width 64 --height 64 --quiet --out run");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const fs::path video = work.path() / "run" / "episode_000.mp4";
+  const CommandResult probe = RunCommand(
+      "ffprobe -v error -count_frames -select_streams v:0 -show_entries "
+      "stream=codec_name,nb_read_frames -of csv=p=0 " + video.string());
+  EXPECT_EQ(probe.output, "h264,6\n");
+  const CommandResult version = RunCommand((root_ / "fetchscope").string() + " --version");
+  EXPECT_EQ(version.exit_code, 0) << version.output;
+}
+
+}  // namespace
+}  // namespace fetchscope
