@@ -533,9 +533,12 @@ nlohmann::json BenchNode(const AssetSource& assets, const std::string& backends,
               "+sim fps");
   try {
     std::unique_ptr<GlContext> gl = CreateGlContext(backend, -1);
+    bool auto_is_zero = false;
     for (const char* msaa : {"auto", "0"}) {
+      if (auto_is_zero) break;  // msaa 0 is what auto already measured
       for (const char* readback : {"sync", "async"}) {
         nlohmann::json row = NodeRenderRow(*gl, assets, w, h, msaa, readback, budget_s / 4);
+        auto_is_zero = std::string(msaa) == "auto" && row["msaa"].get<int>() == 0;
         const std::string label = gl->info().backend + " " + MsaaLabel(msaa, row["msaa"].get<int>()) + " " + readback;
         std::printf("%-44s %4dx%-4d %12.0f %12.0f\n", label.c_str(), w, h, row["render_frames_per_s"].get<double>(),
                     row["loop_frames_per_s"].get<double>());
@@ -579,7 +582,9 @@ nlohmann::json BenchNode(const AssetSource& assets, const std::string& backends,
                   std::to_string(w) + " --height " + std::to_string(h) + AssetsArg(assets) + " --backend " +
                   backend + " --msaa " + c.msaa + " --jobs " + std::to_string(c.jobs) + " --worker-mode " + c.mode,
         dir);
-    const std::string label = "--jobs " + std::to_string(c.jobs) + " " + c.mode + "es, msaa " + c.msaa;
+    const std::string label = "--jobs " + std::to_string(c.jobs) + " " + (c.mode == "process" ? "processes" : "threads") +
+                              ", msaa " + c.msaa;
+    if (c.msaa == "0" && !record_rows.empty() && record_rows.back().value("msaa", -1) == 0) continue;  // auto was 0
     if (run.child.exit_code != 0) {
       record_rows.push_back({{"jobs", c.jobs}, {"worker_mode", c.mode}, {"msaa_requested", c.msaa},
                              {"skipped", "record failed (exit " + std::to_string(run.child.exit_code) + ")"}});
