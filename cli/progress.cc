@@ -8,14 +8,13 @@ namespace fetchscope::cli {
 namespace {
 
 double SteadySeconds() {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch())
-      .count();
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
 
 }  // namespace
 
-ProgressReporter::ProgressReporter(const std::string& label, int episodes,
-                                   long frames_per_episode, bool quiet)
+ProgressReporter::ProgressReporter(const std::string& label, int episodes, long frames_per_episode,
+                                   bool quiet)
     : ProgressReporter(
           [&] {
             Options o;
@@ -57,16 +56,15 @@ std::string ProgressReporter::Line() const {
   }
   char line[256];
   if (o_.terminal) {  // the bar as it has always been
-    std::snprintf(line, sizeof(line), "%s: %d/%d episodes  frame %ld/%ld  %.1f frames/s  ETA %.0f s",
-                  o_.label.c_str(), done_, o_.episodes, frames_, total, fps,
-                  fps > 0 ? left / fps : 0.0);
+    std::snprintf(line, sizeof(line),
+                  "%s: %d/%d episodes  frame %ld/%ld  %.1f frames/s  ETA %.0f s", o_.label.c_str(),
+                  done_, o_.episodes, frames_, total, fps, fps > 0 ? left / fps : 0.0);
     return line;
   }
   const int percent = o_.episodes > 0 ? 100 * done_ / o_.episodes : 100;
   std::snprintf(line, sizeof(line),
                 "%s: progress %d/%d episodes (%d%%), %ld/%ld frames, %.1f frames/s, ETA %s",
-                o_.label.c_str(), done_, o_.episodes, percent,
-                frames_, total, fps, eta);
+                o_.label.c_str(), done_, o_.episodes, percent, frames_, total, fps, eta);
   return line;
 }
 

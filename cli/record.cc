@@ -1,5 +1,5 @@
-// fetchscope record: episodes -> a run folder of videos (MP4, WebM and/or GIF: --format),
-// contact sheets, trajectories and one manifest. The episodes run on the episode scheduler (cli/episode_scheduler.h): --jobs N
+// fetchscope record: episodes -> a run folder of videos, contact sheets, trajectories and
+// one manifest. The episodes run on the episode scheduler (cli/episode_scheduler.h): --jobs N
 // worker processes, each with its own env, policy, GL context, renderer and encoders; the
 // parent decides the GPUs and the encoder once (cli/node_probe.h), owns progress and signals,
 // and writes the manifest. In a worker, rendering and encoding overlap: the render thread
@@ -55,7 +55,7 @@ struct RecordOptions {
   std::string codec = "auto";
   int crf = 23;
   std::string preset;
-  std::string formats = "mp4";      // --format: comma list of mp4, webm, gif
+  std::string formats = "mp4";  // --format: comma list of mp4, webm, gif
   int gif_fps = 10;
   int gif_width = 320;
   int sheet_every = 0;

@@ -102,8 +102,9 @@ std::vector<std::string> SplitLines(const std::string& text) {
 
 void CheckPixelSize(int pixel_size) {
   if (pixel_size < kMinPixelSize || pixel_size > kMaxPixelSize) {
-    throw UsageError("text pixel size " + std::to_string(pixel_size) + " is out of range: accepted " +
-                     std::to_string(kMinPixelSize) + ".." + std::to_string(kMaxPixelSize));
+    throw UsageError("text pixel size " + std::to_string(pixel_size) +
+                     " is out of range: accepted " + std::to_string(kMinPixelSize) + ".." +
+                     std::to_string(kMaxPixelSize));
   }
 }
 
@@ -148,8 +149,9 @@ fs::path FindFontFile() {
   tried.push_back("fontconfig 'DejaVu Sans' (no match)");
   std::string list;
   for (const std::string& t : tried) list += (list.empty() ? "" : ", ") + t;
-  throw RunError("no font for drawing text: tried " + list +
-                 "; install Debian package fonts-dejavu-core or set FETCHSCOPE_FONT to a .ttf file");
+  throw RunError(
+      "no font for drawing text: tried " + list +
+      "; install Debian package fonts-dejavu-core or set FETCHSCOPE_FONT to a .ttf file");
 }
 
 struct Font::Impl {

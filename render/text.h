@@ -42,10 +42,10 @@ struct TextMetrics {
 
 /// How to draw a piece of text.
 struct TextStyle {
-  int pixel_size = 12;                 ///< em size in pixels, 4..512
-  Rgb color = {255, 255, 255};         ///< glyph colour, blended by coverage
-  std::optional<Rgb> background;       ///< when set, a filled box behind the text
-  int padding = 0;                     ///< box margin around the text box, pixels (>= 0)
+  int pixel_size = 12;            ///< em size in pixels, 4..512
+  Rgb color = {255, 255, 255};    ///< glyph colour, blended by coverage
+  std::optional<Rgb> background;  ///< when set, a filled box behind the text
+  int padding = 0;                ///< box margin around the text box, pixels (>= 0)
 };
 
 /// The font file text is drawn with, found in the order given at the top of this file.

@@ -271,12 +271,12 @@ struct VideoWriter::Impl {
   int frames_encoded = 0;
   bool finished = false;
   bool gif = false;
-  int gif_fps = 0;              // options.gif_fps, at most options.fps
-  FilterGraphPtr gif_graph;     // buffer -> scale -> split -> palettegen/paletteuse -> buffersink
+  int gif_fps = 0;           // options.gif_fps, at most options.fps
+  FilterGraphPtr gif_graph;  // buffer -> scale -> split -> palettegen/paletteuse -> buffersink
   AVFilterContext* gif_source = nullptr;  // owned by gif_graph
   AVFilterContext* gif_sink = nullptr;    // owned by gif_graph
-  FramePtr gif_input;           // RGB24 frame handed to the graph
-  FramePtr gif_output;          // PAL8 frame out of the graph
+  FramePtr gif_input;                     // RGB24 frame handed to the graph
+  FramePtr gif_output;                    // PAL8 frame out of the graph
 };
 
 VideoWriter::Impl::Impl(const std::string& path, const VideoOptions& opts)
@@ -297,8 +297,9 @@ VideoWriter::Impl::Impl(const std::string& path, const VideoOptions& opts)
     gif_fps = std::min(options.gif_fps, options.fps);
     encoded_width = std::min(options.gif_width, options.width);
     encoded_height = std::max(
-        1, static_cast<int>((static_cast<long>(options.height) * encoded_width * 2 + options.width) /
-                            (2L * options.width)));
+        1,
+        static_cast<int>((static_cast<long>(options.height) * encoded_width * 2 + options.width) /
+                         (2L * options.width)));
     OpenEncoder();
     OpenOutput();
     OpenGifFilter();
@@ -451,11 +452,12 @@ void VideoWriter::Impl::OpenOutput() {
   AVFormatContext* raw = nullptr;
   ClearLastAvError();
   // The format is named: the muxer must not guess it from the temporary name.
-  const char* muxer_name = options.format == "mp4" ? "mp4" : options.format == "webm" ? "webm" : "gif";
+  const char* muxer_name = options.format == "mp4"    ? "mp4"
+                           : options.format == "webm" ? "webm"
+                                                      : "gif";
   if (int rc = avformat_alloc_output_context2(&raw, nullptr, muxer_name, temp_path.c_str());
       rc < 0) {
-    throw RunError(std::string("cannot create a ") + muxer_name + " muxer: " +
-                   DescribeAvError(rc));
+    throw RunError(std::string("cannot create a ") + muxer_name + " muxer: " + DescribeAvError(rc));
   }
   muxer.reset(raw);
   // Matroska writes a random segment UID and the library version unless asked to be bitexact.
@@ -610,10 +612,10 @@ void VideoWriter::Impl::OpenGifFilter() {
   }
   // One palette for the whole clip (stats_mode=full), then each frame mapped onto it with
   // error diffusion; lanczos keeps thin lines when scaling down.
-  const std::string description =
-      "scale=" + std::to_string(encoded_width) + ":" + std::to_string(encoded_height) +
-      ":flags=lanczos,split[a][b];[a]palettegen=stats_mode=full[p];"
-      "[b][p]paletteuse=dither=sierra2_4a";
+  const std::string description = "scale=" + std::to_string(encoded_width) + ":" +
+                                  std::to_string(encoded_height) +
+                                  ":flags=lanczos,split[a][b];[a]palettegen=stats_mode=full[p];"
+                                  "[b][p]paletteuse=dither=sierra2_4a";
   AVFilterInOut* outputs = avfilter_inout_alloc();
   AVFilterInOut* inputs = avfilter_inout_alloc();
   if (!outputs || !inputs) {
@@ -629,8 +631,8 @@ void VideoWriter::Impl::OpenGifFilter() {
   inputs->filter_ctx = gif_sink;
   inputs->pad_idx = 0;
   inputs->next = nullptr;
-  int rc = avfilter_graph_parse_ptr(gif_graph.get(), description.c_str(), &inputs, &outputs,
-                                   nullptr);
+  int rc =
+      avfilter_graph_parse_ptr(gif_graph.get(), description.c_str(), &inputs, &outputs, nullptr);
   avfilter_inout_free(&outputs);
   avfilter_inout_free(&inputs);
   if (rc < 0) {

@@ -1,14 +1,14 @@
 #include "src/sha256.h"
 
+#include <openssl/err.h>
+#include <openssl/evp.h>
+
 #include <algorithm>
 #include <array>
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
 #include <memory>
-
-#include <openssl/err.h>
-#include <openssl/evp.h>
 
 #include "src/errors.h"
 

@@ -244,13 +244,13 @@ TEST(MakeContactSheetTest, LongLabelsStayInsideTheirBar) {
   EXPECT_EQ(CountColor(sheet, first.x + 64, first.y + 64, kSheetMargin, layout.label_bar_height,
                        kSheetBackground),
             kSheetMargin * layout.label_bar_height);
-  EXPECT_EQ(CountColor(sheet, second.x + 64, second.y + 64, kSheetMargin,
-                       layout.label_bar_height, kSheetBackground),
+  EXPECT_EQ(CountColor(sheet, second.x + 64, second.y + 64, kSheetMargin, layout.label_bar_height,
+                       kSheetBackground),
             kSheetMargin * layout.label_bar_height);
   EXPECT_GT(CountInk(sheet, first.x, first.y + 64, 64, layout.label_bar_height), 20);
   // the title is cut before the right margin
-  EXPECT_EQ(CountColor(sheet, sheet.width - kSheetMargin, 0, kSheetMargin,
-                       layout.title_bar_height, kSheetBackground),
+  EXPECT_EQ(CountColor(sheet, sheet.width - kSheetMargin, 0, kSheetMargin, layout.title_bar_height,
+                       kSheetBackground),
             kSheetMargin * layout.title_bar_height);
   EXPECT_GT(CountInk(sheet, 0, 0, sheet.width, layout.title_bar_height), 0);
 }

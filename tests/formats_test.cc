@@ -49,7 +49,8 @@ TEST_F(FormatsTest, EveryFormatPerEpisodeProbedTaggedAndTheSameWithJobs) {
   std::map<int, std::map<std::string, std::string>> files;
   for (int jobs : {1, 2}) {
     const fs::path out = tmp.path() / ("j" + std::to_string(jobs));
-    const auto r = RunFetchscope(run + " --jobs " + std::to_string(jobs) + " --out " + out.string());
+    const auto r =
+        RunFetchscope(run + " --jobs " + std::to_string(jobs) + " --out " + out.string());
     ASSERT_EQ(r.exit_code, 0) << r.output;
     files[jobs] = EpisodeFiles(out);
   }

@@ -104,7 +104,8 @@ TEST(ProgressReporterTest, TerminalRedrawsOneLineAndQuietPrintsNothing) {
       << text;
   EXPECT_EQ(text.find('\n'), std::string::npos);
   progress.Done("done");
-  EXPECT_EQ(Lines(Contents(out)).back().substr(Lines(Contents(out)).back().rfind('\r') + 1), "done");
+  EXPECT_EQ(Lines(Contents(out)).back().substr(Lines(Contents(out)).back().rfind('\r') + 1),
+            "done");
   std::fclose(out);
 
   std::FILE* quiet_out = std::tmpfile();

@@ -138,8 +138,8 @@ TEST(FontTest, MetricsAreSane) {
 
   // twice the size, about twice the width (hinting rounds each advance)
   const std::string sample = "FetchPickAndPlace-v4 seed 12";
-  const double ratio = static_cast<double>(font.Measure(sample, 32).width) /
-                       font.Measure(sample, 16).width;
+  const double ratio =
+      static_cast<double>(font.Measure(sample, 32).width) / font.Measure(sample, 16).width;
   EXPECT_GT(ratio, 1.8);
   EXPECT_LT(ratio, 2.2);
   // proportional, not fixed-width

@@ -400,8 +400,9 @@ INSTANTIATE_TEST_SUITE_P(
                       "GIF width 8 is out of range: accepted 16..4096 pixels"},
         BadOptionCase{"GifTooWide", With([](VideoOptions* o) { o->gif_width = 5000; }),
                       "GIF width 5000 is out of range"},
-        BadOptionCase{"MetadataKeyWithEquals",
-                      With([](VideoOptions* o) { o->metadata = {{"a=b", "c"}}; }),
+        BadOptionCase{"MetadataKeyWithEquals", With([](VideoOptions* o) {
+                        o->metadata = {{"a=b", "c"}};
+                      }),
                       "video metadata key 'a=b' is not usable"}),
     [](const ::testing::TestParamInfo<BadOptionCase>& info) { return info.param.name; });
 
@@ -459,8 +460,11 @@ std::map<std::string, std::string> FormatTags(const fs::path& path) {
 }
 
 const std::vector<std::pair<std::string, std::string>> kTags = {
-    {"env_id", "FetchPush-v4"}, {"seed", "7"}, {"policy", "exec:python3 my policy.py"},
-    {"episode", "3"}, {"fetchscope_version", "0.1.0"}};
+    {"env_id", "FetchPush-v4"},
+    {"seed", "7"},
+    {"policy", "exec:python3 my policy.py"},
+    {"episode", "3"},
+    {"fetchscope_version", "0.1.0"}};
 
 void EncodeBandsAs(const fs::path& path, const std::string& format, int width, int height,
                    int frames, int gif_fps = 10, int gif_width = 320) {
@@ -503,7 +507,8 @@ TEST(VideoWriterTest, Mp4CarriesTheTags) {
   const fs::path path = dir.path() / "tagged.mp4";
   EncodeBandsAs(path, "mp4", 64, 48, 5);
   const auto tags = FormatTags(path);
-  for (const auto& [key, value] : kTags) EXPECT_EQ(tags.count(key) ? tags.at(key) : "", value) << key;
+  for (const auto& [key, value] : kTags)
+    EXPECT_EQ(tags.count(key) ? tags.at(key) : "", value) << key;
 }
 
 TEST(VideoWriterTest, WebmIsVp9WithEveryFrameInOrderAndTags) {
@@ -524,7 +529,8 @@ TEST(VideoWriterTest, WebmIsVp9WithEveryFrameInOrderAndTags) {
   EXPECT_NEAR(std::stod(probe["format"]["duration"].get<std::string>()), 51 / 25.0, 0.05);
   ExpectFramesInOrder(Decode(path), 64, 48, 51);
   const auto tags = FormatTags(path);
-  for (const auto& [key, value] : kTags) EXPECT_EQ(tags.count(key) ? tags.at(key) : "", value) << key;
+  for (const auto& [key, value] : kTags)
+    EXPECT_EQ(tags.count(key) ? tags.at(key) : "", value) << key;
   const std::string data = testing::ReadFile(path);
   EXPECT_EQ(data.substr(0, 4), "\x1a\x45\xdf\xa3");  // EBML magic
 }
@@ -600,8 +606,8 @@ TEST(VideoWriterTest, UnfinishedWebmAndGifLeaveNothingBehind) {
     {
       VideoWriter writer((dir.path() / ("x." + format)).string(), options);
       writer.AddFrame(BandFrame(1, 32, 32).data());
-      EXPECT_EQ(FolderEntries(dir.path()),
-                std::vector<std::string>{".x.partial." + format}) << format;
+      EXPECT_EQ(FolderEntries(dir.path()), std::vector<std::string>{".x.partial." + format})
+          << format;
     }
     EXPECT_TRUE(FolderEntries(dir.path()).empty()) << format;
   }
