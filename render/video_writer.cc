@@ -611,11 +611,12 @@ void VideoWriter::Impl::OpenGifFilter() {
     throw RunError("cannot create the GIF filter sink: " + DescribeAvError(rc));
   }
   // One palette for the whole clip (stats_mode=full), then each frame mapped onto it with
-  // error diffusion; lanczos keeps thin lines when scaling down.
-  const std::string description = "scale=" + std::to_string(encoded_width) + ":" +
-                                  std::to_string(encoded_height) +
-                                  ":flags=lanczos,split[a][b];[a]palettegen=stats_mode=full[p];"
-                                  "[b][p]paletteuse=dither=sierra2_4a";
+  // error diffusion; lanczos keeps thin lines when scaling down, and bitexact keeps swscale off
+  // CPU-specific code paths whose rounding differs, so the bytes are the same on every machine.
+  const std::string description =
+      "scale=" + std::to_string(encoded_width) + ":" + std::to_string(encoded_height) +
+      ":flags=lanczos+accurate_rnd+bitexact,split[a][b];"
+      "[a]palettegen=stats_mode=full[p];[b][p]paletteuse=dither=sierra2_4a";
   AVFilterInOut* outputs = avfilter_inout_alloc();
   AVFilterInOut* inputs = avfilter_inout_alloc();
   if (!outputs || !inputs) {
