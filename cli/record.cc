@@ -1,4 +1,4 @@
-// fetchscope record: episodes -> a run folder of MP4 videos, contact sheets, trajectories and
+// fetchscope record: episodes -> a run folder of videos, contact sheets, trajectories and
 // one manifest. The episodes run on the episode scheduler (cli/episode_scheduler.h): --jobs N
 // worker processes, each with its own env, policy, GL context, renderer and encoders; the
 // parent decides the GPUs and the encoder once (cli/node_probe.h), owns progress and signals,
@@ -26,6 +26,7 @@
 #include "cli/common.h"
 #include "cli/episode_scheduler.h"
 #include "cli/node_probe.h"
+#include "cli/progress.h"
 #include "cli/render_common.h"
 #include "cli/shard.h"
 #include "render/contact_sheet.h"
@@ -54,6 +55,9 @@ struct RecordOptions {
   std::string codec = "auto";
   int crf = 23;
   std::string preset;
+  std::string formats = "mp4";  // --format: comma list of mp4, webm, gif
+  int gif_fps = 10;
+  int gif_width = 320;
   int sheet_every = 0;
   std::string out = "out";
   bool quiet = false;
@@ -70,7 +74,8 @@ struct RecordPlan {
   uint64_t seed = 0;
   AssetSource assets;
   PolicyContext policy_context;
-  VideoOptions video;      // codec already decided
+  VideoOptions video;      // codec already decided; format and metadata set per file
+  std::vector<std::string> formats;  // --format, in the order given
   GpuChoice gpu;           // EGL devices, worker w on devices[w % size]
   int encoders = 1;        // episodes a worker encodes at once
 };
@@ -133,6 +138,21 @@ std::string EpisodeName(int k) {
   return name;
 }
 
+// The options of episode k's video in `format`: the plan's encoder settings plus the tags that
+// trace a clip found alone back to its run (ffprobe -show_format lists them).
+VideoOptions EpisodeVideoOptions(const RecordPlan& plan, int k, const std::string& format) {
+  VideoOptions video = plan.video;
+  video.format = format;
+  video.metadata = {{"title", plan.spec->id + " seed " + std::to_string(plan.seed) +
+                                  " episode " + std::to_string(k) + " (" + plan.o->policy + ")"},
+                    {"env_id", plan.spec->id},
+                    {"seed", std::to_string(plan.seed)},
+                    {"policy", plan.o->policy},
+                    {"episode", std::to_string(k)},
+                    {"fetchscope_version", FETCHSCOPE_VERSION}};
+  return video;
+}
+
 // One episode's encoding, on its own thread: the video frame by frame as frames arrive, then
 // the contact sheet, the trajectory JSON and the manifest entry, reported to the scheduler.
 class EpisodeEncoder {
@@ -142,8 +162,12 @@ class EpisodeEncoder {
         name_(EpisodeName(k)) {
     const std::vector<int> indices = SheetFrameIndices(plan.o->steps + 1, plan.o->sheet_every);
     on_sheet_.insert(indices.begin(), indices.end());
-    // the writer opens here, on the render thread, so a bad folder fails before any frame
-    writer_.emplace((fs::path(plan.o->out) / (name_ + ".mp4")).string(), plan.video);
+    // the writers open here, on the render thread, so a bad folder fails before any frame
+    for (const std::string& format : plan.formats) {
+      writers_.emplace_back(
+          (fs::path(plan.o->out) / (name_ + "." + VideoFormatExtension(format))).string(),
+          EpisodeVideoOptions(plan, k, format));
+    }
     thread_ = std::thread([this] { Body(); });
   }
   ~EpisodeEncoder() {
@@ -198,7 +222,7 @@ class EpisodeEncoder {
         if (!error_) {
           try {
             const auto t0 = Clock::now();
-            writer_->AddFrame(f->rgb.data());
+            for (VideoWriter& writer : writers_) writer.AddFrame(f->rgb.data());
             encode_s_ += Since(t0);
             if (on_sheet_.count(f->t)) AddTile(*f);
           } catch (...) {
@@ -220,7 +244,7 @@ class EpisodeEncoder {
         }
       }
       pool_.Release(held);
-      if (error_ || item.second == Command::kAbort) writer_.reset();  // removes the partial video
+      if (error_ || item.second == Command::kAbort) writers_.clear();  // removes partial videos
       finished_.store(true);
       return;
     }
@@ -233,7 +257,7 @@ class EpisodeEncoder {
   void Finalize() {
     const RecordOptions& o = *plan_.o;
     const auto t0 = Clock::now();
-    writer_->Finish();
+    for (VideoWriter& writer : writers_) writer.Finish();
     const int steps = static_cast<int>(episode_.steps.size()) - 1;
     const bool complete = steps == o.steps;
     char title[256];
@@ -252,19 +276,27 @@ class EpisodeEncoder {
     WriteJson((fs::path(o.out) / (name_ + ".json")).string(), trajectory);
     const double write_s = Since(t0);
     const bool success = episode_.steps.back().is_success;
+    nlohmann::json videos = nlohmann::json::object();  // format -> file and frames in it
+    for (size_t i = 0; i < writers_.size(); ++i) {
+      videos[plan_.formats[i]] = {
+          {"file", fs::path(writers_[i].path()).filename().string()},
+          {"frames", writers_[i].frames_encoded()}};
+    }
+    const VideoWriter& first = writers_.front();
     channel_.Done(k_, {{"index", k_},
-                       {"video", name_ + ".mp4"},
+                       {"video", fs::path(first.path()).filename().string()},
+                       {"videos", videos},
                        {"sheet", name_ + "_sheet.png"},
                        {"trajectory", name_ + ".json"},
-                       {"frames", writer_->frames_written()},
+                       {"frames", first.frames_written()},
                        {"steps", steps},
                        {"complete", complete},
                        {"return", JsonDouble(episode_.episode_return)},
                        {"is_success", success},
                        {"worker", worker_},
-                       {"codec", writer_->codec_name()},
-                       {"encoded_width", writer_->encoded_width()},
-                       {"encoded_height", writer_->encoded_height()},
+                       {"codec", first.codec_name()},
+                       {"encoded_width", first.encoded_width()},
+                       {"encoded_height", first.encoded_height()},
                        {"timings_s", {{"sim", sim_s_}, {"render", render_s_},
                                       {"encode", encode_s_}, {"write", write_s}}}});
   }
@@ -276,7 +308,7 @@ class EpisodeEncoder {
   WorkerChannel& channel_;
   const std::string name_;
   std::set<int> on_sheet_;
-  std::optional<VideoWriter> writer_;
+  std::vector<VideoWriter> writers_;  // one per plan.formats entry, in that order
   std::vector<SheetTile> tiles_;
   EpisodeRecord episode_;
   double sim_s_ = 0, render_s_ = 0, encode_s_ = 0;
@@ -397,45 +429,6 @@ class RecordRunner : public EpisodeRunner {
   std::deque<std::unique_ptr<EpisodeEncoder>> encoders_;
 };
 
-// The progress line on stderr, fed by the scheduler in the parent.
-class Progress {
- public:
-  Progress(bool quiet, int episodes, int frames_per_episode)
-      : quiet_(quiet), tty_(isatty(STDERR_FILENO)), episodes_(episodes), per_(frames_per_episode),
-        start_(Clock::now()) {}
-  void Frames(int n) {
-    frames_ += n;
-    Draw();
-  }
-  void EpisodeDone() { ++done_; }
-  void Done(const std::string& summary) {
-    if (quiet_) return;
-    if (tty_) std::fprintf(stderr, "\r%*s\r", 78, "");
-    std::fprintf(stderr, "%s\n", summary.c_str());
-  }
-  long frames() const { return frames_; }
-
- private:
-  void Draw() {
-    if (quiet_ || !tty_) return;
-    const double elapsed = Since(start_);
-    if (elapsed - last_ < 0.1) return;
-    last_ = elapsed;
-    const double fps = frames_ / elapsed;
-    const long total = static_cast<long>(episodes_) * per_;
-    const double eta = fps > 0 ? (total - frames_) / fps : 0;
-    std::fprintf(stderr, "\rrecord: %d/%d episodes  frame %ld/%ld  %.1f frames/s  ETA %.0f s   ",
-                 done_, episodes_, frames_, total, fps, eta);
-  }
-
-  bool quiet_, tty_;
-  int episodes_, per_;
-  Clock::time_point start_;
-  long frames_ = 0;
-  int done_ = 0;
-  double last_ = -1;
-};
-
 // llvmpipe starts one rasteriser thread per core in every context; with several workers that
 // oversubscribes the cores, so each worker rasterises on its own thread instead (unless the
 // user chose). Hardware drivers ignore the variable.
@@ -471,6 +464,9 @@ void RunRecord(const RecordOptions& o, const std::string& command_line) {
   plan.video.codec = o.codec;
   plan.video.crf = o.crf;
   plan.video.preset = o.preset;
+  plan.video.gif_fps = o.gif_fps;
+  plan.video.gif_width = o.gif_width;
+  plan.formats = ParseVideoFormats(o.formats);
   ValidateVideoOptions(plan.video);
   const std::vector<int> episodes = ShardEpisodes(shard, o.episodes);
   const int jobs = ResolveJobs(o.jobs, static_cast<int>(episodes.size()));
@@ -504,7 +500,7 @@ void RunRecord(const RecordOptions& o, const std::string& command_line) {
                    (ec ? ec.message() : std::string("a file is in the way")));
   }
 
-  Progress progress(o.quiet, static_cast<int>(episodes.size()), o.steps + 1);
+  ProgressReporter progress("record", static_cast<int>(episodes.size()), o.steps + 1, o.quiet);
   int successes = 0;
   ScheduleOptions schedule;
   schedule.episodes = episodes;
@@ -599,7 +595,9 @@ void RunRecord(const RecordOptions& o, const std::string& command_line) {
                  {"fps", o.fps}, {"width", o.view.width}, {"height", o.view.height},
                  {"encoded_width", (o.view.width + 1) & ~1}, {"encoded_height", (o.view.height + 1) & ~1},
                  {"encoder_threads", plan.video.threads}, {"encoders_per_worker", plan.encoders},
-                 {"container", "mp4"}, {"pix_fmt", "yuv420p"}}},
+                 {"container", plan.formats.front()}, {"formats", plan.formats},
+                 {"gif", {{"fps", std::min(o.gif_fps, o.fps)}, {"width", o.gif_width}}},
+                 {"pix_fmt", "yuv420p"}}},
       {"versions", VersionsJson()},
       {"timings_s", {{"wall", wall}, {"sim", timings["sim"]}, {"render", timings["render"]},
                      {"encode", timings["encode"]}, {"write", timings["write"]}}},
@@ -635,7 +633,9 @@ void RunRecord(const RecordOptions& o, const std::string& command_line) {
 void RegisterRecord(CLI::App& app) {
   auto o = std::make_shared<RecordOptions>();
   CLI::App* sub = app.add_subcommand(
-      "record", "Record episodes: episode_NNN.mp4, episode_NNN_sheet.png, episode_NNN.json, manifest.json");
+      "record",
+      "Record episodes: episode_NNN.mp4 (.webm, .gif: --format), episode_NNN_sheet.png, "
+      "episode_NNN.json, manifest.json");
   AddEnvOptions(sub, &o->env);
   AddViewOptions(sub, &o->view);
   sub->add_option("--episodes", o->episodes, "Number of episodes")->capture_default_str()->check(CLI::Range(1, 1000000));
@@ -650,6 +650,16 @@ void RegisterRecord(CLI::App& app) {
       ->capture_default_str();
   sub->add_option("--crf", o->crf, "H.264 quality, 0 (lossless) .. 51 (worst)")->capture_default_str();
   sub->add_option("--preset", o->preset, std::string("Encoder preset (default ") + kDefaultVideoPreset + ")");
+  sub->add_option("--format", o->formats,
+                  "Video formats, a comma list: mp4 (H.264), webm (VP9, plays in every browser and "
+                  "wandb), gif (one palette per clip, scaled by --gif-fps/--gif-width); one file "
+                  "per episode and format")
+      ->capture_default_str();
+  sub->add_option("--gif-fps", o->gif_fps, "GIF frame rate, 1..50 (at most --fps)")
+      ->capture_default_str();
+  sub->add_option("--gif-width", o->gif_width,
+                  "GIF width in pixels, 16..4096 (never wider than the frames; height keeps the aspect)")
+      ->capture_default_str();
   sub->add_option("--sheet-every", o->sheet_every, "Contact sheet: every K-th frame (0: about 12 tiles); the last frame is always included")
       ->capture_default_str()->check(CLI::Range(0, 1000));
   sub->add_option("--out", o->out, "Output folder")->capture_default_str();

@@ -13,7 +13,6 @@ namespace {
 constexpr int kMinTileWidth = 16;
 constexpr int kMaxTileWidth = 4096;
 constexpr int kLabelLines = 2;
-constexpr int kLabelPadding = 3;  // left and top inset of label text, pixels
 
 // Source pixels that cover one destination pixel, with their box-filter weights.
 struct Span {
@@ -92,23 +91,14 @@ void FillRect(SheetImage* image, int x0, int y0, int width, int height, Rgb colo
   }
 }
 
-// Cuts `line` so it is at most `max_width` pixels wide at `scale`, marking a
-// cut with "..".
-std::string FitLine(const std::string& line, int max_width, int scale) {
-  if (TextWidth(line, scale) <= max_width) return line;
-  std::string cut = line;
-  while (!cut.empty() && TextWidth(cut + "..", scale) > max_width) cut.pop_back();
-  return cut.empty() ? std::string() : cut + "..";
-}
-
 // The first kLabelLines lines of `label`, each fitted to `max_width`.
-std::string FitLabel(const std::string& label, int max_width) {
+std::string FitLabel(const Font& font, const std::string& label, int pixel_size, int max_width) {
   std::string fitted;
   std::size_t start = 0;
   for (int line = 0; line < kLabelLines && start <= label.size(); ++line) {
     const std::size_t end = std::min(label.find('\n', start), label.size());
     if (line > 0) fitted += '\n';
-    fitted += FitLine(label.substr(start, end - start), max_width, kSheetLabelScale);
+    fitted += font.Fit(label.substr(start, end - start), pixel_size, max_width);
     start = end + 1;
   }
   return fitted;
@@ -120,6 +110,20 @@ int ScaledHeight(const SheetTile& tile, int tile_width) {
 }
 
 }  // namespace
+
+SheetLayout ContactSheetLayout(int tile_width) {
+  const Font& font = Font::Default();
+  SheetLayout layout;
+  layout.label_pixel_size = std::clamp(static_cast<int>(std::lround(tile_width / 20.0)), 9, 48);
+  layout.title_pixel_size = static_cast<int>(std::lround(1.5 * layout.label_pixel_size));
+  const TextMetrics label = font.Measure("", layout.label_pixel_size);
+  const TextMetrics title = font.Measure("", layout.title_pixel_size);
+  layout.label_line_height = label.line_height;
+  layout.label_bar_height =
+      2 * kSheetLabelPadding + label.ascent + label.line_height + label.descent;
+  layout.title_bar_height = kSheetMargin + title.ascent + title.descent;
+  return layout;
+}
 
 SheetImage MakeContactSheet(const std::string& title, const std::vector<SheetTile>& tiles,
                             int tile_width, int columns) {
@@ -151,32 +155,41 @@ SheetImage MakeContactSheet(const std::string& title, const std::vector<SheetTil
   for (const SheetTile& tile : tiles)
     cell_height = std::max(cell_height, ScaledHeight(tile, tile_width));
 
+  const Font& font = Font::Default();
+  const SheetLayout layout = ContactSheetLayout(tile_width);
   SheetImage sheet;
   sheet.width = kSheetMargin + columns * (tile_width + kSheetMargin);
-  sheet.height = kSheetTitleBarHeight + rows * (kSheetMargin + cell_height + kSheetLabelBarHeight) +
-                 kSheetMargin;
+  sheet.height = layout.title_bar_height +
+                 rows * (kSheetMargin + cell_height + layout.label_bar_height) + kSheetMargin;
   sheet.rgb.resize(static_cast<std::size_t>(sheet.width) * sheet.height * 3);
   FillRect(&sheet, 0, 0, sheet.width, sheet.height, kSheetBackground);
 
   // A long title drops to the label size before it is cut.
   const int title_room = sheet.width - 2 * kSheetMargin;
   const std::string first_line = title.substr(0, title.find('\n'));
-  const int title_scale =
-      TextWidth(first_line, kSheetTitleScale) <= title_room ? kSheetTitleScale : kSheetLabelScale;
-  const int title_y = kSheetMargin;  // inset from the top as from the left
-  DrawText(sheet.rgb.data(), sheet.width, sheet.height, kSheetMargin, title_y,
-           FitLine(first_line, title_room, title_scale), title_scale, kSheetText);
+  const int title_size = font.Measure(first_line, layout.title_pixel_size).width <= title_room
+                             ? layout.title_pixel_size
+                             : layout.label_pixel_size;
+  TextStyle title_style;
+  title_style.pixel_size = title_size;
+  title_style.color = kSheetText;
+  font.Draw(sheet.rgb.data(), sheet.width, sheet.height, kSheetMargin, kSheetMargin,
+            font.Fit(first_line, title_size, title_room), title_style);
 
-  const int label_room = tile_width - 2 * kLabelPadding;
+  TextStyle label_style;
+  label_style.pixel_size = layout.label_pixel_size;
+  label_style.color = kSheetText;
+  const int label_room = tile_width - 2 * kSheetLabelPadding;
   for (int i = 0; i < n; ++i) {
     const int x0 = kSheetMargin + (i % columns) * (tile_width + kSheetMargin);
-    const int y0 = kSheetTitleBarHeight + kSheetMargin +
-                   (i / columns) * (kSheetMargin + cell_height + kSheetLabelBarHeight);
+    const int y0 = layout.title_bar_height + kSheetMargin +
+                   (i / columns) * (kSheetMargin + cell_height + layout.label_bar_height);
     PasteScaled(tiles[i], tile_width, ScaledHeight(tiles[i], tile_width), &sheet, x0, y0);
     const int bar_y = y0 + cell_height;
-    FillRect(&sheet, x0, bar_y, tile_width, kSheetLabelBarHeight, kSheetLabelBar);
-    DrawText(sheet.rgb.data(), sheet.width, sheet.height, x0 + kLabelPadding, bar_y + kLabelPadding,
-             FitLabel(tiles[i].label, label_room), kSheetLabelScale, kSheetText);
+    FillRect(&sheet, x0, bar_y, tile_width, layout.label_bar_height, kSheetLabelBar);
+    font.Draw(sheet.rgb.data(), sheet.width, sheet.height, x0 + kSheetLabelPadding,
+              bar_y + kSheetLabelPadding,
+              FitLabel(font, tiles[i].label, layout.label_pixel_size, label_room), label_style);
   }
   return sheet;
 }

@@ -1,8 +1,11 @@
 // Contact sheets: a grid of downscaled frames with a label under each and a
 // title on top, as one RGB image (written to PNG by the caller).
 //
-// Layout, all in pixels (M = kSheetMargin, T = kSheetTitleBarHeight,
-// L = kSheetLabelBarHeight, W = tile_width, H = tallest scaled tile):
+// Text is DejaVu Sans through FreeType (render/text.h), sized to the tiles:
+// see ContactSheetLayout().
+//
+// Layout, all in pixels (M = kSheetMargin, T = title_bar_height,
+// L = label_bar_height of ContactSheetLayout(W), W = tile_width, H = tallest scaled tile):
 //   width  = M + columns * (W + M)
 //   height = T + rows * (M + H + L) + M
 // Tile i sits in row i / columns, column i % columns, its top-left corner at
@@ -14,25 +17,38 @@
 #include <string>
 #include <vector>
 
-#include "render/bitmap_font.h"
+#include "render/text.h"
 
 namespace fetchscope {
 
 inline constexpr int kSheetMargin = 8;                 ///< gap around and between cells, pixels
-inline constexpr int kSheetTitleBarHeight = 28;        ///< title band at the top, pixels
-inline constexpr int kSheetLabelBarHeight = 24;        ///< band under each tile (2 lines), pixels
-inline constexpr int kSheetTitleScale = 2;             ///< font scale of the title
-inline constexpr int kSheetLabelScale = 1;             ///< font scale of the labels
 inline constexpr Rgb kSheetBackground = {24, 24, 28};  ///< behind everything
 inline constexpr Rgb kSheetLabelBar = {44, 44, 50};    ///< label band fill
 inline constexpr Rgb kSheetText = {235, 235, 235};     ///< title and label text
+
+/// Text sizes and bands of a sheet, all in pixels, from the tile width W:
+///   label_pixel_size = clamp(round(W / 20), 9, 48)   (12 at the default W = 240)
+///   title_pixel_size = round(1.5 * label_pixel_size)
+///   label_bar_height = 2 * kSheetLabelPadding + two label lines (ascent + line height + descent)
+///   title_bar_height = kSheetMargin + one title line (ascent + descent)
+/// Throws RunError if the font cannot be found (render/text.h).
+struct SheetLayout {
+  int label_pixel_size = 0;
+  int title_pixel_size = 0;
+  int label_bar_height = 0;
+  int title_bar_height = 0;
+  int label_line_height = 0;  ///< baseline-to-baseline distance of the label lines
+};
+SheetLayout ContactSheetLayout(int tile_width);
+
+inline constexpr int kSheetLabelPadding = 3;  ///< left and top inset of label text, pixels
 
 /// One frame for the sheet.
 struct SheetTile {
   std::vector<uint8_t> rgb;  ///< RGB24, width * height * 3 bytes, row 0 = top
   int width = 0;             ///< pixels
   int height = 0;            ///< pixels
-  std::string label;         ///< up to 2 lines separated by '\n'; longer lines are cut with ".."
+  std::string label;         ///< up to 2 lines separated by '\n'; longer lines are cut with "..."
 };
 
 /// An RGB24 image, row 0 = top.
@@ -46,7 +62,7 @@ struct SheetImage {
 /// (0 = ceil(sqrt(n)); never more than n), each tile scaled to `tile_width`
 /// pixels wide keeping its aspect (box filter: every source pixel counts, so
 /// thin lines survive downscaling), its label in a bar underneath and `title`
-/// on top (cut with ".." if wider than the sheet). Throws UsageError for
+/// on top (cut with "..." if wider than the sheet). Throws UsageError for
 /// tile_width outside 16..4096 or negative columns, RunError for a tile whose
 /// buffer does not match its size (naming the tile).
 SheetImage MakeContactSheet(const std::string& title, const std::vector<SheetTile>& tiles,

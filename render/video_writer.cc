@@ -6,7 +6,10 @@
 #include <cstdarg>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <mutex>
+#include <sstream>
 #include <system_error>
 #include <utility>
 #include <vector>
@@ -15,6 +18,9 @@
 #include "src/errors.h"
 
 extern "C" {
+#include <libavfilter/avfilter.h>
+#include <libavfilter/buffersink.h>
+#include <libavfilter/buffersrc.h>
 #include <libavutil/error.h>
 #include <libavutil/imgutils.h>
 #include <libavutil/log.h>
@@ -28,6 +34,9 @@ namespace fs = std::filesystem;
 constexpr int kMaxDimension = 8192;
 constexpr int kMaxFps = 1000;
 constexpr const char* kAcceptedCodecs = "auto, libx264, h264_nvenc";
+constexpr int kMaxGifFps = 50;
+constexpr int kMinGifWidth = 16;
+constexpr int kMaxGifWidth = 4096;
 constexpr std::array<const char*, 10> kX264Presets = {
     "ultrafast", "superfast", "veryfast", "faster",   "fast",
     "medium",    "slow",      "slower",   "veryslow", "placebo"};
@@ -98,6 +107,26 @@ void ValidateOptions(const VideoOptions& options) {
         "video crf " + std::to_string(options.crf) +
         " is out of range: accepted 0..51 (lower is better quality, 23 is the default)");
   }
+  if (options.format != "mp4" && options.format != "webm" && options.format != "gif") {
+    throw UsageError("unknown video format " + Quoted(options.format) + ": accepted " +
+                     kVideoFormats);
+  }
+  if (!in_range(options.gif_fps, 1, kMaxGifFps)) {
+    throw UsageError("GIF fps " + std::to_string(options.gif_fps) +
+                     " is out of range: accepted 1.." + std::to_string(kMaxGifFps) +
+                     " (GIF delays are whole centiseconds; browsers slow anything faster)");
+  }
+  if (!in_range(options.gif_width, kMinGifWidth, kMaxGifWidth)) {
+    throw UsageError("GIF width " + std::to_string(options.gif_width) +
+                     " is out of range: accepted " + std::to_string(kMinGifWidth) + ".." +
+                     std::to_string(kMaxGifWidth) + " pixels");
+  }
+  for (const auto& [key, value] : options.metadata) {
+    if (key.empty() || key.find_first_of("=;\n") != std::string::npos) {
+      throw UsageError("video metadata key " + Quoted(key) +
+                       " is not usable: give a non-empty name without '=', ';' or newlines");
+    }
+  }
   if (!options.preset.empty() && PresetIndex(options.preset) < 0) {
     std::string accepted;
     for (const char* name : kX264Presets)
@@ -129,11 +158,55 @@ void CheckOutputFolder(const fs::path& final_path) {
   }
 }
 
-// ".<stem>.partial.mp4" beside the final file: hidden, and never mistaken for
+// ".<stem>.partial.<ext>" beside the final file: hidden, and never mistaken for
 // a finished video by a glob on "*_000.mp4".
-fs::path TemporaryPathFor(const fs::path& final_path) {
-  return final_path.parent_path() / ("." + final_path.stem().string() + ".partial.mp4");
+fs::path TemporaryPathFor(const fs::path& final_path, const std::string& format) {
+  return final_path.parent_path() /
+         ("." + final_path.stem().string() + ".partial." + VideoFormatExtension(format));
 }
+
+// The GIF form of the tags: one comment, "key=value; key=value".
+std::string GifComment(const std::vector<std::pair<std::string, std::string>>& metadata) {
+  std::string comment;
+  for (const auto& [key, value] : metadata) {
+    comment += (comment.empty() ? "" : "; ") + key + "=" + value;
+  }
+  return comment;
+}
+
+// Inserts a GIF89a comment extension holding `comment` after the header, the logical screen
+// descriptor and the global colour table of the GIF file at `path` (FFmpeg's GIF muxer writes
+// no comment; its demuxer, and so ffprobe, reads one as the tag "comment").
+void InsertGifComment(const fs::path& path, const std::string& comment) {
+  std::ifstream in(path, std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  in.close();
+  if (bytes.size() < 13 || bytes.compare(0, 6, "GIF89a") != 0) {
+    throw RunError("cannot tag GIF " + Quoted(path.string()) + ": not a GIF89a file");
+  }
+  const auto flags = static_cast<unsigned char>(bytes[10]);
+  const std::size_t table = (flags & 0x80) ? 3u << ((flags & 7) + 1) : 0;
+  const std::size_t at = 13 + table;
+  if (at > bytes.size()) throw RunError("cannot tag GIF " + Quoted(path.string()) + ": truncated");
+  std::string block = "\x21\xfe";  // extension introducer, comment label
+  for (std::size_t i = 0; i < comment.size(); i += 255) {
+    const std::string piece = comment.substr(i, 255);
+    block += static_cast<char>(piece.size());
+    block += piece;
+  }
+  block += '\0';  // block terminator
+  bytes.insert(at, block);
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+  out.close();
+  if (!out) throw RunError("cannot write GIF " + Quoted(path.string()));
+}
+
+// Frees a filter graph and every filter in it.
+struct FilterGraphDeleter {
+  void operator()(AVFilterGraph* graph) const noexcept { avfilter_graph_free(&graph); }
+};
+using FilterGraphPtr = std::unique_ptr<AVFilterGraph, FilterGraphDeleter>;
 
 // Removes the file it was given (Adopt) on destruction unless Release()d.
 class TemporaryFile {
@@ -173,6 +246,11 @@ struct VideoWriter::Impl {
   void ConvertFrame(const uint8_t* rgb);
   void SendFrame(const AVFrame* frame);
   void Finish();
+  // GIF: the palette filter graph, and frames through it.
+  void OpenGifFilter();
+  void PushGifFrame(const uint8_t* rgb);  // nullptr: end of the clip
+  void DrainGifFilter();
+  bool GifKeeps(int index) const;
 
   std::string final_path;
   VideoOptions options;
@@ -190,7 +268,15 @@ struct VideoWriter::Impl {
   SwsContextPtr converter;      // RGB24 -> yuv420p, BT.709 limited range
   std::vector<uint8_t> padded;  // swscale's input: the frame (odd row/column repeated) + slack
   int frames_written = 0;
+  int frames_encoded = 0;
   bool finished = false;
+  bool gif = false;
+  int gif_fps = 0;           // options.gif_fps, at most options.fps
+  FilterGraphPtr gif_graph;  // buffer -> scale -> split -> palettegen/paletteuse -> buffersink
+  AVFilterContext* gif_source = nullptr;  // owned by gif_graph
+  AVFilterContext* gif_sink = nullptr;    // owned by gif_graph
+  FramePtr gif_input;                     // RGB24 frame handed to the graph
+  FramePtr gif_output;                    // PAL8 frame out of the graph
 };
 
 VideoWriter::Impl::Impl(const std::string& path, const VideoOptions& opts)
@@ -200,9 +286,27 @@ VideoWriter::Impl::Impl(const std::string& path, const VideoOptions& opts)
       encoded_height((opts.height + 1) & ~1) {
   ValidateOptions(options);
   if (options.preset.empty()) options.preset = kDefaultVideoPreset;
-  if (path.empty()) throw UsageError("video path is empty: give a file name ending in .mp4");
+  if (path.empty()) {
+    throw UsageError("video path is empty: give a file name ending in ." +
+                     VideoFormatExtension(options.format));
+  }
   CheckOutputFolder(path);
   InstallAvLogCapture();
+  gif = options.format == "gif";
+  if (gif) {
+    gif_fps = std::min(options.gif_fps, options.fps);
+    encoded_width = std::min(options.gif_width, options.width);
+    encoded_height = std::max(
+        1,
+        static_cast<int>((static_cast<long>(options.height) * encoded_width * 2 + options.width) /
+                         (2L * options.width)));
+    OpenEncoder();
+    OpenOutput();
+    OpenGifFilter();
+    packet.reset(av_packet_alloc());
+    if (!packet) throw RunError("out of memory allocating a video packet");
+    return;
+  }
   OpenEncoder();
   OpenOutput();
 
@@ -245,6 +349,15 @@ void VideoWriter::Impl::ProbeEncoder(const VideoOptions& options) {
 }
 
 void VideoWriter::Impl::OpenEncoder() {
+  if (options.format == "webm" || options.format == "gif") {
+    const std::string name = options.format == "webm" ? "libvpx-vp9" : "gif";
+    std::string failure;
+    if (!TryOpenEncoder(name, &failure)) {
+      throw RunError("video codec " + name + " cannot open (" + failure +
+                     "); install Debian's libavcodec59, which has it");
+    }
+    return;
+  }
   const bool automatic = options.codec == "auto";
   std::string failure;
   if (automatic || options.codec == "h264_nvenc") {
@@ -272,11 +385,13 @@ bool VideoWriter::Impl::TryOpenEncoder(const std::string& name, std::string* fai
     *failure = "out of memory";
     return false;
   }
+  const bool is_gif = name == "gif";
   context->width = encoded_width;
   context->height = encoded_height;
-  context->pix_fmt = AV_PIX_FMT_YUV420P;
+  context->pix_fmt = is_gif ? AV_PIX_FMT_PAL8 : AV_PIX_FMT_YUV420P;
+  // GIF frames keep their input index as pts (frames between gif_fps ticks are dropped)
   context->time_base = AVRational{1, options.fps};
-  context->framerate = AVRational{options.fps, 1};
+  context->framerate = AVRational{is_gif ? gif_fps : options.fps, 1};
   context->sample_aspect_ratio = AVRational{1, 1};
   // A keyframe every 2 s keeps scrubbing through an episode quick.
   context->gop_size = 2 * options.fps;
@@ -285,7 +400,13 @@ bool VideoWriter::Impl::TryOpenEncoder(const std::string& name, std::string* fai
   context->color_primaries = AVCOL_PRI_BT709;
   context->color_trc = AVCOL_TRC_BT709;
   // MP4 keeps SPS/PPS in the avcC box rather than in the stream.
-  context->flags |= AV_CODEC_FLAG_GLOBAL_HEADER;
+  if (!is_gif) context->flags |= AV_CODEC_FLAG_GLOBAL_HEADER;
+  if (is_gif) {
+    context->color_range = AVCOL_RANGE_UNSPECIFIED;
+    context->colorspace = AVCOL_SPC_UNSPECIFIED;
+    context->color_primaries = AVCOL_PRI_UNSPECIFIED;
+    context->color_trc = AVCOL_TRC_UNSPECIFIED;
+  }
 
   const int preset_index = PresetIndex(options.preset);
   AvDictionary codec_options;
@@ -296,6 +417,22 @@ bool VideoWriter::Impl::TryOpenEncoder(const std::string& name, std::string* fai
     codec_options.Set("rc", "vbr");
     codec_options.Set("cq", std::to_string(std::max(options.crf, 1)));
     context->bit_rate = 0;
+  } else if (name == "libvpx-vp9") {
+    // Constant quality (crf with no bitrate cap). x264's crf 23 looks about like VP9's 31, so the
+    // scale is shifted by 8. One thread, no row or tile parallelism: libvpx's output then never
+    // depends on the machine or the number of workers (record runs one encoder per episode).
+    codec_options.Set("crf", std::to_string(std::min(63, options.crf + 8)));
+    codec_options.Set("b", "0");
+    codec_options.Set("deadline", "good");
+    // veryfast (the default) -> cpu-used 5, medium -> 2, slower and slower -> 0
+    codec_options.Set("cpu-used", std::to_string(std::clamp(7 - preset_index, 0, 5)));
+    codec_options.Set("threads", "1");
+    codec_options.Set("row-mt", "0");
+    codec_options.Set("tile-columns", "0");
+    codec_options.Set("frame-parallel", "0");
+    context->bit_rate = 0;
+  } else if (is_gif) {
+    // nothing to set: one palette per clip comes from the filter graph
   } else {
     codec_options.Set("preset", options.preset);
     codec_options.Set("crf", std::to_string(options.crf));
@@ -311,18 +448,27 @@ bool VideoWriter::Impl::TryOpenEncoder(const std::string& name, std::string* fai
 }
 
 void VideoWriter::Impl::OpenOutput() {
-  const fs::path temp_path = TemporaryPathFor(final_path);
+  const fs::path temp_path = TemporaryPathFor(final_path, options.format);
   AVFormatContext* raw = nullptr;
   ClearLastAvError();
   // The format is named: the muxer must not guess it from the temporary name.
-  if (int rc = avformat_alloc_output_context2(&raw, nullptr, "mp4", temp_path.c_str()); rc < 0) {
-    throw RunError("cannot create an MP4 muxer: " + DescribeAvError(rc));
+  const char* muxer_name = options.format == "mp4"    ? "mp4"
+                           : options.format == "webm" ? "webm"
+                                                      : "gif";
+  if (int rc = avformat_alloc_output_context2(&raw, nullptr, muxer_name, temp_path.c_str());
+      rc < 0) {
+    throw RunError(std::string("cannot create a ") + muxer_name + " muxer: " + DescribeAvError(rc));
   }
   muxer.reset(raw);
+  // Matroska writes a random segment UID and the library version unless asked to be bitexact.
+  if (options.format == "webm") muxer->flags |= AVFMT_FLAG_BITEXACT;
+  for (const auto& [key, value] : options.metadata) {
+    av_dict_set(&muxer->metadata, key.c_str(), value.c_str(), 0);
+  }
   stream = avformat_new_stream(muxer.get(), nullptr);
-  if (stream == nullptr) throw RunError("cannot add a video stream to the MP4 muxer");
+  if (stream == nullptr) throw RunError("cannot add a video stream to the video muxer");
   if (int rc = avcodec_parameters_from_context(stream->codecpar, encoder.get()); rc < 0) {
-    throw RunError("cannot copy encoder parameters to the MP4 stream: " + DescribeAvError(rc));
+    throw RunError("cannot copy encoder parameters to the video stream: " + DescribeAvError(rc));
   }
   stream->time_base = encoder->time_base;
   stream->avg_frame_rate = encoder->framerate;
@@ -337,10 +483,11 @@ void VideoWriter::Impl::OpenOutput() {
   AvDictionary muxer_options;
   // faststart: after the last frame the muxer moves the index (moov) in front
   // of the data, so a browser can start playing before the whole file arrives.
-  muxer_options.Set("movflags", "+faststart");
+  // use_metadata_tags: every tag is written (plain MP4 keeps only a few known names).
+  if (options.format == "mp4") muxer_options.Set("movflags", "+faststart+use_metadata_tags");
   if (int rc = avformat_write_header(muxer.get(), muxer_options.address()); rc < 0) {
-    throw RunError("cannot write the MP4 header of " + Quoted(final_path) + ": " +
-                   DescribeAvError(rc));
+    throw RunError("cannot write the " + options.format + " header of " + Quoted(final_path) +
+                   ": " + DescribeAvError(rc));
   }
 }
 
@@ -381,8 +528,10 @@ void VideoWriter::Impl::SendFrame(const AVFrame* input) {
     if (rc < 0) {
       throw RunError("video encoder " + codec_name + " failed: " + DescribeAvError(rc));
     }
+    if (gif && packet->duration <= 0) packet->duration = options.fps / gif_fps;
     av_packet_rescale_ts(packet.get(), encoder->time_base, stream->time_base);
     packet->stream_index = stream->index;
+    ++frames_encoded;
     // Takes the packet's reference and leaves it blank for the next one.
     if (int write_rc = av_interleaved_write_frame(muxer.get(), packet.get()); write_rc < 0) {
       throw RunError("cannot write video " + Quoted(final_path) + ": " +
@@ -396,6 +545,10 @@ void VideoWriter::Impl::Finish() {
   if (frames_written == 0) {
     throw RunError("video " + Quoted(final_path) + " has no frames: nothing written");
   }
+  if (gif) {
+    PushGifFrame(nullptr);  // palettegen sees the whole clip; paletteuse then lets frames out
+    DrainGifFilter();
+  }
   SendFrame(nullptr);
   ClearLastAvError();
   if (int rc = av_write_trailer(muxer.get()); rc < 0) {
@@ -405,6 +558,9 @@ void VideoWriter::Impl::Finish() {
   if (int rc = avio_closep(&muxer->pb); rc < 0) {
     throw RunError("cannot close video " + Quoted(final_path) + ": " +
                    DescribeAvError(rc));
+  }
+  if (gif && !options.metadata.empty()) {
+    InsertGifComment(temporary.path(), GifComment(options.metadata));
   }
   std::error_code error;
   fs::rename(temporary.path(), final_path, error);
@@ -420,6 +576,112 @@ void VideoWriter::Impl::Finish() {
   packet.reset();
   encoder.reset();
   muxer.reset();
+  gif_graph.reset();
+  gif_input.reset();
+  gif_output.reset();
+}
+
+bool VideoWriter::Impl::GifKeeps(int index) const {
+  if (gif_fps >= options.fps || index == 0) return true;
+  // the first frame at or after each 1/gif_fps tick
+  const long tick = static_cast<long>(index) * gif_fps / options.fps;
+  const long before = static_cast<long>(index - 1) * gif_fps / options.fps;
+  return tick != before;
+}
+
+void VideoWriter::Impl::OpenGifFilter() {
+  gif_graph.reset(avfilter_graph_alloc());
+  gif_input.reset(av_frame_alloc());
+  gif_output.reset(av_frame_alloc());
+  if (!gif_graph || !gif_input || !gif_output) throw RunError("out of memory for the GIF filter");
+  gif_graph->nb_threads = 1;  // the same bytes whatever the machine
+  char source_args[160];
+  std::snprintf(source_args, sizeof(source_args),
+                "video_size=%dx%d:pix_fmt=%d:time_base=1/%d:pixel_aspect=1/1", options.width,
+                options.height, static_cast<int>(AV_PIX_FMT_RGB24), options.fps);
+  ClearLastAvError();
+  if (int rc = avfilter_graph_create_filter(&gif_source, avfilter_get_by_name("buffer"), "in",
+                                            source_args, nullptr, gif_graph.get());
+      rc < 0) {
+    throw RunError("cannot create the GIF filter source: " + DescribeAvError(rc));
+  }
+  if (int rc = avfilter_graph_create_filter(&gif_sink, avfilter_get_by_name("buffersink"), "out",
+                                            nullptr, nullptr, gif_graph.get());
+      rc < 0) {
+    throw RunError("cannot create the GIF filter sink: " + DescribeAvError(rc));
+  }
+  // One palette for the whole clip (stats_mode=full), then each frame mapped onto it with
+  // error diffusion; lanczos keeps thin lines when scaling down, and bitexact keeps swscale off
+  // CPU-specific code paths whose rounding differs, so the bytes are the same on every machine.
+  const std::string description =
+      "scale=" + std::to_string(encoded_width) + ":" + std::to_string(encoded_height) +
+      ":flags=lanczos+accurate_rnd+bitexact,split[a][b];"
+      "[a]palettegen=stats_mode=full[p];[b][p]paletteuse=dither=sierra2_4a";
+  AVFilterInOut* outputs = avfilter_inout_alloc();
+  AVFilterInOut* inputs = avfilter_inout_alloc();
+  if (!outputs || !inputs) {
+    avfilter_inout_free(&outputs);
+    avfilter_inout_free(&inputs);
+    throw RunError("out of memory for the GIF filter");
+  }
+  outputs->name = av_strdup("in");
+  outputs->filter_ctx = gif_source;
+  outputs->pad_idx = 0;
+  outputs->next = nullptr;
+  inputs->name = av_strdup("out");
+  inputs->filter_ctx = gif_sink;
+  inputs->pad_idx = 0;
+  inputs->next = nullptr;
+  int rc =
+      avfilter_graph_parse_ptr(gif_graph.get(), description.c_str(), &inputs, &outputs, nullptr);
+  avfilter_inout_free(&outputs);
+  avfilter_inout_free(&inputs);
+  if (rc < 0) {
+    throw RunError("cannot build the GIF palette filter (" + description +
+                   "): " + DescribeAvError(rc) + "; Debian's libavfilter8 has it");
+  }
+  if (rc = avfilter_graph_config(gif_graph.get(), nullptr); rc < 0) {
+    throw RunError("cannot configure the GIF palette filter: " + DescribeAvError(rc));
+  }
+}
+
+void VideoWriter::Impl::PushGifFrame(const uint8_t* rgb) {
+  ClearLastAvError();
+  if (rgb == nullptr) {
+    if (int rc = av_buffersrc_add_frame_flags(gif_source, nullptr, 0); rc < 0) {
+      throw RunError("cannot end the GIF clip: " + DescribeAvError(rc));
+    }
+    return;
+  }
+  AVFrame* in = gif_input.get();
+  av_frame_unref(in);
+  in->format = AV_PIX_FMT_RGB24;
+  in->width = options.width;
+  in->height = options.height;
+  if (int rc = av_frame_get_buffer(in, 0); rc < 0) {
+    throw RunError("cannot allocate a GIF input frame: " + DescribeAvError(rc));
+  }
+  const std::size_t row = static_cast<std::size_t>(options.width) * 3;
+  for (int y = 0; y < options.height; ++y) {
+    std::memcpy(in->data[0] + static_cast<std::size_t>(y) * in->linesize[0], rgb + y * row, row);
+  }
+  in->pts = frames_written;
+  if (int rc = av_buffersrc_add_frame_flags(gif_source, in, AV_BUFFERSRC_FLAG_KEEP_REF); rc < 0) {
+    throw RunError("cannot pass frame " + std::to_string(frames_written) +
+                   " to the GIF filter: " + DescribeAvError(rc));
+  }
+  av_frame_unref(in);
+}
+
+void VideoWriter::Impl::DrainGifFilter() {
+  while (true) {
+    ClearLastAvError();
+    const int rc = av_buffersink_get_frame(gif_sink, gif_output.get());
+    if (rc == AVERROR(EAGAIN) || rc == AVERROR_EOF) return;
+    if (rc < 0) throw RunError("the GIF palette filter failed: " + DescribeAvError(rc));
+    SendFrame(gif_output.get());
+    av_frame_unref(gif_output.get());
+  }
 }
 
 VideoWriter::VideoWriter(const std::string& path, const VideoOptions& options)
@@ -434,6 +696,14 @@ void VideoWriter::AddFrame(const uint8_t* rgb) {
     throw RunError("video " + Quoted(impl_->final_path) +
                    " is already finished: cannot add frames");
   }
+  if (impl_->gif) {
+    if (impl_->GifKeeps(impl_->frames_written)) {
+      impl_->PushGifFrame(rgb);
+      impl_->DrainGifFilter();
+    }
+    ++impl_->frames_written;
+    return;
+  }
   impl_->ConvertFrame(rgb);
   impl_->frame->pts = impl_->frames_written;
   impl_->SendFrame(impl_->frame.get());
@@ -442,12 +712,46 @@ void VideoWriter::AddFrame(const uint8_t* rgb) {
 
 void VideoWriter::Finish() { impl_->Finish(); }
 int VideoWriter::frames_written() const { return impl_->frames_written; }
+int VideoWriter::frames_encoded() const { return impl_->frames_encoded; }
 const std::string& VideoWriter::codec_name() const { return impl_->codec_name; }
 int VideoWriter::encoded_width() const { return impl_->encoded_width; }
 int VideoWriter::encoded_height() const { return impl_->encoded_height; }
 const std::string& VideoWriter::path() const { return impl_->final_path; }
 
 void ValidateVideoOptions(const VideoOptions& options) { ValidateOptions(options); }
+
+std::vector<std::string> ParseVideoFormats(const std::string& list) {
+  std::vector<std::string> formats;
+  std::size_t start = 0;
+  while (true) {
+    const std::size_t end = list.find(',', start);
+    const std::string entry =
+        list.substr(start, end == std::string::npos ? std::string::npos : end - start);
+    if (entry != "mp4" && entry != "webm" && entry != "gif") {
+      throw UsageError("unknown --format " + Quoted(entry) + " in " + Quoted(list) +
+                       ": accepted a comma list of " + kVideoFormats);
+    }
+    if (std::find(formats.begin(), formats.end(), entry) != formats.end()) {
+      throw UsageError("--format " + Quoted(list) + " names " + entry +
+                       " twice: give each format once");
+    }
+    formats.push_back(entry);
+    if (end == std::string::npos) break;
+    start = end + 1;
+  }
+  return formats;
+}
+
+std::string VideoFormatExtension(const std::string& format) {
+  return format == "webm" ? "webm" : format == "gif" ? "gif" : "mp4";
+}
+
+int GifFrameCount(int frames, int fps, int gif_fps) {
+  if (frames <= 0) return 0;
+  if (gif_fps >= fps) return frames;
+  // frames 0 and the first at or after each later 1/gif_fps tick: ticks 0 .. floor((N-1) G / F)
+  return static_cast<int>(static_cast<long>(frames - 1) * gif_fps / fps) + 1;
+}
 
 bool NvidiaDevicePresent() {
   std::error_code error;

@@ -1,11 +1,19 @@
-// H.264 MP4 writer on libavcodec/libavformat/libswscale: RGB frames in,
-// a file that browsers and players open (yuv420p, BT.709 tags, moov atom in
-// front) out. The file appears under its final name only when complete.
+// Video writer on libavcodec/libavformat/libswscale/libavfilter: RGB frames in, a file that
+// browsers and players open out, in one of three formats:
+//   mp4  H.264 (libx264 or h264_nvenc), yuv420p, BT.709 tags, moov atom in front
+//   webm VP9 (libvpx-vp9), yuv420p, BT.709 tags, single-threaded so the bytes never depend on
+//        the machine
+//   gif  one palette per clip (libavfilter palettegen + paletteuse), scaled down to
+//        gif_width and gif_fps so that files stay small
+// Every format carries VideoOptions::metadata as container tags (GIF: one comment,
+// "key=value; key=value"). The file appears under its final name only when complete.
 #pragma once
 
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace fetchscope {
 
@@ -26,9 +34,28 @@ struct VideoOptions {
   /// the machine or the number of workers; record runs several single-threaded encoders at
   /// once instead (one per episode). 0 = libx264's own choice (about 1.5 x cores).
   int threads = 1;
+  /// Container and codec: mp4 (H.264 per `codec`), webm (VP9; `codec` is ignored) or gif.
+  std::string format = "mp4";
+  int gif_fps = 10;     ///< GIF frame rate (1..50), at most `fps` (never duplicates frames)
+  int gif_width = 320;  ///< GIF width in pixels (16..4096), at most `width`; height keeps aspect
+  /// Container tags, in order (e.g. env_id, seed, policy, episode, fetchscope_version): MP4 and
+  /// WebM tags that `ffprobe -show_format` lists; GIF: one comment extension holding them all.
+  std::vector<std::pair<std::string, std::string>> metadata;
 };
 
+/// The formats VideoOptions::format accepts, in the order --format's help lists them.
+inline constexpr const char* kVideoFormats = "mp4, webm, gif";
 
+/// Parses a --format list ("mp4", "webm,gif", ...): each entry once, at least one. Throws
+/// UsageError naming a bad or repeated entry and what is accepted.
+std::vector<std::string> ParseVideoFormats(const std::string& list);
+
+/// The file extension of a format, without the dot: "mp4", "webm", "gif".
+std::string VideoFormatExtension(const std::string& format);
+
+/// Frames a GIF made from `frames` frames at `fps` holds at options' gif_fps: every frame when
+/// gif_fps >= fps, else libavfilter's fps filter picks the frame nearest each 1/gif_fps tick.
+int GifFrameCount(int frames, int fps, int gif_fps);
 
 /// The preset used when VideoOptions::preset is empty. "veryfast" encodes
 /// several times faster than x264's "medium" at a modest size cost, which
@@ -57,13 +84,15 @@ bool NvidiaDevicePresent();
 /// h264_nvenc was asked for and cannot open, or libx264 is missing.
 VideoCodecDecision DecideVideoCodec(const VideoOptions& options);
 
-/// Writes one H.264 MP4 file, frame by frame.
+/// Writes one video file (MP4, WebM or GIF), frame by frame.
 ///
 /// The encoder gets yuv420p, which needs even dimensions: an odd width or
 /// height is padded by one pixel that repeats the last column or row, so the
 /// encoded size is the frame size rounded up to even (encoded_width/height).
 /// Frame i gets pts i in time base 1/fps, so N frames last exactly N / fps s.
-/// The data goes to a temporary ".<stem>.partial.mp4" in the same folder and
+/// A GIF is scaled to gif_width (even sizes not needed) and thinned to gif_fps; its palette is
+/// made from every frame of the clip, so nothing is written to it before Finish().
+/// The data goes to a temporary ".<stem>.partial.<ext>" in the same folder and
 /// is renamed to `path` by Finish(); a writer destroyed unfinished removes it.
 /// Not thread-safe; separate writers may run on separate threads.
 class VideoWriter {
@@ -95,11 +124,14 @@ class VideoWriter {
 
   /// Frames passed to AddFrame so far.
   int frames_written() const;
-  /// The encoder actually used: "libx264" or "h264_nvenc".
+  /// Frames in the file (after Finish(); for a GIF fewer than frames_written() when gif_fps is
+  /// below fps).
+  int frames_encoded() const;
+  /// The encoder actually used: "libx264", "h264_nvenc", "libvpx-vp9" or "gif".
   const std::string& codec_name() const;
-  /// Width in the file: options.width rounded up to even.
+  /// Width in the file: options.width rounded up to even (GIF: the scaled width).
   int encoded_width() const;
-  /// Height in the file: options.height rounded up to even.
+  /// Height in the file: options.height rounded up to even (GIF: the scaled height).
   int encoded_height() const;
   /// The final path given to the constructor.
   const std::string& path() const;

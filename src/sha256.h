@@ -1,12 +1,15 @@
-// SHA-256 (FIPS 180-4), used to record which assets an output was made with.
+// SHA-256 (FIPS 180-4) through OpenSSL's libcrypto EVP interface, used to record which assets an
+// output was made with.
 #pragma once
 
-#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
+#include <memory>
 #include <string>
 #include <vector>
+
+struct evp_md_ctx_st;  // OpenSSL's EVP_MD_CTX, kept out of this header
 
 namespace fetchscope {
 
@@ -14,6 +17,11 @@ namespace fetchscope {
 class Sha256 {
  public:
   Sha256();
+  ~Sha256();
+  Sha256(Sha256&&) noexcept;
+  Sha256& operator=(Sha256&&) noexcept;
+  Sha256(const Sha256&) = delete;
+  Sha256& operator=(const Sha256&) = delete;
 
   /// Feeds `size` more bytes of the message.
   void Update(const void* data, size_t size);
@@ -23,13 +31,11 @@ class Sha256 {
   std::string HexDigest();
 
  private:
-  void ProcessBlock(const uint8_t* block);
-
-  std::array<uint32_t, 8> state_;  // H0..H7
-  std::array<uint8_t, 64> block_;  // pending partial block
-  size_t block_used_ = 0;          // bytes in block_
-  uint64_t total_bytes_ = 0;       // message length so far
-  std::string digest_;             // set once finished
+  struct CtxFree {
+    void operator()(evp_md_ctx_st* ctx) const;
+  };
+  std::unique_ptr<evp_md_ctx_st, CtxFree> ctx_;
+  std::string digest_;  // set once finished
 };
 
 /// SHA-256 of `bytes` as 64 lowercase hex digits.

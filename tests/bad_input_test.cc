@@ -94,8 +94,9 @@ std::string Expand(std::string s, const fs::path& tmp) {
 }
 
 // Files a record run would write for episode 0.
-const std::vector<std::string> kRecordOutputs = {"out/episode_000.mp4", "out/episode_000_sheet.png",
-                                                 "out/episode_000.json", "out/manifest.json"};
+const std::vector<std::string> kRecordOutputs = {
+    "out/episode_000.mp4",  "out/episode_000.webm", "out/episode_000.gif",
+    "out/episode_000_sheet.png", "out/episode_000.json", "out/manifest.json"};
 
 const char kSmall[] = " --width 64 --height 48 --steps 3 ";
 const char kUlimit[] = "trap '' XFSZ; ulimit -f 16; ";  // 8 KiB: SIGXFSZ ignored -> EFBIG
@@ -157,6 +158,17 @@ std::vector<Case> Matrix() {
       {"RenderNoOutput", "render", 2, "--output"},
       {"RecordUnknownCodec", record + "--codec prores", 2, "prores", kRecordOutputs},
       {"RecordUnknownPreset", record + "--preset warp9", 2, "warp9", kRecordOutputs},
+      {"RecordUnknownFormat", record + "--format mp4,avi", 2, "'avi'", kRecordOutputs},
+      {"RecordEmptyFormat", record + "--format mp4,", 2, "--format", kRecordOutputs},
+      {"RecordRepeatedFormat", record + "--format gif,gif", 2, "gif twice", kRecordOutputs},
+      {"RecordGifFpsZero", record + "--format gif --gif-fps 0", 2, "GIF fps 0", kRecordOutputs},
+      {"RecordGifFpsTooHigh", record + "--format gif --gif-fps 99", 2, "GIF fps 99",
+       kRecordOutputs},
+      {"RecordGifFpsText", record + "--format gif --gif-fps ten", 2, "ten", kRecordOutputs},
+      {"RecordGifWidthTooSmall", record + "--format gif --gif-width 4", 2, "GIF width 4",
+       kRecordOutputs},
+      {"RecordGifWidthTooLarge", record + "--format webm --gif-width 9000", 2, "GIF width 9000",
+       kRecordOutputs},
       {"GoldenUnknownSubcommand", "golden frob", 2, "frob"},
       {"GoldenMissingFolder", "golden check --golden-dir {tmp}/nowhere --out {tmp}/g", 2,
        "{tmp}/nowhere"},

@@ -8,6 +8,8 @@
 #include <set>
 #include <sstream>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "tests/test_util.h"
 
@@ -72,7 +74,9 @@ TEST_F(BundleTest, HoldsWhatANodeLacksAndNothingOfGlibcOrTheDriver) {
   for (const char* needed : {"libavcodec.so.59", "libavformat.so.59", "libswscale.so.6",
                              "libmujoco.so.2.2.2", "libpng16.so.16", "libstdc++.so.6",
                              "libEGL.so.1", "libGLdispatch.so.0", "libOpenGL.so.0", "libGL.so.1",
-                             "libcjson.so.1", "libx264.so.164"}) {
+                             "libcjson.so.1", "libx264.so.164", "libavfilter.so.8",
+                             "libvpx.so.7", "libcrypto.so.3", "libfreetype.so.6",
+                             "libfontconfig.so.1"}) {
     EXPECT_TRUE(libs.count(needed)) << needed;
   }
   for (const std::string& lib : libs) {
@@ -104,20 +108,34 @@ TEST_F(BundleTest, EveryDependencyResolvesInsideTheBundle) {
   }
 }
 
-// The launcher, called through a symbolic link from elsewhere, records an episode that plays.
+// The label font travels beside the binary, where render/text.h looks first.
+TEST_F(BundleTest, HoldsTheLabelFontBesideTheBinary) {
+  const fs::path font = root_ / "bin" / "fonts" / "DejaVuSans.ttf";
+  ASSERT_TRUE(fs::is_regular_file(font)) << font;
+  EXPECT_EQ(testing::ReadFile(font),
+            testing::ReadFile("/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf"));
+}
+
+// The launcher, called through a symbolic link from elsewhere, records an episode that plays,
+// in every format, with its contact sheet (text through the bundled FreeType and font).
 TEST_F(BundleTest, BundledBinaryRecordsAnEpisode) {
   TempDir work;
   fs::create_symlink(root_ / "fetchscope", work.path() / "fs");
   const CommandResult r = RunCommand(
       "cd " + work.path().string() +
       " && env -u MUJOCO_GL ./fs record --env-id FetchPush-v4 --policy scripted --episodes 1 "
-      "--steps 5 --width 64 --height 64 --quiet --out run");
+      "--steps 5 --width 64 --height 64 --quiet --format mp4,webm,gif --out run");
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  const fs::path video = work.path() / "run" / "episode_000.mp4";
-  const CommandResult probe = RunCommand(
-      "ffprobe -v error -count_frames -select_streams v:0 -show_entries "
-      "stream=codec_name,nb_read_frames -of csv=p=0 " + video.string());
-  EXPECT_EQ(probe.output, "h264,6\n");
+  for (const auto& [file, expected] : std::vector<std::pair<std::string, std::string>>{
+           {"episode_000.mp4", "h264,6\n"}, {"episode_000.webm", "vp9,6\n"},
+           {"episode_000.gif", "gif,3\n"}}) {
+    const fs::path video = work.path() / "run" / file;
+    const CommandResult probe = RunCommand(
+        "ffprobe -v error -count_frames -select_streams v:0 -show_entries "
+        "stream=codec_name,nb_read_frames -of csv=p=0 " + video.string());
+    EXPECT_EQ(probe.output, expected) << file;
+  }
+  EXPECT_TRUE(fs::is_regular_file(work.path() / "run" / "episode_000_sheet.png"));
   const CommandResult version = RunCommand((root_ / "fetchscope").string() + " --version");
   EXPECT_EQ(version.exit_code, 0) << version.output;
 }

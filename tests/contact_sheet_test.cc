@@ -1,14 +1,13 @@
-// Contact sheet layout, tile scaling and labels, and the bitmap font under them.
+// Contact sheet layout, tile scaling and labels (the text itself: text_test.cc).
 #include "render/contact_sheet.h"
 
 #include <gtest/gtest.h>
 
 #include <cstdint>
-#include <set>
 #include <string>
 #include <vector>
 
-#include "render/bitmap_font.h"
+#include "render/text.h"
 #include "src/errors.h"
 
 namespace fetchscope {
@@ -85,14 +84,40 @@ int CountColor(const SheetImage& image, int x0, int y0, int w, int h, Rgb color)
   return count;
 }
 
+// Pixels in the rectangle that carry text ink: the text is light (235) and anti-aliased, the
+// bars and background under it dark (24..50), so a pixel past half-way is text.
+int CountInk(const SheetImage& image, int x0, int y0, int w, int h) {
+  int count = 0;
+  for (int y = y0; y < y0 + h; ++y) {
+    for (int x = x0; x < x0 + w; ++x) count += PixelAt(image, x, y).g > 140;
+  }
+  return count;
+}
+
 // Top-left corner of tile i, from the layout documented in the header.
 struct Origin {
   int x, y;
 };
 Origin TileOrigin(int i, int columns, int tile_width, int cell_height) {
+  const SheetLayout layout = ContactSheetLayout(tile_width);
   return {kSheetMargin + (i % columns) * (tile_width + kSheetMargin),
-          kSheetTitleBarHeight + kSheetMargin +
-              (i / columns) * (kSheetMargin + cell_height + kSheetLabelBarHeight)};
+          layout.title_bar_height + kSheetMargin +
+              (i / columns) * (kSheetMargin + cell_height + layout.label_bar_height)};
+}
+
+TEST(ContactSheetLayoutTest, TextGrowsWithTheTiles) {
+  const SheetLayout small = ContactSheetLayout(64), usual = ContactSheetLayout(240),
+                    large = ContactSheetLayout(640);
+  EXPECT_EQ(small.label_pixel_size, 9);
+  EXPECT_EQ(usual.label_pixel_size, 12);
+  EXPECT_EQ(large.label_pixel_size, 32);
+  EXPECT_EQ(usual.title_pixel_size, 18);
+  EXPECT_LT(small.label_bar_height, usual.label_bar_height);
+  EXPECT_LT(usual.label_bar_height, large.label_bar_height);
+  EXPECT_LT(usual.title_bar_height, large.title_bar_height);
+  // two lines of labels fit: at least two line heights plus the padding
+  EXPECT_GE(usual.label_bar_height, 2 * usual.label_line_height + 2 * kSheetLabelPadding);
+  EXPECT_GE(usual.label_line_height, usual.label_pixel_size);
 }
 
 const Rgb kPalette[] = {{255, 0, 0},   {0, 255, 0},   {0, 0, 255},     {255, 255, 0},
@@ -103,16 +128,17 @@ TEST(MakeContactSheetTest, SizeFollowsTheLayout) {
   // 5 tiles of 100x50 at width 40 -> 40x20 cells; ceil(sqrt(5)) = 3 columns, 2 rows.
   std::vector<SheetTile> tiles;
   for (int i = 0; i < 5; ++i) tiles.push_back(SolidTile(100, 50, kPalette[i]));
+  const SheetLayout layout = ContactSheetLayout(40);
   SheetImage sheet = MakeContactSheet("title", tiles, 40);
   EXPECT_EQ(sheet.width, kSheetMargin + 3 * (40 + kSheetMargin));
-  EXPECT_EQ(sheet.height,
-            kSheetTitleBarHeight + 2 * (kSheetMargin + 20 + kSheetLabelBarHeight) + kSheetMargin);
+  EXPECT_EQ(sheet.height, layout.title_bar_height +
+                              2 * (kSheetMargin + 20 + layout.label_bar_height) + kSheetMargin);
   EXPECT_EQ(sheet.rgb.size(), static_cast<size_t>(sheet.width) * sheet.height * 3);
 
   sheet = MakeContactSheet("title", tiles, 40, /*columns=*/1);
   EXPECT_EQ(sheet.width, kSheetMargin + 40 + kSheetMargin);
-  EXPECT_EQ(sheet.height,
-            kSheetTitleBarHeight + 5 * (kSheetMargin + 20 + kSheetLabelBarHeight) + kSheetMargin);
+  EXPECT_EQ(sheet.height, layout.title_bar_height +
+                              5 * (kSheetMargin + 20 + layout.label_bar_height) + kSheetMargin);
 
   // more columns than tiles: no empty columns
   sheet = MakeContactSheet("title", tiles, 40, /*columns=*/9);
@@ -173,36 +199,40 @@ TEST(MakeContactSheetTest, TitleAndLabelsAreDrawn) {
                                   SolidTile(64, 64, kPalette[3], "t=10"),
                                   SolidTile(64, 64, kPalette[4], "")};
   const int tile_width = 96, cell_height = 96, columns = 3;
+  const SheetLayout layout = ContactSheetLayout(tile_width);
   const SheetImage sheet = MakeContactSheet("FetchReach-v4 seed 1", tiles, tile_width, columns);
 
-  const int title_text = CountColor(sheet, 0, 0, sheet.width, kSheetTitleBarHeight, kSheetText);
-  EXPECT_GT(title_text, 100);
+  EXPECT_GT(CountInk(sheet, 0, 0, sheet.width, layout.title_bar_height), 60);
 
+  // the first line ends where the second line's box starts
+  const int first_rows = kSheetLabelPadding + layout.label_line_height;
   auto bar_text = [&](int i, int first_row, int rows) {
     const Origin o = TileOrigin(i, columns, tile_width, cell_height);
-    return CountColor(sheet, o.x, o.y + cell_height + first_row, tile_width, rows, kSheetText);
+    return CountInk(sheet, o.x, o.y + cell_height + first_row, tile_width, rows);
   };
   auto bar_fill = [&](int i) {
     const Origin o = TileOrigin(i, columns, tile_width, cell_height);
-    return CountColor(sheet, o.x, o.y + cell_height, tile_width, kSheetLabelBarHeight,
+    return CountColor(sheet, o.x, o.y + cell_height, tile_width, layout.label_bar_height,
                       kSheetLabelBar);
   };
   // two lines on tile 0, one on tile 1, none on tile 2; the bar is filled around the text
-  EXPECT_GT(bar_text(0, 0, kLineHeight), 20);
-  EXPECT_GT(bar_text(0, kLineHeight, kSheetLabelBarHeight - kLineHeight), 20);
-  EXPECT_GT(bar_text(1, 0, kLineHeight), 10);
-  EXPECT_EQ(bar_text(1, kLineHeight, kSheetLabelBarHeight - kLineHeight), 0);
-  EXPECT_EQ(bar_text(2, 0, kSheetLabelBarHeight), 0);
-  EXPECT_EQ(bar_fill(2), tile_width * kSheetLabelBarHeight);
-  EXPECT_GT(bar_fill(0), tile_width * kSheetLabelBarHeight / 2);
+  EXPECT_GT(bar_text(0, 0, first_rows), 20);
+  EXPECT_GT(bar_text(0, first_rows, layout.label_bar_height - first_rows), 20);
+  EXPECT_GT(bar_text(1, 0, first_rows), 10);
+  EXPECT_EQ(bar_text(1, first_rows, layout.label_bar_height - first_rows), 0);
+  EXPECT_EQ(bar_text(2, 0, layout.label_bar_height), 0);
+  EXPECT_EQ(bar_fill(2), tile_width * layout.label_bar_height);
+  EXPECT_GT(bar_fill(0), tile_width * layout.label_bar_height / 2);
 
   // An empty title leaves the title bar plain.
   const SheetImage untitled = MakeContactSheet("", tiles, tile_width, columns);
-  EXPECT_EQ(CountColor(untitled, 0, 0, untitled.width, kSheetTitleBarHeight, kSheetText), 0);
+  EXPECT_EQ(CountColor(untitled, 0, 0, untitled.width, layout.title_bar_height, kSheetBackground),
+            untitled.width * layout.title_bar_height);
 }
 
 TEST(MakeContactSheetTest, LongLabelsStayInsideTheirBar) {
   const std::string long_line(200, 'W');
+  const SheetLayout layout = ContactSheetLayout(64);
   const SheetImage sheet =
       MakeContactSheet(std::string(300, 'M'),
                        {SolidTile(32, 32, kPalette[0], long_line + "\n" + long_line),
@@ -210,18 +240,19 @@ TEST(MakeContactSheetTest, LongLabelsStayInsideTheirBar) {
                        64, 2);
   const Origin first = TileOrigin(0, 2, 64, 64);
   const Origin second = TileOrigin(1, 2, 64, 64);
-  // no text in the margin between the two label bars, nor right of the sheet's last bar
-  EXPECT_EQ(
-      CountColor(sheet, first.x + 64, first.y + 64, kSheetMargin, kSheetLabelBarHeight, kSheetText),
-      0);
-  EXPECT_EQ(CountColor(sheet, second.x + 64, second.y + 64, kSheetMargin, kSheetLabelBarHeight,
-                       kSheetText),
-            0);
+  // no ink in the margin between the two label bars, nor right of the sheet's last bar
+  EXPECT_EQ(CountColor(sheet, first.x + 64, first.y + 64, kSheetMargin, layout.label_bar_height,
+                       kSheetBackground),
+            kSheetMargin * layout.label_bar_height);
+  EXPECT_EQ(CountColor(sheet, second.x + 64, second.y + 64, kSheetMargin, layout.label_bar_height,
+                       kSheetBackground),
+            kSheetMargin * layout.label_bar_height);
+  EXPECT_GT(CountInk(sheet, first.x, first.y + 64, 64, layout.label_bar_height), 20);
   // the title is cut before the right margin
-  EXPECT_EQ(CountColor(sheet, sheet.width - kSheetMargin, 0, kSheetMargin, kSheetTitleBarHeight,
-                       kSheetText),
-            0);
-  EXPECT_GT(CountColor(sheet, 0, 0, sheet.width, kSheetTitleBarHeight, kSheetText), 0);
+  EXPECT_EQ(CountColor(sheet, sheet.width - kSheetMargin, 0, kSheetMargin, layout.title_bar_height,
+                       kSheetBackground),
+            kSheetMargin * layout.title_bar_height);
+  EXPECT_GT(CountInk(sheet, 0, 0, sheet.width, layout.title_bar_height), 0);
 }
 
 TEST(MakeContactSheetTest, BadArgumentsAreNamed) {
@@ -242,68 +273,7 @@ TEST(MakeContactSheetTest, BadArgumentsAreNamed) {
 TEST(MakeContactSheetTest, NoTilesGivesATitleOnlySheet) {
   const SheetImage sheet = MakeContactSheet("nothing", {}, 64);
   EXPECT_EQ(sheet.width, kSheetMargin + 64 + kSheetMargin);
-  EXPECT_EQ(sheet.height, kSheetTitleBarHeight + kSheetMargin);
-}
-
-TEST(BitmapFontTest, TextWidthAndHeight) {
-  EXPECT_EQ(TextWidth("", 1), 0);
-  EXPECT_EQ(TextWidth("A", 1), kGlyphWidth);
-  EXPECT_EQ(TextWidth("AB", 1), kGlyphAdvance + kGlyphWidth);
-  EXPECT_EQ(TextWidth("AB", 3), 3 * (kGlyphAdvance + kGlyphWidth));
-  EXPECT_EQ(TextWidth("A\nABC\nAB", 1), 2 * kGlyphAdvance + kGlyphWidth);
-  EXPECT_EQ(TextHeight("", 2), 0);
-  EXPECT_EQ(TextHeight("x", 2), 2 * kGlyphHeight);
-  EXPECT_EQ(TextHeight("x\ny", 1), kLineHeight + kGlyphHeight);
-}
-
-// The lit pixels of `text` drawn alone, as a string of '#' and '.'.
-std::string Render(const std::string& text, int scale) {
-  const int w = TextWidth(text, scale), h = kGlyphHeight * scale;
-  std::vector<uint8_t> rgb(static_cast<size_t>(w) * h * 3, 0);
-  DrawText(rgb.data(), w, h, 0, 0, text, scale, {255, 255, 255});
-  std::string bits;
-  for (size_t i = 0; i < rgb.size(); i += 3) bits += rgb[i] ? '#' : '.';
-  return bits;
-}
-
-TEST(BitmapFontTest, EveryPrintableGlyphIsDistinctAndOnlySpaceIsBlank) {
-  std::set<std::string> seen;
-  for (int code = 33; code <= 126; ++code) {
-    const std::string bits = Render(std::string(1, static_cast<char>(code)), 1);
-    EXPECT_NE(bits.find('#'), std::string::npos) << "glyph " << code << " is blank";
-    EXPECT_TRUE(seen.insert(bits).second) << "glyph " << static_cast<char>(code) << " repeats";
-  }
-  EXPECT_EQ(Render(" ", 1).find('#'), std::string::npos);
-  // non-ASCII bytes draw as '?'
-  EXPECT_EQ(Render("\xe9", 1), Render("?", 1));
-}
-
-TEST(BitmapFontTest, ScaleMakesBlocks) {
-  const std::string one = Render("A", 1), two = Render("A", 2);
-  for (int y = 0; y < 2 * kGlyphHeight; ++y) {
-    for (int x = 0; x < 2 * kGlyphWidth; ++x) {
-      ASSERT_EQ(two[y * 2 * kGlyphWidth + x], one[(y / 2) * kGlyphWidth + x / 2]) << x << "," << y;
-    }
-  }
-}
-
-TEST(BitmapFontTest, ClipsAtEveryEdge) {
-  // A 20x12 image inside a guard band: text hanging over every edge must not
-  // touch the guard bytes.
-  const int w = 20, h = 12, guard = 64;
-  std::vector<uint8_t> memory(guard + w * h * 3 + guard, 7);
-  uint8_t* image = memory.data() + guard;
-  std::fill(image, image + w * h * 3, 0);
-  for (int x : {-30, -3, 0, 15, 19, 40}) {
-    for (int y : {-20, -4, 0, 8, 11, 30}) {
-      DrawText(image, w, h, x, y, "WM#@\nWM#@", 2, {255, 255, 255});
-    }
-  }
-  for (int i = 0; i < guard; ++i) {
-    ASSERT_EQ(memory[i], 7);
-    ASSERT_EQ(memory[guard + w * h * 3 + i], 7);
-  }
-  EXPECT_GT(std::count(image, image + w * h * 3, 255), 0);
+  EXPECT_EQ(sheet.height, ContactSheetLayout(64).title_bar_height + kSheetMargin);
 }
 
 }  // namespace

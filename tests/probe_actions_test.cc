@@ -156,9 +156,11 @@ TEST(ProbeActionsTest, OutWritesReportAndSheet) {
   // one row per probe: first and last frame
   const Image sheet = ReadPng((out / "probe_actions_sheet.png").string());
   EXPECT_EQ(sheet.width, kSheetMargin + 2 * (96 + kSheetMargin));
-  EXPECT_EQ(sheet.height, kSheetTitleBarHeight +
-                              static_cast<int>(probes) * (kSheetMargin + 96 + kSheetLabelBarHeight) +
-                              kSheetMargin);
+  const SheetLayout layout = ContactSheetLayout(96);
+  EXPECT_EQ(sheet.height,
+            layout.title_bar_height +
+                static_cast<int>(probes) * (kSheetMargin + 96 + layout.label_bar_height) +
+                kSheetMargin);
   // no stray files beside the two
   int files = 0;
   for (const auto& e : fs::directory_iterator(out)) {

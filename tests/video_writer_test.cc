@@ -1,15 +1,17 @@
-// VideoWriter: real libx264 encodes, checked with ffprobe and decoded back
-// with libavformat/libavcodec.
+// VideoWriter: real libx264, libvpx-vp9 and GIF encodes, checked with ffprobe and decoded back
+// with libavformat/libavcodec; container tags read back by ffprobe.
 #include "render/video_writer.h"
 
 #include <gtest/gtest.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cstdint>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -387,7 +389,21 @@ INSTANTIATE_TEST_SUITE_P(
         BadOptionCase{"ZeroWidth", With([](VideoOptions* o) { o->width = 0; }),
                       "video size 0x480 is out of range"},
         BadOptionCase{"HugeHeight", With([](VideoOptions* o) { o->height = 100000; }),
-                      "video size 480x100000 is out of range: width and height must be 1..8192"}),
+                      "video size 480x100000 is out of range: width and height must be 1..8192"},
+        BadOptionCase{"UnknownFormat", With([](VideoOptions* o) { o->format = "avi"; }),
+                      "unknown video format 'avi': accepted mp4, webm, gif"},
+        BadOptionCase{"GifFpsZero", With([](VideoOptions* o) { o->gif_fps = 0; }),
+                      "GIF fps 0 is out of range: accepted 1..50"},
+        BadOptionCase{"GifFpsTooHigh", With([](VideoOptions* o) { o->gif_fps = 60; }),
+                      "GIF fps 60 is out of range: accepted 1..50"},
+        BadOptionCase{"GifTooNarrow", With([](VideoOptions* o) { o->gif_width = 8; }),
+                      "GIF width 8 is out of range: accepted 16..4096 pixels"},
+        BadOptionCase{"GifTooWide", With([](VideoOptions* o) { o->gif_width = 5000; }),
+                      "GIF width 5000 is out of range"},
+        BadOptionCase{"MetadataKeyWithEquals", With([](VideoOptions* o) {
+                        o->metadata = {{"a=b", "c"}};
+                      }),
+                      "video metadata key 'a=b' is not usable"}),
     [](const ::testing::TestParamInfo<BadOptionCase>& info) { return info.param.name; });
 
 TEST(VideoWriterTest, MissingFolderIsARunErrorNamingIt) {
@@ -424,6 +440,177 @@ TEST(VideoWriterTest, UnwritableFolderIsARunErrorNamingIt) {
         << e.what();
   }
   fs::permissions(folder, fs::perms::owner_all);
+}
+
+// ffprobe's format tags of `path`, names lowercased (Matroska stores tag names in capitals).
+std::map<std::string, std::string> FormatTags(const fs::path& path) {
+  const testing::CommandResult probe =
+      RunCommand("ffprobe -v error -show_entries format_tags -of json '" + path.string() + "'");
+  EXPECT_EQ(probe.exit_code, 0) << probe.output;
+  const nlohmann::json j = nlohmann::json::parse(probe.output, nullptr, false);
+  std::map<std::string, std::string> tags;
+  if (j.is_discarded() || !j.contains("format") || !j["format"].contains("tags")) return tags;
+  for (const auto& [key, value] : j["format"]["tags"].items()) {
+    std::string name = key;
+    std::transform(name.begin(), name.end(), name.begin(),
+                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    tags[name] = value.get<std::string>();
+  }
+  return tags;
+}
+
+const std::vector<std::pair<std::string, std::string>> kTags = {
+    {"env_id", "FetchPush-v4"},
+    {"seed", "7"},
+    {"policy", "exec:python3 my policy.py"},
+    {"episode", "3"},
+    {"fetchscope_version", "0.1.0"}};
+
+void EncodeBandsAs(const fs::path& path, const std::string& format, int width, int height,
+                   int frames, int gif_fps = 10, int gif_width = 320) {
+  VideoOptions options;
+  options.width = width;
+  options.height = height;
+  options.codec = "libx264";
+  options.format = format;
+  options.gif_fps = gif_fps;
+  options.gif_width = gif_width;
+  options.metadata = kTags;
+  VideoWriter writer(path.string(), options);
+  for (int k = 0; k < frames; ++k) writer.AddFrame(BandFrame(k, width, height).data());
+  writer.Finish();
+  EXPECT_EQ(writer.frames_written(), frames);
+}
+
+TEST(VideoFormatsTest, ParsesCommaListsAndNamesBadEntries) {
+  EXPECT_EQ(ParseVideoFormats("mp4"), std::vector<std::string>{"mp4"});
+  EXPECT_EQ(ParseVideoFormats("webm,gif,mp4"), (std::vector<std::string>{"webm", "gif", "mp4"}));
+  for (const auto& [list, expected] : std::vector<std::pair<std::string, std::string>>{
+           {"avi", "unknown --format 'avi' in 'avi': accepted a comma list of mp4, webm, gif"},
+           {"mp4,", "unknown --format '' in 'mp4,'"},
+           {"", "unknown --format ''"},
+           {"MP4", "unknown --format 'MP4'"},
+           {"gif,webm,gif", "names gif twice"}}) {
+    try {
+      ParseVideoFormats(list);
+      ADD_FAILURE() << "no exception for '" << list << "'";
+    } catch (const UsageError& e) {
+      EXPECT_NE(std::string(e.what()).find(expected), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_EQ(VideoFormatExtension("webm"), "webm");
+  EXPECT_EQ(VideoFormatExtension("gif"), "gif");
+}
+
+TEST(VideoWriterTest, Mp4CarriesTheTags) {
+  TempDir dir;
+  const fs::path path = dir.path() / "tagged.mp4";
+  EncodeBandsAs(path, "mp4", 64, 48, 5);
+  const auto tags = FormatTags(path);
+  for (const auto& [key, value] : kTags)
+    EXPECT_EQ(tags.count(key) ? tags.at(key) : "", value) << key;
+}
+
+TEST(VideoWriterTest, WebmIsVp9WithEveryFrameInOrderAndTags) {
+  TempDir dir;
+  const fs::path path = dir.path() / "bands.webm";
+  EncodeBandsAs(path, "webm", 64, 48, 51);
+  EXPECT_EQ(FolderEntries(dir.path()), std::vector<std::string>{"bands.webm"});
+  const nlohmann::json probe = Probe(path);
+  ASSERT_FALSE(probe.is_discarded());
+  ASSERT_EQ(probe["streams"].size(), 1u);
+  const nlohmann::json& stream = probe["streams"][0];
+  EXPECT_EQ(stream["codec_name"], "vp9");
+  EXPECT_EQ(stream["pix_fmt"], "yuv420p");
+  EXPECT_EQ(stream["width"], 64);
+  EXPECT_EQ(stream["height"], 48);
+  EXPECT_EQ(stream["nb_read_frames"], "51");
+  EXPECT_EQ(stream["r_frame_rate"], "25/1");
+  EXPECT_NEAR(std::stod(probe["format"]["duration"].get<std::string>()), 51 / 25.0, 0.05);
+  ExpectFramesInOrder(Decode(path), 64, 48, 51);
+  const auto tags = FormatTags(path);
+  for (const auto& [key, value] : kTags)
+    EXPECT_EQ(tags.count(key) ? tags.at(key) : "", value) << key;
+  const std::string data = testing::ReadFile(path);
+  EXPECT_EQ(data.substr(0, 4), "\x1a\x45\xdf\xa3");  // EBML magic
+}
+
+TEST(VideoWriterTest, WebmAndGifBytesRepeat) {
+  TempDir dir;
+  for (const std::string format : {"webm", "gif"}) {
+    const fs::path a = dir.path() / ("a." + format), b = dir.path() / ("b." + format);
+    EncodeBandsAs(a, format, 96, 64, 20);
+    EncodeBandsAs(b, format, 96, 64, 20);
+    EXPECT_EQ(testing::ReadFile(a), testing::ReadFile(b)) << format;
+  }
+}
+
+TEST(VideoWriterTest, GifIsScaledThinnedAndPalettedWithTheTagsAsAComment) {
+  TempDir dir;
+  const fs::path path = dir.path() / "bands.gif";
+  // 51 frames at 25 fps, 10 fps wanted: frames 0, 3, 5, 8, 10, ... 48, 50 (ticks 0.0 .. 2.0 s)
+  EncodeBandsAs(path, "gif", 120, 90, 51, /*gif_fps=*/10, /*gif_width=*/60);
+  EXPECT_EQ(GifFrameCount(51, 25, 10), 21);
+  EXPECT_EQ(FolderEntries(dir.path()), std::vector<std::string>{"bands.gif"});
+  const nlohmann::json probe = Probe(path);
+  ASSERT_FALSE(probe.is_discarded());
+  ASSERT_EQ(probe["streams"].size(), 1u);
+  const nlohmann::json& stream = probe["streams"][0];
+  EXPECT_EQ(stream["codec_name"], "gif");
+  EXPECT_EQ(stream["width"], 60);
+  EXPECT_EQ(stream["height"], 45);
+  EXPECT_EQ(stream["nb_read_frames"], "21");
+  EXPECT_NEAR(std::stod(probe["format"]["duration"].get<std::string>()), 51 / 25.0, 0.1);
+
+  // each GIF frame shows the input frame picked for its tick (two colours: the palette is exact)
+  const DecodedVideo video = Decode(path);
+  ASSERT_EQ(video.frames.size(), 21u);
+  for (int j = 0; j < 21; ++j) {
+    const int k = (j * 25 + 9) / 10;  // first input frame at or after j / 10 s
+    for (int bit = 0; bit < kBits; ++bit) {
+      // the centre row of the band in the 90-row source, scaled to 45 rows
+      const int y = (bit * BandHeight(90) + BandHeight(90) / 2) / 2;
+      const std::vector<double> mean = RowMean(video.frames[j], 60, y, 2, 58);
+      const uint8_t* expected = ((k >> bit) & 1) ? kOn : kOff;
+      for (int c = 0; c < 3; ++c) {
+        ASSERT_NEAR(mean[c], expected[c], 12) << "gif frame " << j << " band " << bit;
+      }
+    }
+  }
+  const auto tags = FormatTags(path);
+  ASSERT_TRUE(tags.count("comment"));
+  EXPECT_EQ(tags.at("comment"),
+            "env_id=FetchPush-v4; seed=7; policy=exec:python3 my policy.py; episode=3; "
+            "fetchscope_version=0.1.0");
+}
+
+TEST(VideoWriterTest, GifKeepsEveryFrameAtOrAboveTheSourceRateAndNeverUpscales) {
+  TempDir dir;
+  const fs::path path = dir.path() / "all.gif";
+  EncodeBandsAs(path, "gif", 40, 30, 12, /*gif_fps=*/50, /*gif_width=*/320);
+  EXPECT_EQ(GifFrameCount(12, 25, 50), 12);
+  const nlohmann::json probe = Probe(path);
+  ASSERT_FALSE(probe.is_discarded());
+  EXPECT_EQ(probe["streams"][0]["nb_read_frames"], "12");
+  EXPECT_EQ(probe["streams"][0]["width"], 40);
+  EXPECT_EQ(probe["streams"][0]["height"], 30);
+}
+
+TEST(VideoWriterTest, UnfinishedWebmAndGifLeaveNothingBehind) {
+  TempDir dir;
+  for (const std::string format : {"webm", "gif"}) {
+    VideoOptions options;
+    options.width = 32;
+    options.height = 32;
+    options.format = format;
+    {
+      VideoWriter writer((dir.path() / ("x." + format)).string(), options);
+      writer.AddFrame(BandFrame(1, 32, 32).data());
+      EXPECT_EQ(FolderEntries(dir.path()), std::vector<std::string>{".x.partial." + format})
+          << format;
+    }
+    EXPECT_TRUE(FolderEntries(dir.path()).empty()) << format;
+  }
 }
 
 }  // namespace

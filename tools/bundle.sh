@@ -1,10 +1,12 @@
 #!/usr/bin/env bash
 # Makes dist/fetchscope-VERSION-linux-x86_64.tar.xz: a relocatable fetchscope for machines without
 # our Debian packages (GPU nodes running a CUDA image, clusters without root). It holds the
-# binary, the bundled models, a launcher that sets the library path, and every shared library
-# the binary needs that a bare CUDA image lacks (libav*, libmujoco and its dependencies, libpng,
-# libstdc++, and libglvnd's libEGL/libGL/libOpenGL dispatchers, which the binary opens at run
-# time). It never holds glibc (the node's must be used) nor a GL vendor or GPU driver library
+# binary, the bundled models, the DejaVu Sans font for labels (bin/fonts/, found beside the
+# binary before any system font), a launcher that sets the library path, and every shared library
+# the binary needs that a bare CUDA image lacks (whatever ldd lists: libav* with libavfilter,
+# libvpx and libx264, libmujoco and its dependencies, libpng, libcrypto, libfreetype,
+# libfontconfig, libstdc++, and libglvnd's libEGL/libGL/libOpenGL dispatchers, which the binary
+# opens at run time). It never holds glibc (the node's must be used) nor a GL vendor or GPU driver library
 # (the node's NVIDIA driver, or its Mesa, provides those).
 #
 #   tools/bundle.sh [BUILD_DIR]      default BUILD_DIR: build (made with tools/quickstart.sh)
@@ -27,7 +29,7 @@ dist=${DIST_DIR:-dist}
 stage=$(mktemp -d)
 trap 'rm -rf "$stage"' EXIT
 root=$stage/$name
-mkdir -p "$root/bin/models" "$root/lib"
+mkdir -p "$root/bin/models" "$root/bin/fonts" "$root/lib"
 
 # glibc's own libraries, by exact name: they must come from the node (a bundled ld.so or libc
 # would not match the node's kernel interface and NSS). Names are compared whole, never as
@@ -85,6 +87,13 @@ for lib in "${!wanted[@]}"; do
 done
 cp "$binary" "$root/bin/fetchscope"
 cp models/*.xml "$root/bin/models/"
+# the font the labels are drawn with (render/text.h looks in <binary folder>/fonts/ first)
+font=${FETCHSCOPE_FONT:-/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf}
+if [[ ! -f $font ]]; then
+  echo "bundle: $font missing (Debian: fonts-dejavu-core)" >&2
+  exit 2
+fi
+cp -L "$font" "$root/bin/fonts/DejaVuSans.ttf"
 strip --strip-unneeded "$root/bin/fetchscope" "$root"/lib/*.so* 2>/dev/null || true
 
 # The newest glibc symbol version anything in the bundle needs: the node's glibc must be at
@@ -126,7 +135,9 @@ libosmesa6): GL vendor libraries are never bundled. First on a new node:
   ./fetchscope list-gpus
 See https://github.com/ (the project's README) for Slurm and Kubernetes examples.
 Bundled libraries keep their own licences (Debian packages: see the copyright files of
-libavcodec59, libmujoco2.2.2, libpng16-16, libglvnd0 and their dependencies).
+libavcodec59, libavfilter8, libmujoco2.2.2, libpng16-16, libssl3, libfreetype6,
+libfontconfig1, libglvnd0 and their dependencies). bin/fonts/DejaVuSans.ttf is from
+fonts-dejavu-core (Bitstream Vera / DejaVu licence).
 README
 
 mkdir -p "$dist"

@@ -8,6 +8,7 @@ packages=(cmake g++ make pkg-config
   libmujoco-dev libqhull-dev
   libegl-dev libegl1 libegl-mesa0 libgl1-mesa-dri libosmesa6-dev
   libeigen3-dev libpng-dev libavcodec-dev libavformat-dev libavutil-dev libswscale-dev
+  libavfilter-dev libssl-dev libfreetype-dev libfontconfig-dev fonts-dejavu-core
   libcli11-dev nlohmann-json3-dev libgtest-dev
   ffmpeg python3 python3-numpy
   binutils xz-utils)

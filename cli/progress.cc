@@ -1,0 +1,100 @@
+#include "cli/progress.h"
+
+#include <unistd.h>
+
+#include <algorithm>
+
+namespace fetchscope::cli {
+namespace {
+
+double SteadySeconds() {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+}  // namespace
+
+ProgressReporter::ProgressReporter(const std::string& label, int episodes, long frames_per_episode,
+                                   bool quiet)
+    : ProgressReporter(
+          [&] {
+            Options o;
+            o.label = label;
+            o.episodes = episodes;
+            o.frames_per_episode = frames_per_episode;
+            o.quiet = quiet;
+            o.terminal = isatty(STDERR_FILENO);
+            return o;
+          }(),
+          SteadySeconds) {}
+
+ProgressReporter::ProgressReporter(const Options& options, std::function<double()> clock_s)
+    : o_(options), clock_(std::move(clock_s)) {
+  start_ = clock_();
+  last_log_ = start_;
+}
+
+void ProgressReporter::Frames(int n) {
+  frames_ += n;
+  Update();
+}
+
+void ProgressReporter::EpisodeDone() {
+  ++done_;
+  Update();
+}
+
+std::string ProgressReporter::Line() const {
+  const double elapsed = clock_() - start_;
+  const double fps = elapsed > 0 ? frames_ / elapsed : 0;
+  const long total = static_cast<long>(o_.episodes) * o_.frames_per_episode;
+  const long left = std::max(0L, total - frames_);
+  char eta[32];
+  if (fps > 0) {
+    std::snprintf(eta, sizeof(eta), "%.0f s", left / fps);
+  } else {
+    std::snprintf(eta, sizeof(eta), "unknown");
+  }
+  char line[256];
+  if (o_.terminal) {  // the bar as it has always been
+    std::snprintf(line, sizeof(line),
+                  "%s: %d/%d episodes  frame %ld/%ld  %.1f frames/s  ETA %.0f s", o_.label.c_str(),
+                  done_, o_.episodes, frames_, total, fps, fps > 0 ? left / fps : 0.0);
+    return line;
+  }
+  const int percent = o_.episodes > 0 ? 100 * done_ / o_.episodes : 100;
+  std::snprintf(line, sizeof(line),
+                "%s: progress %d/%d episodes (%d%%), %ld/%ld frames, %.1f frames/s, ETA %s",
+                o_.label.c_str(), done_, o_.episodes, percent, frames_, total, fps, eta);
+  return line;
+}
+
+void ProgressReporter::Update() {
+  if (o_.quiet) return;
+  const double now = clock_();
+  if (o_.terminal) {
+    if (last_draw_ >= 0 && now - last_draw_ < 0.1) return;
+    last_draw_ = now;
+    std::fprintf(o_.out, "\r%s   ", Line().c_str());
+    std::fflush(o_.out);
+    return;
+  }
+  const int step = std::max(1, o_.log_percent_step);
+  const int percent = o_.episodes > 0 ? 100 * done_ / o_.episodes : 0;
+  const int reached = percent / step * step;
+  const bool new_step = reached > logged_percent_;
+  const bool interval = now - last_log_ >= o_.log_interval_s;
+  if (!new_step && !interval) return;
+  if (new_step) logged_percent_ = reached;
+  last_log_ = now;
+  std::fprintf(o_.out, "%s\n", Line().c_str());
+  std::fflush(o_.out);
+}
+
+void ProgressReporter::Done(const std::string& summary) {
+  if (o_.quiet) return;
+  if (o_.terminal) std::fprintf(o_.out, "\r%*s\r", 78, "");
+  std::fprintf(o_.out, "%s\n", summary.c_str());
+  std::fflush(o_.out);
+}
+
+}  // namespace fetchscope::cli

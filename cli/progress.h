@@ -1,0 +1,60 @@
+// Progress of a batch of episodes on stderr, fed by the episode scheduler in the parent.
+//
+// On a terminal: one line redrawn in place (at most 10 times a second) with done/total
+// episodes, frames, frames/s and ETA, cleared before the summary.
+// Not on a terminal (Slurm and Kubernetes logs, a pipe, a file): a plain line
+//   "<label>: progress 3/10 episodes (30%), 153/510 frames, 41.7 frames/s, ETA 8 s"
+// each time another 10% of the episodes is done and whenever 30 s have passed since the last
+// line, so a long run shows it is alive and a short one prints no more than ten lines.
+#pragma once
+
+#include <chrono>
+#include <cstdio>
+#include <functional>
+#include <string>
+
+namespace fetchscope::cli {
+
+class ProgressReporter {
+ public:
+  struct Options {
+    std::string label = "record";  ///< the line's prefix: the subcommand
+    int episodes = 0;              ///< episodes in the run
+    long frames_per_episode = 0;   ///< frames (or steps) each episode reports
+    bool quiet = false;            ///< print nothing, not even the summary
+    bool terminal = false;         ///< redraw one line (true) or print log lines (false)
+    double log_interval_s = 30;    ///< log mode: a line at least this often
+    int log_percent_step = 10;     ///< log mode: a line each time this % more episodes are done
+    std::FILE* out = stderr;
+  };
+
+  /// terminal = isatty(stderr); the clock is std::chrono::steady_clock.
+  ProgressReporter(const std::string& label, int episodes, long frames_per_episode, bool quiet);
+  /// For tests: every option, and a clock in seconds.
+  ProgressReporter(const Options& options, std::function<double()> clock_s);
+
+  /// `n` more frames done.
+  void Frames(int n);
+  /// One more episode done.
+  void EpisodeDone();
+  /// Clears the terminal line and prints `summary` (unless quiet).
+  void Done(const std::string& summary);
+
+  long frames() const { return frames_; }
+  int episodes_done() const { return done_; }
+
+ private:
+  void Update();
+  std::string Line() const;
+
+  Options o_;
+  std::function<double()> clock_;
+  double start_ = 0;
+  long frames_ = 0;
+  int done_ = 0;
+  double last_draw_ = -1;   // terminal: last redraw
+  double last_log_ = 0;     // log mode: time of the last line
+  int logged_percent_ = 0;  // log mode: the last multiple of log_percent_step printed
+};
+
+}  // namespace fetchscope::cli

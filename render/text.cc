@@ -1,0 +1,304 @@
+#include "render/text.h"
+
+#include <fontconfig/fontconfig.h>
+#include <ft2build.h>
+#include FT_FREETYPE_H
+
+#include <algorithm>
+#include <cstdlib>
+#include <fstream>
+#include <vector>
+
+#include "src/errors.h"
+
+namespace fetchscope {
+namespace fs = std::filesystem;
+namespace {
+
+constexpr int kMinPixelSize = 4;
+constexpr int kMaxPixelSize = 512;
+constexpr char kFontName[] = "DejaVuSans.ttf";
+constexpr char kDebianFont[] = "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf";
+
+bool Readable(const fs::path& path) {
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec)) return false;
+  std::ifstream in(path, std::ios::binary);
+  return in.good();
+}
+
+// fontconfig's file for "DejaVu Sans", or empty when it has none (its best match for a missing
+// family is some other font, which would change every label: that is refused).
+std::string FontconfigMatch() {
+  FcConfig* config = FcInitLoadConfigAndFonts();
+  if (!config) return "";
+  std::string file;
+  FcPattern* pattern = FcNameParse(reinterpret_cast<const FcChar8*>("DejaVu Sans:style=Book"));
+  if (pattern) {
+    FcConfigSubstitute(config, pattern, FcMatchPattern);
+    FcDefaultSubstitute(pattern);
+    FcResult result = FcResultNoMatch;
+    FcPattern* match = FcFontMatch(config, pattern, &result);
+    if (match) {
+      FcChar8* family = nullptr;
+      FcChar8* path = nullptr;
+      if (FcPatternGetString(match, FC_FAMILY, 0, &family) == FcResultMatch &&
+          FcPatternGetString(match, FC_FILE, 0, &path) == FcResultMatch &&
+          std::string(reinterpret_cast<const char*>(family)) == "DejaVu Sans") {
+        file = reinterpret_cast<const char*>(path);
+      }
+      FcPatternDestroy(match);
+    }
+    FcPatternDestroy(pattern);
+  }
+  FcConfigDestroy(config);
+  return file;
+}
+
+// Next code point of `s` from `*at` (advanced past it); U+FFFD for a malformed sequence.
+char32_t NextCodePoint(const std::string& s, size_t* at) {
+  const auto byte = [&](size_t i) { return static_cast<unsigned char>(s[i]); };
+  const unsigned char lead = byte(*at);
+  int extra;
+  char32_t cp;
+  if (lead < 0x80) {
+    ++*at;
+    return lead;
+  } else if ((lead & 0xE0) == 0xC0) {
+    extra = 1, cp = lead & 0x1F;
+  } else if ((lead & 0xF0) == 0xE0) {
+    extra = 2, cp = lead & 0x0F;
+  } else if ((lead & 0xF8) == 0xF0) {
+    extra = 3, cp = lead & 0x07;
+  } else {
+    ++*at;
+    return 0xFFFD;
+  }
+  size_t i = *at + 1;
+  for (int k = 0; k < extra; ++k, ++i) {
+    if (i >= s.size() || (byte(i) & 0xC0) != 0x80) {
+      *at = i;
+      return 0xFFFD;
+    }
+    cp = (cp << 6) | (byte(i) & 0x3F);
+  }
+  *at = i;
+  static constexpr char32_t kMinForLength[] = {0, 0x80, 0x800, 0x10000};
+  if (cp < kMinForLength[extra] || cp > 0x10FFFF || (cp >= 0xD800 && cp <= 0xDFFF)) return 0xFFFD;
+  return cp;
+}
+
+std::vector<std::string> SplitLines(const std::string& text) {
+  std::vector<std::string> lines;
+  size_t start = 0;
+  while (true) {
+    const size_t end = text.find('\n', start);
+    lines.push_back(text.substr(start, end == std::string::npos ? std::string::npos : end - start));
+    if (end == std::string::npos) break;
+    start = end + 1;
+  }
+  return lines;
+}
+
+void CheckPixelSize(int pixel_size) {
+  if (pixel_size < kMinPixelSize || pixel_size > kMaxPixelSize) {
+    throw UsageError("text pixel size " + std::to_string(pixel_size) +
+                     " is out of range: accepted " + std::to_string(kMinPixelSize) + ".." +
+                     std::to_string(kMaxPixelSize));
+  }
+}
+
+uint8_t Blend(uint8_t under, uint8_t over, unsigned coverage) {
+  return static_cast<uint8_t>((under * (255u - coverage) + over * coverage + 127u) / 255u);
+}
+
+void FillBox(uint8_t* rgb, int width, int height, int x0, int y0, int w, int h, Rgb color) {
+  const int x1 = std::min(width, x0 + w), y1 = std::min(height, y0 + h);
+  for (int y = std::max(0, y0); y < y1; ++y) {
+    for (int x = std::max(0, x0); x < x1; ++x) {
+      uint8_t* p = rgb + (static_cast<size_t>(y) * width + x) * 3;
+      p[0] = color.r;
+      p[1] = color.g;
+      p[2] = color.b;
+    }
+  }
+}
+
+}  // namespace
+
+fs::path FindFontFile() {
+  std::vector<std::string> tried;
+  if (const char* env = std::getenv("FETCHSCOPE_FONT"); env && *env) {
+    if (Readable(env)) return env;
+    throw RunError(std::string("FETCHSCOPE_FONT='") + env +
+                   "' is not a readable font file: point it at a .ttf/.otf file, or unset it to "
+                   "use DejaVu Sans (Debian package fonts-dejavu-core)");
+  }
+  tried.push_back("$FETCHSCOPE_FONT (unset)");
+  std::error_code ec;
+  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
+  if (!ec) {
+    const fs::path beside = exe.parent_path() / "fonts" / kFontName;
+    if (Readable(beside)) return beside;
+    tried.push_back(beside.string());
+  }
+  if (Readable(kDebianFont)) return kDebianFont;
+  tried.push_back(kDebianFont);
+  const std::string matched = FontconfigMatch();
+  if (!matched.empty() && Readable(matched)) return matched;
+  tried.push_back("fontconfig 'DejaVu Sans' (no match)");
+  std::string list;
+  for (const std::string& t : tried) list += (list.empty() ? "" : ", ") + t;
+  throw RunError(
+      "no font for drawing text: tried " + list +
+      "; install Debian package fonts-dejavu-core or set FETCHSCOPE_FONT to a .ttf file");
+}
+
+struct Font::Impl {
+  FT_Library library = nullptr;
+  FT_Face face = nullptr;
+  int size = 0;  // pixel size last set on `face`
+
+  ~Impl() {
+    if (face) FT_Done_Face(face);
+    if (library) FT_Done_FreeType(library);
+  }
+
+  void SetSize(int pixel_size) {
+    if (size == pixel_size) return;
+    if (FT_Set_Pixel_Sizes(face, 0, static_cast<FT_UInt>(pixel_size)) != 0) {
+      throw RunError("FreeType cannot size the font to " + std::to_string(pixel_size) + " pixels");
+    }
+    size = pixel_size;
+  }
+
+  // Metrics of the current size.
+  void LineMetrics(TextMetrics* m) const {
+    const FT_Size_Metrics& sm = face->size->metrics;
+    m->ascent = static_cast<int>((sm.ascender + 63) >> 6);
+    m->descent = static_cast<int>((-sm.descender + 63) >> 6);
+    m->line_height = std::max(static_cast<int>((sm.height + 32) >> 6), m->ascent + m->descent);
+  }
+
+  // Loads the glyph of `cp` (rendered when `render`) into face->glyph. False if it fails.
+  bool Load(char32_t cp, bool render) {
+    const FT_UInt index = FT_Get_Char_Index(face, cp);
+    const FT_Int32 flags = FT_LOAD_DEFAULT | FT_LOAD_TARGET_NORMAL | (render ? FT_LOAD_RENDER : 0);
+    return FT_Load_Glyph(face, index, flags) == 0;
+  }
+
+  // Advance width of one line, pixels.
+  int LineWidth(const std::string& line) {
+    FT_Pos pen = 0;
+    for (size_t at = 0; at < line.size();) {
+      if (Load(NextCodePoint(line, &at), false)) pen += face->glyph->advance.x;
+    }
+    return static_cast<int>((pen + 32) >> 6);
+  }
+
+  TextMetrics Measure(const std::string& text) {
+    TextMetrics m;
+    LineMetrics(&m);
+    if (text.empty()) return m;
+    const std::vector<std::string> lines = SplitLines(text);
+    m.lines = static_cast<int>(lines.size());
+    for (const std::string& line : lines) m.width = std::max(m.width, LineWidth(line));
+    m.height = (m.lines - 1) * m.line_height + m.ascent + m.descent;
+    return m;
+  }
+};
+
+Font::Font(const fs::path& file) : impl_(std::make_unique<Impl>()), file_(file) {
+  if (FT_Init_FreeType(&impl_->library) != 0) throw RunError("FreeType failed to initialise");
+  if (FT_New_Face(impl_->library, file.c_str(), 0, &impl_->face) != 0) {
+    throw RunError("FreeType cannot load the font '" + file.string() +
+                   "': not a font file FreeType reads (use a .ttf/.otf, e.g. DejaVuSans.ttf from "
+                   "Debian package fonts-dejavu-core)");
+  }
+}
+
+Font::~Font() = default;
+
+const Font& Font::Default() {
+  static std::mutex mutex;
+  static std::unique_ptr<Font> font;
+  std::lock_guard<std::mutex> lock(mutex);
+  if (!font) font = std::make_unique<Font>(FindFontFile());
+  return *font;
+}
+
+TextMetrics Font::Measure(const std::string& utf8, int pixel_size) const {
+  CheckPixelSize(pixel_size);
+  std::lock_guard<std::mutex> lock(mutex_);
+  impl_->SetSize(pixel_size);
+  return impl_->Measure(utf8);
+}
+
+TextMetrics Font::Draw(uint8_t* rgb, int width, int height, int x, int y, const std::string& utf8,
+                       const TextStyle& style) const {
+  CheckPixelSize(style.pixel_size);
+  if (style.padding < 0) {
+    throw UsageError("text box padding " + std::to_string(style.padding) +
+                     " is negative: give 0 or more pixels");
+  }
+  std::lock_guard<std::mutex> lock(mutex_);
+  impl_->SetSize(style.pixel_size);
+  const TextMetrics m = impl_->Measure(utf8);
+  if (style.background) {
+    FillBox(rgb, width, height, x - style.padding, y - style.padding, m.width + 2 * style.padding,
+            m.height + 2 * style.padding, *style.background);
+  }
+  if (utf8.empty()) return m;
+  int baseline = y + m.ascent;
+  FT_Face face = impl_->face;
+  for (const std::string& line : SplitLines(utf8)) {
+    FT_Pos pen = static_cast<FT_Pos>(x) * 64;
+    for (size_t at = 0; at < line.size();) {
+      if (!impl_->Load(NextCodePoint(line, &at), true)) continue;
+      const FT_GlyphSlot g = face->glyph;
+      const FT_Bitmap& bitmap = g->bitmap;
+      const int left = static_cast<int>((pen + 32) >> 6) + g->bitmap_left;
+      const int top = baseline - g->bitmap_top;
+      if (bitmap.pixel_mode == FT_PIXEL_MODE_GRAY) {
+        for (int row = 0; row < static_cast<int>(bitmap.rows); ++row) {
+          const int py = top + row;
+          if (py < 0 || py >= height) continue;
+          const unsigned char* src = bitmap.buffer + static_cast<long>(row) * bitmap.pitch;
+          for (int col = 0; col < static_cast<int>(bitmap.width); ++col) {
+            const int px = left + col;
+            const unsigned coverage = src[col];
+            if (px < 0 || px >= width || coverage == 0) continue;
+            uint8_t* p = rgb + (static_cast<size_t>(py) * width + px) * 3;
+            p[0] = Blend(p[0], style.color.r, coverage);
+            p[1] = Blend(p[1], style.color.g, coverage);
+            p[2] = Blend(p[2], style.color.b, coverage);
+          }
+        }
+      }
+      pen += g->advance.x;
+    }
+    baseline += m.line_height;
+  }
+  return m;
+}
+
+std::string Font::Fit(const std::string& utf8, int pixel_size, int max_width,
+                      const std::string& ellipsis) const {
+  CheckPixelSize(pixel_size);
+  std::lock_guard<std::mutex> lock(mutex_);
+  impl_->SetSize(pixel_size);
+  if (impl_->LineWidth(utf8) <= max_width) return utf8;
+  // code point boundaries, so a cut never splits a UTF-8 sequence
+  std::vector<size_t> ends;
+  for (size_t at = 0; at < utf8.size();) {
+    NextCodePoint(utf8, &at);
+    ends.push_back(at);
+  }
+  for (size_t k = ends.size(); k-- > 0;) {
+    const std::string cut = utf8.substr(0, ends[k]) + ellipsis;
+    if (impl_->LineWidth(cut) <= max_width) return cut;
+  }
+  return impl_->LineWidth(ellipsis) <= max_width ? ellipsis : std::string();
+}
+
+}  // namespace fetchscope

@@ -1,0 +1,154 @@
+// Progress in batch logs: log lines every 10% of the episodes and every 30 s when stderr is not
+// a terminal, the redrawn bar on a terminal; and a real record run with stderr into a pipe.
+#include "cli/progress.h"
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <regex>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "tests/test_util.h"
+
+namespace fetchscope {
+namespace {
+
+using testing::RunCommand;
+using testing::TempDir;
+
+std::vector<std::string> Lines(const std::string& text) {
+  std::vector<std::string> lines;
+  std::istringstream in(text);
+  for (std::string line; std::getline(in, line);) lines.push_back(line);
+  return lines;
+}
+
+// Everything written to a tmpfile.
+std::string Contents(std::FILE* f) {
+  std::fflush(f);
+  std::rewind(f);
+  std::string s;
+  char buffer[4096];
+  size_t n;
+  while ((n = std::fread(buffer, 1, sizeof(buffer), f)) > 0) s.append(buffer, n);
+  return s;
+}
+
+TEST(ProgressReporterTest, LogLinesEveryTenPercentAndEveryThirtySeconds) {
+  std::FILE* out = std::tmpfile();
+  ASSERT_NE(out, nullptr);
+  double now = 100;
+  cli::ProgressReporter::Options o;
+  o.label = "record";
+  o.episodes = 20;
+  o.frames_per_episode = 51;
+  o.out = out;
+  cli::ProgressReporter progress(o, [&] { return now; });
+  // episode 1 of 20 is 5%: no line; episode 2 is 10%: a line
+  now += 1;
+  progress.Frames(51);
+  progress.EpisodeDone();
+  EXPECT_EQ(Contents(out), "");
+  now += 1;
+  progress.Frames(51);
+  progress.EpisodeDone();
+  std::vector<std::string> lines = Lines(Contents(out));
+  ASSERT_EQ(lines.size(), 1u);
+  // 102 frames in 2 s: 51 frames/s; 918 frames left: ETA 18 s
+  EXPECT_EQ(lines[0],
+            "record: progress 2/20 episodes (10%), 102/1020 frames, 51.0 frames/s, ETA 18 s");
+  // a slow episode: frames alone print nothing until 30 s have passed since the last line
+  now += 29;
+  progress.Frames(10);
+  EXPECT_EQ(Lines(Contents(out)).size(), 1u);
+  now += 1.5;
+  progress.Frames(10);
+  lines = Lines(Contents(out));
+  ASSERT_EQ(lines.size(), 2u);
+  EXPECT_NE(lines[1].find("2/20 episodes (10%), 122/1020 frames"), std::string::npos) << lines[1];
+  // the rest of the run: one line per further 10%, the last at 100%
+  for (int e = 3; e <= 20; ++e) {
+    now += 0.5;
+    progress.Frames(e == 3 ? 31 : 51);
+    progress.EpisodeDone();
+  }
+  lines = Lines(Contents(out));
+  EXPECT_EQ(lines.size(), 2u + 9u);
+  EXPECT_NE(lines.back().find("20/20 episodes (100%), 1020/1020 frames"), std::string::npos)
+      << lines.back();
+  EXPECT_NE(lines.back().find("ETA 0 s"), std::string::npos) << lines.back();
+  progress.Done("record: summary");
+  EXPECT_EQ(Lines(Contents(out)).back(), "record: summary");
+  EXPECT_EQ(Contents(out).find('\r'), std::string::npos);
+  std::fclose(out);
+}
+
+TEST(ProgressReporterTest, TerminalRedrawsOneLineAndQuietPrintsNothing) {
+  std::FILE* out = std::tmpfile();
+  ASSERT_NE(out, nullptr);
+  double now = 0;
+  cli::ProgressReporter::Options o;
+  o.episodes = 2;
+  o.frames_per_episode = 10;
+  o.terminal = true;
+  o.out = out;
+  cli::ProgressReporter progress(o, [&] { return now; });
+  now = 1;
+  progress.Frames(10);
+  progress.EpisodeDone();
+  const std::string text = Contents(out);
+  EXPECT_EQ(text.rfind("\rrecord: 0/2 episodes  frame 10/20  10.0 frames/s  ETA 1 s", 0), 0u)
+      << text;
+  EXPECT_EQ(text.find('\n'), std::string::npos);
+  progress.Done("done");
+  EXPECT_EQ(Lines(Contents(out)).back().substr(Lines(Contents(out)).back().rfind('\r') + 1),
+            "done");
+  std::fclose(out);
+
+  std::FILE* quiet_out = std::tmpfile();
+  o.quiet = true;
+  o.terminal = false;
+  o.out = quiet_out;
+  cli::ProgressReporter quiet(o, [&] { return now; });
+  quiet.Frames(20);
+  quiet.EpisodeDone();
+  quiet.EpisodeDone();
+  quiet.Done("done");
+  EXPECT_EQ(Contents(quiet_out), "");
+  std::fclose(quiet_out);
+}
+
+TEST(ProgressInAPipeTest, RecordPrintsProgressLinesWhenStderrIsNotATerminal) {
+  unsetenv("DISPLAY");
+  TempDir tmp;
+  // stderr into a pipe (cat), stdout elsewhere: what a Slurm or Kubernetes log sees
+  const auto r = RunCommand(std::string(FETCHSCOPE_BIN) +
+                            " record --env-id FetchReach-v4 --episodes 10 --steps 2 --width 32 "
+                            "--height 32 --out " +
+                            (tmp.path() / "out").string() + " 2>&1 >/dev/null | cat");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const std::regex progress_line(
+      R"(record: progress (\d+)/10 episodes \((\d+)%\), (\d+)/30 frames, [0-9.]+ frames/s, ETA (\d+ s|unknown))");
+  int lines = 0, last_done = 0;
+  for (const std::string& line : Lines(r.output)) {
+    std::smatch m;
+    if (!std::regex_match(line, m, progress_line)) continue;
+    ++lines;
+    const int done = std::stoi(m[1]);
+    EXPECT_GE(done, last_done) << line;
+    EXPECT_EQ(std::stoi(m[2]), done * 10) << line;
+    EXPECT_GE(std::stoi(m[3]), done * 3) << line;
+    last_done = done;
+  }
+  // one line per 10% of 10 episodes (a 30 s line could add one on a very slow machine)
+  EXPECT_GE(lines, 10) << r.output;
+  EXPECT_EQ(last_done, 10) << r.output;
+  EXPECT_EQ(r.output.find('\r'), std::string::npos) << "terminal bar in a pipe";
+  EXPECT_NE(r.output.find("record: 10 episode(s)"), std::string::npos) << r.output;
+}
+
+}  // namespace
+}  // namespace fetchscope
