@@ -5,6 +5,7 @@
 #include <mujoco/mujoco.h>
 
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -38,6 +39,9 @@ struct RenderOptions {
   OverlaySet overlays;              ///< drawn by Render (not by the depth/segmentation layers)
   int msaa_samples = kMsaaModel;    ///< samples per pixel: 0 (off), 1, 2, 4, 8, 16, kMsaaModel
                                     ///< or kMsaaAuto; capped at the driver's maximum
+  /// Optional: adds more decor geoms after the overlays (the anatomy card's markers), in Render
+  /// only; must stay within scene->maxgeom (kMaxOverlayGeoms are free when overlays are off).
+  std::function<void(mjvScene*)> extra_geoms;
 };
 
 /// The CPU rasterizer a GL_RENDERER string names ("llvmpipe", "softpipe", "swrast", "SWR",
