@@ -45,6 +45,11 @@ int StopSignal();
 /// The command line as typed (set by main), recorded in manifests.
 std::string& CommandLine();
 
+/// The --help formatter of every command: a placeholder named after the option instead of
+/// CLI11's type names ("--seed SEED", not "--seed TEXT=0"), defaults in the description, no
+/// "{false}" after negated flags. Set on the app before the subcommands are added (they inherit it).
+std::shared_ptr<CLI::Formatter> MakeHelpFormatter();
+
 /// Registration of each subcommand (one file each).
 void RegisterListEnvs(CLI::App& app);
 void RegisterDescribe(CLI::App& app);
@@ -59,5 +64,6 @@ void RegisterProbeActions(CLI::App& app);
 void RegisterMergeManifests(CLI::App& app);
 void RegisterGolden(CLI::App& app);
 void RegisterListGpus(CLI::App& app);
+void RegisterAnatomy(CLI::App& app);
 
 }  // namespace fetchscope::cli

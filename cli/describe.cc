@@ -1,6 +1,7 @@
 // fetchscope describe: Gymnasium-style spaces plus what every index means.
 #include <cstdio>
 
+#include "cli/chapter.h"
 #include "cli/common.h"
 #include "src/episode.h"
 #include "src/fetch_env.h"
@@ -9,18 +10,21 @@
 namespace fetchscope::cli {
 namespace {
 
+// A Box as the chapter prints it (Gymnasium's `low.tolist()`/`high.tolist()`): one bound per
+// element, infinities as the strict-JSON strings "-inf"/"inf".
 nlohmann::json Box(int n, const std::string& dtype, double low, double high) {
-  return {{"type", "Box"}, {"shape", {n}}, {"dtype", dtype}, {"low", JsonDouble(low)},
-          {"high", JsonDouble(high)}};
+  nlohmann::json lows = nlohmann::json::array(), highs = nlohmann::json::array();
+  for (int i = 0; i < n; ++i) {
+    lows.push_back(JsonDouble(low));
+    highs.push_back(JsonDouble(high));
+  }
+  return {{"type", "Box"}, {"shape", {n}}, {"dtype", dtype}, {"low", lows}, {"high", highs}};
 }
 
-struct Label {
-  const char* name;
-  const char* meaning;
-  const char* unit;
-};
+}  // namespace
 
-std::vector<Label> ObservationLabels(bool has_object) {
+std::vector<ObservationLabel> ObservationLabels(bool has_object) {
+  using Label = ObservationLabel;
   const std::vector<Label> grip = {
       {"grip_pos.x", "gripper (site robot0:grip) position x, world frame", "m"},
       {"grip_pos.y", "gripper position y, world frame", "m"},
@@ -67,12 +71,27 @@ std::vector<Label> ObservationLabels(bool has_object) {
   return out;
 }
 
-nlohmann::json Describe(const FetchEnv& env) {
+std::string ObservationSlice(bool has_object, const std::string& slice) {
+  const std::vector<ObservationLabel> labels = ObservationLabels(has_object);
+  int first = -1, last = -1;
+  for (int i = 0; i < static_cast<int>(labels.size()); ++i) {
+    const std::string name = labels[i].name;
+    if (name.compare(0, slice.size() + 1, slice + ".") == 0) {
+      if (first < 0) first = i;
+      last = i;
+    }
+  }
+  if (first < 0) return "";
+  if (first == last) return "obs[" + std::to_string(first) + "]";
+  return "obs[" + std::to_string(first) + ":" + std::to_string(last + 1) + "]";
+}
+
+nlohmann::json DescribeJson(const FetchEnv& env) {
   const EnvSpec& s = env.spec();
   const mjModel* m = env.model();
   nlohmann::json obs_labels = nlohmann::json::array();
   int i = 0;
-  for (const Label& l : ObservationLabels(s.has_object)) {
+  for (const ObservationLabel& l : ObservationLabels(s.has_object)) {
     obs_labels.push_back({{"index", i++}, {"name", l.name}, {"meaning", l.meaning}, {"unit", l.unit}});
   }
   const std::string gripper_meaning =
@@ -96,16 +115,16 @@ nlohmann::json Describe(const FetchEnv& env) {
   j["action_space"] = Box(4, "float32", -1.0, 1.0);
   j["action_space"]["labels"] = actions;
   j["action_space"]["clipping"] = "actions are clipped to [-1, 1] before use; larger commands saturate";
-  j["observation_space"] = {
-      {"type", "Dict"},
-      {"spaces",
-       {{"achieved_goal", Box(3, "float64", -INFINITY, INFINITY)},
-        {"desired_goal", Box(3, "float64", -INFINITY, INFINITY)},
-        {"observation", Box(obs_size, "float64", -INFINITY, INFINITY)}}}};
-  j["observation_space"]["spaces"]["observation"]["labels"] = obs_labels;
-  j["observation_space"]["spaces"]["achieved_goal"]["meaning"] =
+  // the chapter's layout: the three Boxes directly under observation_space (Gymnasium's Dict
+  // space, keys sorted as Dict sorts them); our labels and meanings are extra keys in each Box
+  j["observation_space"] = {{"achieved_goal", Box(3, "float64", -INFINITY, INFINITY)},
+                            {"desired_goal", Box(3, "float64", -INFINITY, INFINITY)},
+                            {"observation", Box(obs_size, "float64", -INFINITY, INFINITY)}};
+  j["observation_space_type"] = "Dict";
+  j["observation_space"]["observation"]["labels"] = obs_labels;
+  j["observation_space"]["achieved_goal"]["meaning"] =
       s.has_object ? "object (site object0) position, m" : "gripper (site robot0:grip) position, m";
-  j["observation_space"]["spaces"]["desired_goal"]["meaning"] = "the episode's goal position, m";
+  j["observation_space"]["desired_goal"]["meaning"] = "the episode's goal position, m";
   j["reward"] = {
       {"distance", "d = || achieved_goal - desired_goal ||_2 (Euclidean, metres)"},
       {"sparse", "-1.0 if d > distance_threshold else -0.0 (float32)"},
@@ -141,7 +160,18 @@ nlohmann::json Describe(const FetchEnv& env) {
   return j;
 }
 
-}  // namespace
+void RunDescribe(const EnvOptions& env, const std::string& json_out) {
+  const EnvSpec& spec = FindEnvSpec(env.env_id);
+  FetchEnv fetch(spec, ResolveAssets(env.assets));
+  const nlohmann::json j = DescribeJson(fetch);
+  if (json_out.empty()) {
+    std::printf("%s\n", DumpJson(j).c_str());
+  } else {
+    const std::string path = JsonOutPath(json_out, "describe");
+    WriteJson(path, j);
+    std::printf("wrote %s\n", path.c_str());
+  }
+}
 
 void RegisterDescribe(CLI::App& app) {
   auto env = std::make_shared<EnvOptions>();
@@ -151,18 +181,7 @@ void RegisterDescribe(CLI::App& app) {
   AddEnvOptions(sub, env.get(), false);
   sub->add_option("--json-out", *json_out, "Write P (if it ends in .json) else P_describe.json; "
                                            "without it the JSON goes to stdout");
-  sub->callback([env, json_out]() {
-    const EnvSpec& spec = FindEnvSpec(env->env_id);
-    FetchEnv fetch(spec, ResolveAssets(env->assets));
-    const nlohmann::json j = Describe(fetch);
-    if (json_out->empty()) {
-      std::printf("%s\n", DumpJson(j).c_str());
-    } else {
-      const std::string path = JsonOutPath(*json_out, "describe");
-      WriteJson(path, j);
-      std::printf("wrote %s\n", path.c_str());
-    }
-  });
+  sub->callback([env, json_out]() { RunDescribe(*env, *json_out); });
 }
 
 }  // namespace fetchscope::cli

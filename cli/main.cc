@@ -8,6 +8,7 @@
 #include "cli/common.h"
 #include "src/errors.h"
 #include "src/fetch_env.h"
+#include "src/suggest.h"
 
 int main(int argc, char** argv) {
   using namespace fetchscope;
@@ -17,12 +18,14 @@ int main(int argc, char** argv) {
       ": step Gymnasium-Robotics Fetch v4 episodes on MuJoCo, render them headless (EGL or "
       "OSMesa), write videos, contact sheets, trajectories and the env's anatomy JSON."};
   for (int i = 0; i < argc; ++i) cli::CommandLine() += (i ? " " : "") + std::string(argv[i]);
+  app.formatter(cli::MakeHelpFormatter());  // before the subcommands: they inherit it
   app.set_version_flag("--version", FETCHSCOPE_VERSION);
   app.require_subcommand(1);
   cli::RegisterListEnvs(app);
   cli::RegisterDescribe(app);
   cli::RegisterRewardCheck(app);
   cli::RegisterRandomEpisodes(app);
+  cli::RegisterAnatomy(app);
   cli::RegisterRollout(app);
   cli::RegisterRender(app);
   cli::RegisterListCameras(app);
@@ -54,11 +57,13 @@ int main(int argc, char** argv) {
     }
     if (i < argc && argv[i][0] != '-' && !parent->get_subcommands({}).empty()) {
       std::string names;
+      std::vector<std::string> list;
       for (const CLI::App* sub : parent->get_subcommands({})) {
         names += (names.empty() ? "" : ", ") + sub->get_name();
+        list.push_back(sub->get_name());
       }
-      std::fprintf(stderr, "fetchscope: error: unknown command '%s': accepted: %s\n", argv[i],
-                   names.c_str());
+      std::fprintf(stderr, "fetchscope: error: unknown command '%s'%s: accepted: %s\n", argv[i],
+                   DidYouMean(argv[i], list).c_str(), names.c_str());
       return 2;
     }
     std::fprintf(stderr, "fetchscope: error: %s (see fetchscope --help)\n", e.what());

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "cli/chapter.h"
 #include "cli/common.h"
 #include "cli/episode_scheduler.h"
 #include "src/episode.h"
@@ -14,14 +15,6 @@
 
 namespace fetchscope::cli {
 namespace {
-
-struct RandomEpisodesOptions {
-  EnvOptions env;
-  int n_episodes = 10;
-  std::string json_out;
-  int jobs = 1;
-  std::string worker_mode = "process";
-};
 
 // Plays random episodes and reports each one's row of the metrics.
 class RandomEpisodeRunner : public EpisodeRunner {
@@ -44,6 +37,8 @@ class RandomEpisodeRunner : public EpisodeRunner {
  private:
   EpisodeSequence sequence_;
 };
+
+}  // namespace
 
 void RunRandomEpisodes(const RandomEpisodesOptions& o) {
   const EnvSpec& spec = FindEnvSpec(o.env.env_id);
@@ -90,7 +85,9 @@ void RunRandomEpisodes(const RandomEpisodesOptions& o) {
                       {"n_episodes", o.n_episodes},
                       {"success_rate", successes / n},
                       {"mean_return", mean},
+                      // the population standard deviation (numpy's np.std default, ddof=0)
                       {"std_return", std::sqrt(var)},
+                      {"std_return_ddof", 0},
                       {"mean_episode_length", total_length / n},
                       {"mean_final_distance", mean_final},
                       {"final_distances", finals},
@@ -109,12 +106,12 @@ void RunRandomEpisodes(const RandomEpisodesOptions& o) {
               std::sqrt(var), total_length / n, mean_final, path.c_str());
 }
 
-}  // namespace
-
 void RegisterRandomEpisodes(CLI::App& app) {
   auto o = std::make_shared<RandomEpisodesOptions>();
   CLI::App* sub = app.add_subcommand(
-      "random-episodes", "Random-policy baseline: success rate, returns, lengths, final distances");
+      "random-episodes",
+      "Random-policy baseline: success rate, mean and std of returns (std over episodes with "
+      "ddof=0, numpy's np.std default), lengths, final distances");
   AddEnvOptions(sub, &o->env);
   sub->add_option("--n-episodes", o->n_episodes, "Episodes to run")
       ->capture_default_str()

@@ -8,6 +8,7 @@
 #include "render/png_io.h"
 #include "render/renderer.h"
 #include "src/errors.h"
+#include "src/suggest.h"
 
 namespace fetchscope::cli {
 namespace {
@@ -43,8 +44,7 @@ void RegisterRender(CLI::App& app) {
   sub->add_flag("-v,--verbose", *verbose, "Print the GL vendor, renderer and version, and the MSAA samples used and why");
   sub->callback([=]() {
     bool want_rgb = false, want_depth = false, want_seg = false;
-    std::stringstream ss(*layers);
-    for (std::string token; std::getline(ss, token, ',');) {
+    for (const std::string& token : SplitCommaList(*layers)) {
       if (token == "rgb") {
         want_rgb = true;
       } else if (token == "depth") {
@@ -52,7 +52,9 @@ void RegisterRender(CLI::App& app) {
       } else if (token == "segmentation") {
         want_seg = true;
       } else {
-        throw UsageError("--layers: unknown layer '" + token + "': use rgb, depth, segmentation");
+        throw UsageError("--layers: unknown layer '" + token + "'" +
+                         DidYouMean(token, {"rgb", "depth", "segmentation"}) +
+                         ": use rgb, depth, segmentation");
       }
     }
     const EnvSpec& spec = FindEnvSpec(env->env_id);

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "cli/chapter.h"
 #include "cli/common.h"
 #include "src/episode.h"
 #include "src/fetch_env.h"
@@ -32,110 +33,115 @@ struct Mismatch {
 
 }  // namespace
 
+bool RunRewardCheck(const RewardCheckOptions& options) {
+  const EnvSpec& chosen = FindEnvSpec(options.env.env_id);
+  const uint64_t seed = ParseSeed(options.env.seed);
+  const AssetSource assets = ResolveAssets(options.env.assets);
+  std::vector<Mismatch> mismatches;
+  nlohmann::json variants = nlohmann::json::array();
+  for (const EnvSpec& spec : AllEnvSpecs()) {
+    if (spec.task != chosen.task) continue;
+    FetchEnv fetch(spec, assets);
+    PolicyContext context;
+    context.seed = seed;
+    auto policy = MakePolicy("random", spec, context);
+    NumpyGenerator relabel_rng(seed + 1);
+    long step_checks = 0, relabel_checks = 0, success_checks = 0;
+    int done = 0, episode = 0;
+    while (done < options.n_steps) {
+      const int steps = std::min(spec.max_episode_steps, options.n_steps - done);
+      std::vector<std::array<double, 3>> achieved;
+      auto check = [&](const StepRecord& s, const StepResult* r) {
+        achieved.push_back(s.obs.achieved_goal);
+        if (!r) return true;
+        const double expected = FormulaReward(spec.dense, spec.distance_threshold,
+                                              s.obs.achieved_goal, s.obs.desired_goal);
+        ++step_checks;
+        if (!SameBits(r->reward, expected)) {
+          mismatches.push_back({spec.id, "step reward", episode, s.t, r->reward, expected});
+        }
+        const double via_env = fetch.ComputeReward(s.obs.achieved_goal, s.obs.desired_goal);
+        if (!SameBits(via_env, r->reward)) {
+          mismatches.push_back({spec.id, "compute_reward", episode, s.t, via_env, r->reward});
+        }
+        double d2 = 0;
+        for (int i = 0; i < 3; ++i) {
+          d2 += (s.obs.achieved_goal[i] - s.obs.desired_goal[i]) * (s.obs.achieved_goal[i] - s.obs.desired_goal[i]);
+        }
+        ++success_checks;
+        if (r->is_success != (std::sqrt(d2) < spec.distance_threshold)) {
+          mismatches.push_back({spec.id, "is_success", episode, s.t, double(r->is_success),
+                                double(!r->is_success)});
+        }
+        return true;
+      };
+      RunEpisode(fetch, *policy, episode, episode == 0 ? std::optional<uint64_t>(seed) : std::nullopt,
+                 steps, check);
+      // relabel: pair each achieved goal with a future achieved goal and with a random goal
+      for (size_t t = 0; t < achieved.size(); ++t) {
+        const size_t future = t + static_cast<size_t>(relabel_rng.NextDouble() * (achieved.size() - t));
+        std::array<double, 3> random_goal;
+        for (int i = 0; i < 3; ++i) {
+          random_goal[i] = fetch.initial_gripper_xpos()[i] + relabel_rng.Uniform(-0.3, 0.3);
+        }
+        for (const auto& goal : {achieved[std::min(future, achieved.size() - 1)], random_goal}) {
+          const double got = fetch.ComputeReward(achieved[t], goal);
+          const double expected = FormulaReward(spec.dense, spec.distance_threshold, achieved[t], goal);
+          ++relabel_checks;
+          if (!SameBits(got, expected)) {
+            mismatches.push_back({spec.id, "relabelled reward", episode, int(t), got, expected});
+          }
+        }
+      }
+      done += steps;
+      ++episode;
+    }
+    std::printf("%-28s %ld step rewards, %ld success flags, %ld relabelled rewards: %s\n",
+                spec.id.c_str(), step_checks, success_checks, relabel_checks,
+                mismatches.empty() ? "all equal" : "MISMATCH");
+    variants.push_back({{"env_id", spec.id},
+                        {"step_rewards_checked", step_checks},
+                        {"success_flags_checked", success_checks},
+                        {"relabelled_rewards_checked", relabel_checks},
+                        {"episodes", episode}});
+  }
+  nlohmann::json first = nlohmann::json::array();
+  for (size_t i = 0; i < mismatches.size() && i < 20; ++i) {
+    const Mismatch& mm = mismatches[i];
+    first.push_back({{"env_id", mm.env_id}, {"kind", mm.kind}, {"episode", mm.episode},
+                     {"t", mm.t}, {"got", JsonDouble(mm.got)}, {"expected", JsonDouble(mm.expected)}});
+    std::printf("  mismatch: %s %s episode %d t %d: got %.17g expected %.17g\n", mm.env_id.c_str(),
+                mm.kind.c_str(), mm.episode, mm.t, mm.got, mm.expected);
+  }
+  const bool pass = mismatches.empty();
+  std::printf("reward-check %s: %s (n-steps %d, seed %s, assets %s)\n",
+              TaskName(chosen.task).c_str(), pass ? "PASS" : "FAIL", options.n_steps, options.env.seed.c_str(),
+              assets.kind.c_str());
+  if (!options.json_out.empty()) {
+    nlohmann::json j = {{"task", TaskName(chosen.task)}, {"pass", pass}, {"n_steps", options.n_steps},
+                        {"seed", seed}, {"assets", AssetsJson(assets)}, {"variants", variants},
+                        {"mismatch_count", mismatches.size()}, {"first_mismatches", first},
+                        {"versions", VersionsJson()}};
+    const std::string path = JsonOutPath(options.json_out, "reward_check");
+    WriteJson(path, j);
+    std::printf("wrote %s\n", path.c_str());
+  }
+  return pass;
+}
+
 void RegisterRewardCheck(CLI::App& app) {
-  auto env = std::make_shared<EnvOptions>();
-  auto n_steps = std::make_shared<int>(500);
-  auto json_out = std::make_shared<std::string>();
+  auto o = std::make_shared<RewardCheckOptions>();
   CLI::App* sub = app.add_subcommand(
       "reward-check",
       "Check every step's reward against compute_reward, sparse and dense, plus relabelled goals");
-  AddEnvOptions(sub, env.get());
-  sub->add_option("--n-steps", *n_steps, "Random-policy steps per variant")
+  AddEnvOptions(sub, &o->env);
+  sub->add_option("--n-steps", o->n_steps, "Random-policy steps per variant")
       ->capture_default_str()
       ->check(CLI::Range(1, 10000000));
-  sub->add_option("--json-out", *json_out, "Write P (.json) or P_reward_check.json");
-  sub->callback([env, n_steps, json_out]() {
-    const EnvSpec& chosen = FindEnvSpec(env->env_id);
-    const uint64_t seed = ParseSeed(env->seed);
-    const AssetSource assets = ResolveAssets(env->assets);
-    std::vector<Mismatch> mismatches;
-    nlohmann::json variants = nlohmann::json::array();
-    for (const EnvSpec& spec : AllEnvSpecs()) {
-      if (spec.task != chosen.task) continue;
-      FetchEnv fetch(spec, assets);
-      PolicyContext context;
-      context.seed = seed;
-      auto policy = MakePolicy("random", spec, context);
-      NumpyGenerator relabel_rng(seed + 1);
-      long step_checks = 0, relabel_checks = 0, success_checks = 0;
-      int done = 0, episode = 0;
-      while (done < *n_steps) {
-        const int steps = std::min(spec.max_episode_steps, *n_steps - done);
-        std::vector<std::array<double, 3>> achieved;
-        auto check = [&](const StepRecord& s, const StepResult* r) {
-          achieved.push_back(s.obs.achieved_goal);
-          if (!r) return true;
-          const double expected = FormulaReward(spec.dense, spec.distance_threshold,
-                                                s.obs.achieved_goal, s.obs.desired_goal);
-          ++step_checks;
-          if (!SameBits(r->reward, expected)) {
-            mismatches.push_back({spec.id, "step reward", episode, s.t, r->reward, expected});
-          }
-          const double via_env = fetch.ComputeReward(s.obs.achieved_goal, s.obs.desired_goal);
-          if (!SameBits(via_env, r->reward)) {
-            mismatches.push_back({spec.id, "compute_reward", episode, s.t, via_env, r->reward});
-          }
-          double d2 = 0;
-          for (int i = 0; i < 3; ++i) {
-            d2 += (s.obs.achieved_goal[i] - s.obs.desired_goal[i]) * (s.obs.achieved_goal[i] - s.obs.desired_goal[i]);
-          }
-          ++success_checks;
-          if (r->is_success != (std::sqrt(d2) < spec.distance_threshold)) {
-            mismatches.push_back({spec.id, "is_success", episode, s.t, double(r->is_success),
-                                  double(!r->is_success)});
-          }
-          return true;
-        };
-        RunEpisode(fetch, *policy, episode, episode == 0 ? std::optional<uint64_t>(seed) : std::nullopt,
-                   steps, check);
-        // relabel: pair each achieved goal with a future achieved goal and with a random goal
-        for (size_t t = 0; t < achieved.size(); ++t) {
-          const size_t future = t + static_cast<size_t>(relabel_rng.NextDouble() * (achieved.size() - t));
-          std::array<double, 3> random_goal;
-          for (int i = 0; i < 3; ++i) {
-            random_goal[i] = fetch.initial_gripper_xpos()[i] + relabel_rng.Uniform(-0.3, 0.3);
-          }
-          for (const auto& goal : {achieved[std::min(future, achieved.size() - 1)], random_goal}) {
-            const double got = fetch.ComputeReward(achieved[t], goal);
-            const double expected = FormulaReward(spec.dense, spec.distance_threshold, achieved[t], goal);
-            ++relabel_checks;
-            if (!SameBits(got, expected)) {
-              mismatches.push_back({spec.id, "relabelled reward", episode, int(t), got, expected});
-            }
-          }
-        }
-        done += steps;
-        ++episode;
-      }
-      std::printf("%-28s %ld step rewards, %ld success flags, %ld relabelled rewards: %s\n",
-                  spec.id.c_str(), step_checks, success_checks, relabel_checks,
-                  mismatches.empty() ? "all equal" : "MISMATCH");
-      variants.push_back({{"env_id", spec.id},
-                          {"step_rewards_checked", step_checks},
-                          {"success_flags_checked", success_checks},
-                          {"relabelled_rewards_checked", relabel_checks},
-                          {"episodes", episode}});
-    }
-    nlohmann::json first = nlohmann::json::array();
-    for (size_t i = 0; i < mismatches.size() && i < 20; ++i) {
-      const Mismatch& mm = mismatches[i];
-      first.push_back({{"env_id", mm.env_id}, {"kind", mm.kind}, {"episode", mm.episode},
-                       {"t", mm.t}, {"got", JsonDouble(mm.got)}, {"expected", JsonDouble(mm.expected)}});
-      std::printf("  mismatch: %s %s episode %d t %d: got %.17g expected %.17g\n", mm.env_id.c_str(),
-                  mm.kind.c_str(), mm.episode, mm.t, mm.got, mm.expected);
-    }
-    const bool pass = mismatches.empty();
-    std::printf("reward-check %s: %s (n-steps %d, seed %s, assets %s)\n",
-                TaskName(chosen.task).c_str(), pass ? "PASS" : "FAIL", *n_steps, env->seed.c_str(),
-                assets.kind.c_str());
-    if (!json_out->empty()) {
-      nlohmann::json j = {{"task", TaskName(chosen.task)}, {"pass", pass}, {"n_steps", *n_steps},
-                          {"seed", seed}, {"assets", AssetsJson(assets)}, {"variants", variants},
-                          {"mismatch_count", mismatches.size()}, {"first_mismatches", first},
-                          {"versions", VersionsJson()}};
-      WriteJson(JsonOutPath(*json_out, "reward_check"), j);
-    }
-    if (!pass) ExitStatus() = 1;
+  sub->add_option("--json-out", o->json_out, "Write P (.json) or P_reward_check.json; without it only the table is "
+                  "printed");
+  sub->callback([o]() {
+    if (!RunRewardCheck(*o)) ExitStatus() = 1;
   });
 }
 

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "src/errors.h"
+#include "src/suggest.h"
 
 namespace fetchscope {
 namespace {
@@ -132,8 +133,10 @@ CameraSpec ParseOne(const std::string& token, const mjModel* model) {
     spec.kind = CameraSpec::kNamed;
     return spec;
   }
-  throw UsageError("camera '" + token + "' is not known; " + kAccepted +
-                   " (model cameras: " + ModelCameraNames(model) + ")");
+  std::vector<std::string> names = {"default", "track", "free"};
+  for (int i = 0; model && i < model->ncam; ++i) names.push_back(mj_id2name(model, mjOBJ_CAMERA, i));
+  throw UsageError("camera '" + token + "' is not known" + DidYouMean(token, names) + "; " +
+                   kAccepted + " (model cameras: " + ModelCameraNames(model) + ")");
 }
 
 }  // namespace
@@ -145,7 +148,7 @@ std::vector<CameraSpec> ParseCameraList(const std::string& spec, const mjModel* 
   // camera before it (its keys and lookat values); anything else, "free..." included, starts
   // a new camera.
   std::vector<std::string> tokens;
-  for (const std::string& part : Split(spec, ',')) {
+  for (const std::string& part : SplitCommaList(spec)) {  // "default, track" as "default,track"
     double unused;
     bool continues = part.rfind("free", 0) != 0 &&
                      (part.find('=') != std::string::npos || ParseNumber(part, &unused));

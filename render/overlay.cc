@@ -5,12 +5,13 @@
 #include <string>
 
 #include "src/errors.h"
+#include "src/suggest.h"
 
 namespace fetchscope {
 namespace {
 
 constexpr char kAcceptedOverlays[] =
-    "accepted: default, none, or a comma list of goal, achieved, hud, action, trail";
+    "accepted: default, none, all, or a comma list of goal, achieved, hud, action, trail";
 
 // Colours (rgba).
 constexpr float kGoalRed[4] = {1.0f, 0.0f, 0.0f, 1.0f};       // as target0
@@ -64,14 +65,11 @@ std::string Format(const char* format, double value) {
 }  // namespace
 
 OverlaySet ParseOverlays(const std::string& spec) {
-  if (spec == "default") return OverlaySet{};
+  const std::string trimmed = TrimSpaces(spec);
+  if (trimmed == "default") return OverlaySet{};
   OverlaySet set{false, false, false, false, false};
-  if (spec == "none") return set;
-  size_t start = 0;
-  while (true) {
-    size_t end = spec.find(',', start);
-    std::string token =
-        spec.substr(start, end == std::string::npos ? std::string::npos : end - start);
+  if (trimmed == "none") return set;
+  for (const std::string& token : SplitCommaList(spec)) {
     if (token == "goal") {
       set.goal = true;
     } else if (token == "achieved") {
@@ -84,13 +82,16 @@ OverlaySet ParseOverlays(const std::string& spec) {
       set.trail = true;
     } else if (token == "default") {
       set.goal = set.achieved = set.hud = true;
+    } else if (token == "all") {
+      set = OverlaySet{true, true, true, true, true};
     } else {
-      throw UsageError("overlay '" + token + "' in '" + spec + "' is not known; " +
-                       kAcceptedOverlays);
+      const std::string suggestion = DidYouMean(
+          token, {"goal", "achieved", "hud", "action", "trail", "default", "none", "all"});
+      throw UsageError("overlay '" + token + "' in '" + spec + "' is not known" + suggestion +
+                       "; " + kAcceptedOverlays);
     }
-    if (end == std::string::npos) return set;
-    start = end + 1;
   }
+  return set;
 }
 
 void Trail::Add(int step, const std::array<double, 3>& position) {

@@ -23,8 +23,9 @@ struct OverlaySet {
   bool trail = false;    ///< polyline of recent achieved-goal positions
 };
 
-/// Parses --overlay: "default", "none", or a comma list of goal|achieved|hud|action|trail.
-/// Throws UsageError naming the bad token and listing the accepted ones.
+/// Parses --overlay: "default", "none", "all", or a comma list of
+/// goal|achieved|hud|action|trail|default|all (spaces around items are ignored). Throws
+/// UsageError naming the bad token, the nearest accepted one and listing the accepted ones.
 OverlaySet ParseOverlays(const std::string& spec);
 
 /// What the overlays show for one frame (the environment fills it).

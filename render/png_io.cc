@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "src/atomic_file.h"
 #include "src/errors.h"
 
 namespace fetchscope {
@@ -128,6 +129,7 @@ void WritePng(const std::string& path, int width, int height, int channels, int 
     rows[y] = const_cast<png_bytep>(static_cast<const png_byte*>(pixels) + y * row_bytes);
   }
 
+  ParentFolders parents(path);  // missing folders are created; removed again if this fails
   // hidden (".NAME.tmp-XXXXXX"), like every other temporary, so a killed run leaves nothing that
   // looks like an output
   const size_t slash = path.rfind('/');
@@ -160,6 +162,7 @@ void WritePng(const std::string& path, int width, int height, int channels, int 
     unlink(temp.c_str());
     throw RunError("cannot write " + path + ": " + std::strerror(err));
   }
+  parents.Keep();
 }
 
 Image ReadPng(const std::string& path) {

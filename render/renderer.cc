@@ -416,6 +416,7 @@ void Renderer::Draw(const mjData* data, const FrameInfo& info, bool overlays) {
         }
         if (options_.overlays.trail) trail_.Add(info.step, info.achieved);
         AddOverlayGeoms(options_.overlays, info, grip, trail_, !placed, scene);
+        if (options_.extra_geoms) options_.extra_geoms(scene);
       } else if (!placed) {
         AddOverlayGeoms(OverlaySet{false, false, false, false, false}, info, {}, trail_, true,
                         scene);

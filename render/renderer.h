@@ -6,6 +6,7 @@
 
 #include <cstdint>
 #include <deque>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -51,6 +52,9 @@ struct RenderOptions {
   int msaa_samples = kMsaaModel;    ///< samples per pixel: 0 (off), 1, 2, 4, 8, 16, kMsaaModel
                                     ///< or kMsaaAuto; capped at the driver's maximum
   Readback readback = Readback::kAuto;  ///< how Submit/Collect read frames back
+  /// Optional: adds more decor geoms after the overlays (the anatomy card's markers), in Render
+  /// only; must stay within scene->maxgeom (kMaxOverlayGeoms are free when overlays are off).
+  std::function<void(mjvScene*)> extra_geoms;
 };
 
 /// The CPU rasterizer a GL_RENDERER string names ("llvmpipe", "softpipe", "swrast", "SWR",

@@ -1,11 +1,13 @@
 #include "src/atomic_file.h"
 
 #include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <atomic>
 #include <cerrno>
 #include <cstring>
+#include <filesystem>
 #include <utility>
 
 #include "src/errors.h"
@@ -33,7 +35,58 @@ std::string ErrnoText(int error) {
   return error != 0 ? std::strerror(error) : "input/output error";
 }
 
+// `final_path` itself, after checking that it names a file (for the member initialiser).
+const std::string& CheckedFilePath(const std::string& final_path) {
+  const std::string name = SplitPath(final_path).second;
+  if (name.empty() || name == "." || name == "..") {
+    throw RunError("cannot write '" + final_path + "': it names a folder, not a file");
+  }
+  return final_path;
+}
+
 }  // namespace
+
+ParentFolders::ParentFolders(const std::string& file_path) {
+  namespace fs = std::filesystem;
+  const fs::path folder = fs::path(file_path).parent_path();
+  // the missing folders, innermost first; an error while looking (a file in the way, no
+  // permission) shows up below when the folder cannot be created
+  std::vector<fs::path> missing;
+  for (fs::path p = folder; !p.empty(); p = p.parent_path()) {
+    std::error_code ec;
+    if (fs::exists(p, ec)) break;
+    missing.push_back(p);
+    if (p == p.parent_path()) break;  // the root
+  }
+  for (auto it = missing.rbegin(); it != missing.rend(); ++it) {
+    if (::mkdir(it->c_str(), 0777) == 0) {
+      created_.push_back(it->string());
+    } else if (errno != EEXIST || !fs::is_directory(*it)) {  // EEXIST: made by a concurrent writer
+      const int error = errno == EEXIST ? ENOTDIR : errno;
+      RemoveCreated();
+      throw RunError("cannot create folder '" + it->string() + "': " + std::strerror(error));
+    }
+  }
+}
+
+ParentFolders::~ParentFolders() { RemoveCreated(); }
+
+ParentFolders::ParentFolders(ParentFolders&& other) noexcept
+    : created_(std::exchange(other.created_, {})) {}
+
+ParentFolders& ParentFolders::operator=(ParentFolders&& other) noexcept {
+  if (this != &other) {
+    RemoveCreated();
+    created_ = std::exchange(other.created_, {});
+  }
+  return *this;
+}
+
+void ParentFolders::RemoveCreated() noexcept {
+  // deepest first; rmdir leaves a folder that someone else has put a file in since
+  for (auto it = created_.rbegin(); it != created_.rend(); ++it) ::rmdir(it->c_str());
+  created_.clear();
+}
 
 std::string TempPathFor(const std::string& final_path) {
   const auto [folder, name] = SplitPath(final_path);
@@ -49,11 +102,9 @@ void CommitTempFile(const std::string& temp_path, const std::string& final_path)
   }
 }
 
-AtomicFile::AtomicFile(const std::string& final_path) : final_path_(final_path) {
+AtomicFile::AtomicFile(const std::string& final_path)
+    : final_path_(CheckedFilePath(final_path)), parents_(final_path) {
   const auto [folder, name] = SplitPath(final_path);
-  if (name.empty() || name == "." || name == "..") {
-    throw RunError("cannot write '" + final_path + "': it names a folder, not a file");
-  }
   // O_EXCL: never write into someone else's file (a stale temp left by a reused pid is skipped)
   for (int attempt = 0; attempt < 100; ++attempt) {
     temp_path_ = TempPathFor(final_path);
@@ -81,6 +132,7 @@ AtomicFile::~AtomicFile() { Discard(); }
 
 AtomicFile::AtomicFile(AtomicFile&& other) noexcept
     : final_path_(std::move(other.final_path_)),
+      parents_(std::move(other.parents_)),
       temp_path_(std::move(other.temp_path_)),
       file_(std::exchange(other.file_, nullptr)),
       pending_(std::exchange(other.pending_, false)),
@@ -90,6 +142,7 @@ AtomicFile& AtomicFile::operator=(AtomicFile&& other) noexcept {
   if (this != &other) {
     Discard();
     final_path_ = std::move(other.final_path_);
+    parents_ = std::move(other.parents_);
     temp_path_ = std::move(other.temp_path_);
     file_ = std::exchange(other.file_, nullptr);
     pending_ = std::exchange(other.pending_, false);
@@ -119,6 +172,7 @@ void AtomicFile::Commit() {
   }
   pending_ = false;
   CommitTempFile(temp_path_, final_path_);
+  parents_.Keep();
 }
 
 void AtomicFile::Discard() noexcept {

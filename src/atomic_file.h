@@ -5,8 +5,36 @@
 #include <cstdio>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace fetchscope {
+
+/// Creates the missing folders above a file about to be written (mkdir -p of its folder part), so
+/// every output path (`--json-out`, `-o`, `--out`) may name folders that do not exist yet. Unless
+/// Keep() is called, destruction removes again the folders it created, deepest first and only
+/// while empty, so a write that fails leaves no new empty folders behind. Movable, not copyable.
+class ParentFolders {
+ public:
+  /// Throws RunError naming the folder if one cannot be created, e.g. "cannot create folder
+  /// 'out/a': Not a directory" (a file is in the way) or "...: Permission denied".
+  explicit ParentFolders(const std::string& file_path);
+  ~ParentFolders();
+  ParentFolders(const ParentFolders&) = delete;
+  ParentFolders& operator=(const ParentFolders&) = delete;
+  ParentFolders(ParentFolders&& other) noexcept;
+  ParentFolders& operator=(ParentFolders&& other) noexcept;
+
+  /// The file was written: keep the folders.
+  void Keep() { created_.clear(); }
+
+  /// The folders this object created, outermost first.
+  const std::vector<std::string>& created() const { return created_; }
+
+ private:
+  void RemoveCreated() noexcept;
+
+  std::vector<std::string> created_;
+};
 
 /// The temporary name a writer should use for `final_path`: "<dir>/.<name>.tmp-<pid>-<n>", with
 /// n a process-wide counter, so concurrent writers (threads, processes, Slurm tasks sharing a
@@ -18,7 +46,8 @@ std::string TempPathFor(const std::string& final_path);
 /// the temporary is removed and RunError names the final path.
 void CommitTempFile(const std::string& temp_path, const std::string& final_path);
 
-/// A file being written atomically. The constructor creates the temporary file; Commit() checks
+/// A file being written atomically. The constructor creates missing parent folders (see
+/// ParentFolders; removed again if the file is never committed) and the temporary file; Commit() checks
 /// every write succeeded and renames it to the final path; destruction without Commit() (an
 /// error, an interrupt) removes the temporary. Not thread-safe; movable, not copyable.
 class AtomicFile {
@@ -54,6 +83,7 @@ class AtomicFile {
   void Discard() noexcept;
 
   std::string final_path_;
+  ParentFolders parents_;      // created before the temporary, removed after it if not committed
   std::string temp_path_;
   std::FILE* file_ = nullptr;  // open until Commit() or destruction
   bool pending_ = false;       // the temporary exists and is ours to remove

@@ -1,6 +1,7 @@
 #include "src/env_spec.h"
 
 #include "src/errors.h"
+#include "src/suggest.h"
 
 namespace fetchscope {
 namespace {
@@ -61,11 +62,14 @@ const std::vector<EnvSpec>& AllEnvSpecs() {
 const EnvSpec& FindEnvSpec(const std::string& id) {
   const std::string wanted = (id == "auto") ? "FetchReachDense-v4" : id;
   std::string valid;
+  std::vector<std::string> names = {"auto"};
   for (const EnvSpec& s : AllEnvSpecs()) {
     if (s.id == wanted) return s;
     valid += (valid.empty() ? "" : ", ") + s.id;
+    names.push_back(s.id);
   }
-  throw UsageError("unknown env id '" + id + "': use one of " + valid + " (or auto)");
+  throw UsageError("unknown env id '" + id + "'" + DidYouMean(id, names) + ": use one of " +
+                   valid + " (or auto)");
 }
 
 std::string TaskName(Task task) {

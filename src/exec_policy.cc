@@ -86,7 +86,10 @@ class ExecPolicy : public Policy {
       a.value = ParseActionLine(answer);
       return a;
     } catch (const RunError& e) {
-      throw RunError("exec policy '" + command_ + "' at step " + std::to_string(t) + ": " + e.what());
+      // the usual cause: a print() or a library's log line on stdout, which is the protocol's
+      throw RunError("exec policy '" + command_ + "' at step " + std::to_string(t) + ": " +
+                     e.what() + "; its stdout must carry only the action lines: send logs and "
+                     "prints to stderr (Python: print(..., file=sys.stderr))");
     }
   }
   std::string name() const override { return "exec:" + command_; }

@@ -132,7 +132,7 @@ std::vector<Action> ParseCsv(std::string text, const std::string& name) {
     bool all_words = true;
     bool any_text = false;
     for (size_t c = 0; c < fields.size(); ++c) {
-      double v;
+      double v = 0;  // what ParseDouble leaves on failure does not matter: any_text reports it
       const bool ok = ParseDouble(fields[c], &v);
       if (c < kActionSize) values[c] = v;
       all_words = all_words && !ok && !StartsLikeNumber(fields[c]);

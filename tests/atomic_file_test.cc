@@ -108,14 +108,57 @@ TEST(AtomicFileTest, UnwritableFolderNamesTheFolder) {
   TempDir dir;
   // tests run as root, where mode bits do not stop writes: use a missing folder and a regular
   // file in the folder's place instead
-  const std::string missing = (dir.path() / "no" / "such").string();
-  EXPECT_EQ(ErrorOf([&] { AtomicFile file(missing + "/a.json"); }),
-            "cannot write to folder '" + missing + "': No such file or directory");
   EXPECT_EQ(ErrorOf([] { WriteFileAtomically("/etc/hostname/x.json", "{}"); }),
             "cannot write to folder '/etc/hostname': Not a directory");
   EXPECT_EQ(ErrorOf([&] { AtomicFile file(dir.path().string() + "/"); }),
             "cannot write '" + dir.path().string() + "/': it names a folder, not a file");
   EXPECT_EQ(FileCount(dir.path()), 0u);
+}
+
+TEST(AtomicFileTest, MissingParentFoldersAreCreated) {
+  TempDir dir;
+  const std::filesystem::path path = dir.path() / "results" / "deep" / "ch01_env_describe.json";
+  WriteFileAtomically(path.string(), "{}\n");
+  EXPECT_EQ(ReadFile(path), "{}\n");
+  EXPECT_EQ(FileCount(dir.path() / "results" / "deep"), 1u);  // no temporary left
+
+  // a relative path with a bare folder name, as the course types it
+  const std::filesystem::path cwd = std::filesystem::current_path();
+  std::filesystem::current_path(dir.path());
+  WriteFileAtomically("results2/x.json", "1");
+  std::filesystem::current_path(cwd);
+  EXPECT_EQ(ReadFile(dir.path() / "results2" / "x.json"), "1");
+}
+
+TEST(AtomicFileTest, FoldersCreatedForAFileNeverCommittedAreRemoved) {
+  TempDir dir;
+  std::filesystem::create_directory(dir.path() / "kept");
+  {
+    AtomicFile file((dir.path() / "kept" / "new" / "newer" / "a.json").string());
+    file.Write("lost");
+    EXPECT_TRUE(std::filesystem::is_directory(dir.path() / "kept" / "new" / "newer"));
+  }
+  // the folders this write made are gone again; the one that was there stays
+  EXPECT_TRUE(std::filesystem::is_directory(dir.path() / "kept"));
+  EXPECT_EQ(FileCount(dir.path() / "kept"), 0u);
+
+  // a folder that meanwhile holds someone else's file stays
+  {
+    ParentFolders parents((dir.path() / "a" / "b" / "c.png").string());
+    EXPECT_EQ(parents.created().size(), 2u);
+    WriteFileAtomically((dir.path() / "a" / "other.json").string(), "x");
+  }
+  EXPECT_TRUE(std::filesystem::exists(dir.path() / "a" / "other.json"));
+  EXPECT_FALSE(std::filesystem::exists(dir.path() / "a" / "b"));
+}
+
+TEST(AtomicFileTest, AFileInTheWayOfAParentFolderNamesIt) {
+  TempDir dir;
+  WriteFileAtomically((dir.path() / "f").string(), "x");
+  const std::string in_the_way = (dir.path() / "f" / "sub").string();
+  EXPECT_EQ(ErrorOf([&] { WriteFileAtomically(in_the_way + "/a.json", "{}"); }),
+            "cannot create folder '" + in_the_way + "': Not a directory");
+  EXPECT_EQ(FileCount(dir.path()), 1u);
 }
 
 TEST(AtomicFileTest, FinalPathThatIsAFolderFailsAtCommit) {

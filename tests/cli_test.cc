@@ -41,13 +41,23 @@ TEST(Cli, DescribeEveryId) {
     const bool pick = std::string(id).find("PickAndPlace") != std::string::npos;
     EXPECT_EQ(j["action_space"]["shape"][0], 4);
     EXPECT_EQ(j["action_space"]["dtype"], "float32");
-    EXPECT_EQ(j["action_space"]["low"], -1.0);
-    const auto& spaces = j["observation_space"]["spaces"];
+    // the chapter's D1 layout: one bound per element, the Boxes directly under
+    // observation_space, infinities as strict-JSON strings
+    EXPECT_EQ(j["action_space"]["low"], nlohmann::json::parse("[-1.0, -1.0, -1.0, -1.0]"));
+    EXPECT_EQ(j["action_space"]["high"], nlohmann::json::parse("[1.0, 1.0, 1.0, 1.0]"));
+    const auto& spaces = j["observation_space"];
+    EXPECT_EQ(spaces.size(), 3u) << spaces.dump();
     const int n = reach ? 10 : 25;
-    EXPECT_EQ(spaces["observation"]["shape"][0], n);
+    EXPECT_EQ(spaces["observation"]["shape"], nlohmann::json::array({n}));
     EXPECT_EQ(spaces["observation"]["labels"].size(), static_cast<size_t>(n));
-    EXPECT_EQ(spaces["achieved_goal"]["shape"][0], 3);
-    EXPECT_EQ(spaces["observation"]["high"], "inf");  // strict JSON: infinity as a string
+    for (const char* key : {"achieved_goal", "desired_goal"}) {
+      EXPECT_EQ(spaces[key]["type"], "Box");
+      EXPECT_EQ(spaces[key]["dtype"], "float64");
+      EXPECT_EQ(spaces[key]["shape"], nlohmann::json::array({3}));
+      EXPECT_EQ(spaces[key]["low"], nlohmann::json::array({"-inf", "-inf", "-inf"}));
+    }
+    EXPECT_EQ(spaces["observation"]["high"], std::vector<std::string>(n, "inf"));
+    EXPECT_EQ(spaces["observation"]["low"], std::vector<std::string>(n, "-inf"));
     EXPECT_EQ(j["action_space"]["labels"].size(), 4u);
     const std::string grip = j["action_space"]["labels"][3]["meaning"];
     if (pick) {
@@ -190,7 +200,7 @@ TEST_P(BadInputTest, OneClearLineAndNoOutputFile) {
 INSTANTIATE_TEST_SUITE_P(
     Anatomy, BadInputTest,
     ::testing::Values(
-        BadInput{"describe --env-id FetchReach-v9", 2, "unknown env id 'FetchReach-v9': use one of FetchReach-v4"},
+        BadInput{"describe --env-id FetchReach-v9", 2, "unknown env id 'FetchReach-v9' (did you mean 'FetchReach-v4'?): use one of FetchReach-v4"},
         BadInput{"describe --assets TMP/missing", 2, "missing' does not exist: use bundled, auto"},
         BadInput{"describe --assets TMP", 2, "has no fetch/reach.xml"},
         BadInput{"describe --env-id FetchReach-v4 --assets TMP/bad", 1, "bad/fetch/reach.xml': XML parse error"},

@@ -72,7 +72,9 @@ TEST_P(EveryTask, ObservationLayoutAndGoals) {
       EXPECT_DOUBLE_EQ(obs.observation[6 + i], obs.observation[3 + i] - obs.observation[i]);
     }
     // object tasks: goal on the table (or lifted, PickAndPlace) at the settled object height
-    if (!env.spec().target_in_the_air) EXPECT_EQ(obs.desired_goal[2], env.height_offset());
+    if (!env.spec().target_in_the_air) {
+      EXPECT_EQ(obs.desired_goal[2], env.height_offset());
+    }
     // the object starts at least 0.1 m from the gripper in xy
     EXPECT_GE(std::hypot(obs.observation[3] - env.initial_gripper_xpos()[0],
                          obs.observation[4] - env.initial_gripper_xpos()[1]), 0.1);

@@ -1,0 +1,59 @@
+// The course chapter's deliverables as functions: D1 (describe), D2 (reward-check), D3
+// (random-episodes), shared by those subcommands and by `anatomy`, which makes them all at once.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "cli/common.h"
+#include "src/fetch_env.h"
+
+namespace fetchscope::cli {
+
+/// One observation index as describe labels it.
+struct ObservationLabel {
+  const char* name;     ///< e.g. "grip_pos.x": slice name, '.', component
+  const char* meaning;  ///< one line
+  const char* unit;     ///< "m", "m/step", "rad", ...
+};
+
+/// The label of every observation index, in order (10 for Reach, 25 for the object tasks).
+std::vector<ObservationLabel> ObservationLabels(bool has_object);
+
+/// The indices of slice `slice` (e.g. "grip_pos", "object_rel_pos", "gripper_state") in Python
+/// slice notation, "obs[0:3]", or "obs[3]" for one index; "" when the task has no such slice.
+std::string ObservationSlice(bool has_object, const std::string& slice);
+
+/// D1: the chapter's layout (action_space and observation_space's three Boxes with one bound per
+/// element) plus our labels, formulas, timing, assets and the D4 answers.
+nlohmann::json DescribeJson(const FetchEnv& env);
+
+/// `describe`: D1 to stdout, or to JsonOutPath(json_out, "describe").
+void RunDescribe(const EnvOptions& env, const std::string& json_out);
+
+/// What reward-check runs.
+struct RewardCheckOptions {
+  EnvOptions env;
+  int n_steps = 500;     ///< random-policy steps per variant
+  std::string json_out;  ///< empty: no JSON file
+};
+
+/// D2, `reward-check`: prints a table and writes JSON when asked. Returns true on pass.
+bool RunRewardCheck(const RewardCheckOptions& options);
+
+/// What random-episodes runs.
+struct RandomEpisodesOptions {
+  EnvOptions env;
+  int n_episodes = 10;
+  std::string json_out;  ///< empty: the JSON goes to stdout
+  int jobs = 1;
+  std::string worker_mode = "process";
+};
+
+/// D3, `random-episodes`: the random-policy baseline, to stdout or JsonOutPath(json_out,
+/// "random_metrics") (then a one-line summary goes to stdout).
+void RunRandomEpisodes(const RandomEpisodesOptions& options);
+
+}  // namespace fetchscope::cli

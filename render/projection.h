@@ -1,0 +1,26 @@
+// World points to pixels for a rendered frame: the same projection mjr_render applies to the
+// scene's camera (mjv_updateScene fills it from the camera's fovy and pose).
+#pragma once
+
+#include <mujoco/mujoco.h>
+
+#include <array>
+#include <optional>
+
+namespace fetchscope {
+
+/// A pixel position in a frame: x to the right, y down from the top row (row 0 = top, as the
+/// images fetchscope writes), in pixels; may lie outside the frame.
+struct Pixel {
+  double x;  ///< column, 0 = left edge of the frame
+  double y;  ///< row, 0 = top edge of the frame
+};
+
+/// Where world point `point` (m) appears in a frame `frame_height` pixels tall whose camera
+/// viewport is `tile` (OpenGL convention, bottom-left origin, as Renderer::tiles()), for the
+/// scene's camera after mjv_updateScene (the average of scene.camera[0] and [1], as mjr_render
+/// uses). Empty when the point lies behind the camera or on its plane.
+std::optional<Pixel> ProjectToPixel(const mjvScene& scene, const mjrRect& tile, int frame_height,
+                                    const std::array<double, 3>& point);
+
+}  // namespace fetchscope
