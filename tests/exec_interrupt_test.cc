@@ -59,7 +59,8 @@ std::vector<nlohmann::json> PolicyChildren(const fs::path& dir) {
   return out;
 }
 
-// Waits (bounded, so a hang fails the test) until a policy child noted itself or `pid` exited.
+// Waits (bounded, so a hang fails the test) until a policy child noted itself (at the first
+// step of the first episode) or `pid` exited.
 bool WaitForChild(const fs::path& dir, pid_t pid) {
   for (int i = 0; i < 6000; ++i) {  // 60 s
     if (!PolicyChildren(dir).empty()) return true;
@@ -96,7 +97,7 @@ TEST(ExecInterrupt, CtrlCAlwaysEndsAsAnInterruptionWithAManifest) {
     const std::string pid_dir = "FETCHSCOPE_TEST_PID_DIR=" + pids.string();
     const pid_t pid = SpawnJob(RecordArgs(out), tmp.path() / "log", {pid_dir});
     ASSERT_TRUE(WaitForChild(pids, pid)) << ReadFile(tmp.path() / "log");
-    std::this_thread::sleep_for(std::chrono::milliseconds(random() % 300));
+    std::this_thread::sleep_for(std::chrono::milliseconds(random() % 600));
     kill(-pid, SIGINT);  // Ctrl-C: the foreground group
     if (run % 2 == 1) {
       // the child dies of the same signal anyway (as if it had been in the group)
