@@ -232,10 +232,11 @@ RunFolder::RunFolder(const RunFolderRequest& request) : request_(request) {
       for (int k : request.episodes) {
         if (!done.count(k)) todo_.push_back(k);
       }
-      // the episodes to redo go first (an incomplete one's files), and the old manifest
+      // the files of the episodes to redo go first (an incomplete one's); the manifest stays
+      // until the new one replaces it, so that a failed --resume leaves the run resumable
       for (const std::string& name : run_files) {
         const std::optional<RunFileName> parsed = ParseRunFileName(name);
-        if (parsed->manifest || !done.count(parsed->episode)) remove.push_back(name);
+        if (!parsed->manifest && !done.count(parsed->episode)) remove.push_back(name);
       }
       remove.insert(remove.end(), hidden.begin(), hidden.end());
       break;
@@ -261,15 +262,19 @@ RunFolder::~RunFolder() {
 }
 
 void RunFolder::Cleanup() noexcept {
-  const fs::path out = request_.out.empty() ? fs::path(".") : fs::path(request_.out);
-  std::error_code ec;
-  std::vector<fs::path> remove;
-  for (const auto& entry : fs::directory_iterator(out, ec)) {
-    const std::string name = entry.path().filename().string();
-    if (!before_.count(name) && Ours(name)) remove.push_back(entry.path());
+  try {
+    const fs::path out = request_.out.empty() ? fs::path(".") : fs::path(request_.out);
+    std::error_code ec;
+    std::vector<fs::path> remove;
+    for (const auto& entry : fs::directory_iterator(out, ec)) {
+      const std::string name = entry.path().filename().string();
+      if (!before_.count(name) && Ours(name)) remove.push_back(entry.path());
+    }
+    for (const fs::path& p : remove) fs::remove(p, ec);
+    for (const fs::path& dir : created_dirs_) fs::remove(dir, ec);  // only when empty again
+  } catch (...) {
+    // best effort: the error that is being reported matters more
   }
-  for (const fs::path& p : remove) fs::remove(p, ec);
-  for (const fs::path& dir : created_dirs_) fs::remove(dir, ec);  // only when empty again
 }
 
 }  // namespace fetchscope::cli
