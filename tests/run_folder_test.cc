@@ -14,9 +14,12 @@
 #include <set>
 #include <string>
 #include <thread>
+#include <tuple>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
+#include "cli/run_folder.h"
 #include "tests/test_util.h"
 
 namespace fetchscope {
@@ -48,6 +51,30 @@ class RunFolderTest : public ::testing::Test {
     for (const char* name : {"SLURM_ARRAY_TASK_ID", "JOB_COMPLETION_INDEX"}) unsetenv(name);
   }
 };
+
+// Which names in a folder are a record run's (and so never the user's).
+TEST(RunFileName, NamesRecordWritesAndNothingElse) {
+  using cli::ParseRunFileName;
+  for (const char* name : {"manifest.json", "manifest_shard_0001_of_0004.json"}) {
+    ASSERT_TRUE(ParseRunFileName(name)) << name;
+    EXPECT_TRUE(ParseRunFileName(name)->manifest) << name;
+  }
+  for (const auto& [name, k, hidden] : std::vector<std::tuple<std::string, int, bool>>{
+           {"episode_000.mp4", 0, false},
+           {"episode_012_sheet.png", 12, false},
+           {"episode_1234.json", 1234, false},
+           {".episode_003.partial.mp4", 3, true},
+           {".episode_004.json.tmp-ab12", 4, true}}) {
+    const auto parsed = ParseRunFileName(name);
+    ASSERT_TRUE(parsed) << name;
+    EXPECT_EQ(parsed->episode, k) << name;
+    EXPECT_EQ(parsed->hidden, hidden) << name;
+  }
+  for (const char* name : {"notes.txt", "episode_x.mp4", "episode_001.txt", "my_manifest.json",
+                           "episode_.json", ".hidden", "results.json"}) {
+    EXPECT_FALSE(ParseRunFileName(name)) << name;
+  }
+}
 
 TEST_F(RunFolderTest, AFolderHoldingARunIsRefused) {
   TempDir tmp;
@@ -137,7 +164,7 @@ TEST_F(RunFolderTest, ResumeAfterSigintGivesTheBytesOfAnUninterruptedRun) {
   ASSERT_EQ(m["interrupted"], true);
   ASSERT_LT(m["episodes"].size(), 12u) << "the run ended before the signal";
   const auto& last = m["episodes"].back();
-  EXPECT_EQ(last["complete"], last["steps"] == 50);
+  EXPECT_EQ(last["complete"].get<bool>(), last["steps"].get<int>() == 50);
 
   // other parameters are refused, naming the first that differs
   r = RunFetchscope(run + "--steps 49 --resume --out " + out.string());
@@ -185,7 +212,7 @@ TEST_F(RunFolderTest, AFailedRunLeavesNothingBehind) {
   TempDir tmp;
   const std::string exec_run = "record --quiet --env-id FetchReach-v4 --width 32 --height 32 "
                                "--steps 5 --episodes 3 ";
-  for (const std::string failing :
+  for (const std::string& failing :
        {std::string("--policy \"exec:read l; echo 0 0 0 0; read l; exit 3\""),
         std::string("--exec-timeout 0.3 --policy \"exec:sleep 30\""),
         std::string("--policy random --codec h264_nvenc")}) {
