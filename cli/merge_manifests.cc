@@ -156,7 +156,9 @@ void Merge(const std::vector<std::string>& dirs, std::string out, bool quiet) {
         throw RunError("episode " + std::to_string(k) + " appears twice: in '" +
                        episode_at[k].first->path.string() + "' and '" + m.path.string() + "'");
       }
-      if (e.value("steps", -1) != steps) continue;  // cut short by a signal: counted as missing
+      // cut short by a signal: counted as missing (manifests from before "complete" existed
+      // say it by their step count)
+      if (!e.value("complete", e.value("steps", -1) == steps)) continue;
       bool files = true;
       for (const char* kind : {"video", "sheet", "trajectory"}) {
         const fs::path file = m.path.parent_path() / e.value(kind, std::string());

@@ -10,6 +10,7 @@
 #include <signal.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
@@ -28,6 +29,7 @@
 #include "cli/node_probe.h"
 #include "cli/progress.h"
 #include "cli/render_common.h"
+#include "cli/run_folder.h"
 #include "cli/shard.h"
 #include "render/contact_sheet.h"
 #include "render/png_io.h"
@@ -65,6 +67,10 @@ struct RecordOptions {
   std::string worker_mode = "process";
   std::string shard;                // "I/N"; empty: from the environment, else the whole run
   int shard_count = 0;              // with JOB_COMPLETION_INDEX; 0 = not given
+  bool overwrite = false;           // replace the run already in --out
+  bool resume = false;              // continue the run already in --out
+  std::string replay_dtype;         // --replay-dtype: "", float32, float64
+  bool episodes_given = false;      // --episodes was on the command line
 };
 
 // Everything the parent decided before the workers start; workers only read it.
@@ -259,7 +265,7 @@ class EpisodeEncoder {
     const auto t0 = Clock::now();
     for (VideoWriter& writer : writers_) writer.Finish();
     const int steps = static_cast<int>(episode_.steps.size()) - 1;
-    const bool complete = steps == o.steps;
+    const bool complete = episode_.complete;  // false: ended early by SIGINT/SIGTERM
     char title[256];
     std::snprintf(title, sizeof(title), "%s  seed %s  policy %s  episode %d%s",
                   plan_.spec->id.c_str(), o.env.seed.c_str(), o.policy.c_str(), k_,
@@ -450,8 +456,84 @@ void ValidatePolicy(const std::string& policy, const EnvSpec& spec, const Policy
   MakePolicy(policy, spec, context);
 }
 
-void RunRecord(const RecordOptions& o, const std::string& command_line) {
+// What makes two record runs the same run, by option: what a resumed run must repeat for its
+// episodes to come out byte for byte as the run it continues (--jobs, --gpu and --backend
+// are free: outputs do not depend on them on one machine).
+nlohmann::json RecordParameters(const RecordOptions& o, const RecordPlan& plan, const Shard& shard) {
+  return {{"--env-id", plan.spec->id},
+          {"--seed", plan.seed},
+          {"--policy", o.policy},
+          {"--replay-dtype", o.replay_dtype},
+          {"--episodes", o.episodes},
+          {"--steps", o.steps},
+          {"--sheet-every", o.sheet_every},
+          {"--assets", plan.assets.sha256},
+          {"--camera", o.view.camera},
+          {"--overlay", o.view.overlay},
+          {"--width", o.view.width},
+          {"--height", o.view.height},
+          {"--msaa", o.view.msaa},
+          {"--codec", plan.video.codec},
+          {"--crf", o.crf},
+          {"--preset", o.preset.empty() ? kDefaultVideoPreset : o.preset},
+          {"--fps", o.fps},
+          {"--shard", ShardLabel(shard)}};
+}
+
+RunFolderRequest MakeRunFolderRequest(const RecordOptions& o, const Shard& shard,
+                                      const std::vector<int>& episodes,
+                                      const nlohmann::json& parameters) {
+  RunFolderRequest request;
+  request.out = o.out;
+  request.mode = ParseReuseMode(o.overwrite, o.resume);
+  request.manifest_name = ShardManifestName(shard);
+  request.sharded = shard.sharded();
+  request.owns = [shard](int k) { return shard.Owns(k); };
+  request.episodes = episodes;
+  request.parameters = parameters;
+  return request;
+}
+
+// --resume: the manifest entries of this run and the complete ones kept from the run it
+// continues, in episode order.
+nlohmann::json WithKeptEpisodes(nlohmann::json entries, const std::vector<nlohmann::json>& kept) {
+  for (const nlohmann::json& e : kept) entries.push_back(e);
+  std::sort(entries.begin(), entries.end(), [](const nlohmann::json& a, const nlohmann::json& b) {
+    return a.at("index").get<int>() < b.at("index").get<int>();
+  });
+  return entries;
+}
+
+// The episodes this run records: those of its shard among 0 .. --episodes-1 or, replaying a
+// trajectory JSON, the file's episodes, each under its own index (and so with its own reset);
+// --episodes then becomes one past the last index.
+std::vector<int> RecordEpisodeList(RecordOptions* o, const Shard& shard, const RecordPlan& plan) {
+  std::string env_id, seed;
+  const std::optional<std::vector<int>> indices = ReplayTrajectoryEpisodes(o->policy, &env_id, &seed);
+  if (!indices) return ShardEpisodes(shard, o->episodes);
+  if (o->episodes_given && o->episodes != static_cast<int>(indices->size())) {
+    throw UsageError("--episodes " + std::to_string(o->episodes) + " disagrees with " + o->policy +
+                     ", which holds " + std::to_string(indices->size()) +
+                     " episode(s): a trajectory JSON replays all its episodes; drop --episodes");
+  }
+  if (!o->quiet && (env_id != plan.spec->id || seed != std::to_string(plan.seed))) {
+    std::fprintf(stderr,
+                 "fetchscope: warning: %s was recorded on %s with --seed %s, this run is %s with "
+                 "--seed %llu: the resets differ, so the recorded trajectory is not reproduced\n",
+                 o->policy.c_str() + 7, env_id.c_str(), seed.c_str(), plan.spec->id.c_str(),
+                 static_cast<unsigned long long>(plan.seed));
+  }
+  o->episodes = indices->back() + 1;
+  std::vector<int> mine;
+  for (int k : *indices) {
+    if (shard.Owns(k)) mine.push_back(k);
+  }
+  return mine;
+}
+
+void RunRecord(const RecordOptions& options, const std::string& command_line) {
   const auto wall_start = Clock::now();
+  RecordOptions o = options;  // a trajectory replay sets the episodes
   RecordPlan plan;
   plan.o = &o;
   plan.spec = &FindEnvSpec(o.env.env_id);
@@ -468,7 +550,7 @@ void RunRecord(const RecordOptions& o, const std::string& command_line) {
   plan.video.gif_width = o.gif_width;
   plan.formats = ParseVideoFormats(o.formats);
   ValidateVideoOptions(plan.video);
-  const std::vector<int> episodes = ShardEpisodes(shard, o.episodes);
+  const std::vector<int> episodes = RecordEpisodeList(&o, shard, plan);
   const int jobs = ResolveJobs(o.jobs, static_cast<int>(episodes.size()));
   plan.encoders = EncodersPerWorker(jobs);
 
@@ -476,6 +558,9 @@ void RunRecord(const RecordOptions& o, const std::string& command_line) {
   plan.policy_context.steps_per_episode = o.steps;
   plan.policy_context.episodes = o.episodes;
   plan.policy_context.exec_timeout_s = o.exec_timeout;
+  plan.policy_context.stop_requested = [] { return StopSignal() != 0; };
+  plan.policy_context.replay_dtype = o.replay_dtype;
+  plan.policy_context.episode_indices = episodes;
   ValidatePolicy(o.policy, *plan.spec, plan.policy_context);
   plan.assets = ResolveAssets(o.env.assets);
   std::string model_path;
@@ -493,17 +578,14 @@ void RunRecord(const RecordOptions& o, const std::string& command_line) {
     std::fprintf(stderr, "fetchscope: warning: %s\n", node.warnings.c_str());
   }
 
-  std::error_code ec;
-  fs::create_directories(o.out, ec);
-  if (!fs::is_directory(o.out)) {
-    throw RunError("cannot create output folder '" + o.out + "': " +
-                   (ec ? ec.message() : std::string("a file is in the way")));
-  }
+  // never two runs in one folder; a failure below leaves nothing this run made
+  const nlohmann::json parameters = RecordParameters(o, plan, shard);
+  RunFolder folder(MakeRunFolderRequest(o, shard, episodes, parameters));
 
-  ProgressReporter progress("record", static_cast<int>(episodes.size()), o.steps + 1, o.quiet);
+  ProgressReporter progress("record", static_cast<int>(folder.todo().size()), o.steps + 1, o.quiet);
   int successes = 0;
   ScheduleOptions schedule;
-  schedule.episodes = episodes;
+  schedule.episodes = folder.todo();
   schedule.jobs = jobs;
   schedule.mode = mode;
   schedule.on_progress = [&](int n) { progress.Frames(n); };
@@ -532,6 +614,7 @@ void RunRecord(const RecordOptions& o, const std::string& command_line) {
     e.erase("encoded_height");
     episodes_json.push_back(std::move(e));
   }
+  episodes_json = WithKeptEpisodes(std::move(episodes_json), folder.kept());
   // The first worker that started speaks for the GL setup (all run the same backend).
   nlohmann::json first_worker;
   for (const nlohmann::json& w : result.workers) {
@@ -540,8 +623,8 @@ void RunRecord(const RecordOptions& o, const std::string& command_line) {
       break;
     }
   }
-  if (result.results.empty() && result.signal == 0 && !result.failures.empty()) {
-    // nothing was recorded: leave no manifest behind (the videos were never renamed)
+  if (result.signal == 0 && !result.failures.empty()) {
+    // a run-time failure: no manifest, and `folder` removes what this run wrote
     const WorkerFailure& first = result.failures.front();
     if (first.usage) throw UsageError(first.message);
     throw RunError(DescribeFailures(result));
@@ -604,9 +687,12 @@ void RunRecord(const RecordOptions& o, const std::string& command_line) {
       {"frames", progress.frames()},
       {"interrupted", sig != 0},
       {"signal", sig == 0 ? nlohmann::json(nullptr) : nlohmann::json(sig == SIGINT ? "SIGINT" : "SIGTERM")},
-      {"command_line", command_line}};
+      {"command_line", command_line},
+      {"parameters", parameters},
+      {"resumed", o.resume && !folder.kept().empty()}};
   WriteJson((fs::path(o.out) / ShardManifestName(shard)).string(), manifest);
-  const size_t recorded = episodes_json.size();
+  folder.Commit();
+  const size_t recorded = result.results.size();
   char summary[768];
   std::snprintf(summary, sizeof(summary),
                 "record: %zu episode(s), %ld frames in %.1f s (%.1f frames/s, %.2f episodes/s, %d "
@@ -621,10 +707,6 @@ void RunRecord(const RecordOptions& o, const std::string& command_line) {
   if (sig) {
     ExitStatus() = 128 + sig;
     return;
-  }
-  if (!result.failures.empty()) {
-    throw RunError(DescribeFailures(result) + "; the manifest lists the missing episodes (" +
-                   std::to_string(result.missing.size()) + ")");
   }
 }
 
@@ -643,6 +725,7 @@ void RegisterRecord(CLI::App& app) {
   sub->add_option("--policy", o->policy, kPolicyHelp)->capture_default_str();
   sub->add_option("--exec-timeout", o->exec_timeout, "Seconds an exec: policy may take per answer")
       ->capture_default_str()->check(CLI::Range(0.001, 86400.0));
+  sub->add_option("--replay-dtype", o->replay_dtype, kReplayDtypeHelp);
   sub->add_option("--fps", o->fps, "Video frame rate (25 = the control rate: real time)")->capture_default_str();
   sub->add_option("--codec", o->codec,
                   "auto (h264_nvenc where the GPU has NVENC, else libx264; decided once per run), "
@@ -664,6 +747,13 @@ void RegisterRecord(CLI::App& app) {
       ->capture_default_str()->check(CLI::Range(0, 1000));
   sub->add_option("--out", o->out, "Output folder")->capture_default_str();
   sub->add_flag("-q,--quiet", o->quiet, "No progress or summary on stderr");
+  sub->add_flag("--overwrite", o->overwrite,
+                "Replace the record run already in --out (its manifest and episode files; other "
+                "files stay). Without --overwrite or --resume such a folder is refused");
+  sub->add_flag("--resume", o->resume,
+                "Continue the interrupted record run in --out: keep its complete episodes and "
+                "record the others, byte-identical to an uninterrupted run; the options must "
+                "be those of that run");
   AddJobsOptions(sub, &o->jobs, &o->worker_mode);
   sub->add_option("--shard", o->shard,
                   "Record only shard I of N (0 <= I < N): episodes k with k mod N = I. Without it: "
@@ -671,7 +761,10 @@ void RegisterRecord(CLI::App& app) {
   sub->add_option("--shard-count", o->shard_count,
                   "Number of shards when the index comes from JOB_COMPLETION_INDEX (a Kubernetes "
                   "Indexed Job's completions)");
-  sub->callback([o]() { RunRecord(*o, CommandLine()); });
+  sub->callback([o, sub]() {
+    o->episodes_given = sub->count("--episodes") > 0;
+    RunRecord(*o, CommandLine());
+  });
 }
 
 }  // namespace fetchscope::cli

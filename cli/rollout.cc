@@ -21,6 +21,7 @@ struct RolloutOptions {
   std::string policy = "random";
   std::string json_out;
   double exec_timeout = 10.0;
+  std::string replay_dtype;
   int jobs = 1;
   std::string worker_mode = "process";
 };
@@ -54,6 +55,8 @@ void RunRollout(const RolloutOptions& o) {
   context.steps_per_episode = o.steps;
   context.episodes = o.episodes;
   context.exec_timeout_s = o.exec_timeout;
+  context.stop_requested = [] { return StopSignal() != 0; };
+  context.replay_dtype = o.replay_dtype;
   { FetchEnv check(spec, assets); }  // bad assets fail here, before any worker starts
   ScheduleOptions schedule;
   for (int k = 0; k < o.episodes; ++k) schedule.episodes.push_back(k);
@@ -102,6 +105,7 @@ void RegisterRollout(CLI::App& app) {
   sub->add_option("--policy", o->policy, kPolicyHelp)->capture_default_str();
   sub->add_option("--exec-timeout", o->exec_timeout, "Seconds an exec: policy may take per answer")
       ->capture_default_str()->check(CLI::Range(0.001, 86400.0));
+  sub->add_option("--replay-dtype", o->replay_dtype, kReplayDtypeHelp);
   sub->add_option("--json-out", o->json_out, "Write F (.json) or F_rollout.json; without it JSON goes to stdout");
   AddJobsOptions(sub, &o->jobs, &o->worker_mode);
   sub->callback([o]() { RunRollout(*o); });

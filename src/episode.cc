@@ -1,5 +1,6 @@
 #include "src/episode.h"
 
+#include "src/errors.h"
 #include "src/json_util.h"
 
 namespace fetchscope {
@@ -13,9 +14,15 @@ EpisodeRecord RunEpisode(FetchEnv& env, Policy& policy, int index, std::optional
   first.is_success = env.IsSuccess(first.obs.achieved_goal, first.obs.desired_goal);
   episode.steps.push_back(first);
   policy.BeginEpisode(index, first.obs);
+  episode.complete = steps == 0;
   if (on_step && !on_step(episode.steps.back(), nullptr)) return episode;
   for (int t = 0; t < steps; ++t) {
-    const Action action = policy.Act(episode.steps.back().obs, t);
+    Action action;
+    try {
+      action = policy.Act(episode.steps.back().obs, t);
+    } catch (const PolicyInterrupted&) {
+      return episode;  // the stop came while the policy was answering: the episode ends here
+    }
     const StepResult result = env.Step(action);
     StepRecord record;
     record.t = t + 1;
@@ -25,6 +32,7 @@ EpisodeRecord RunEpisode(FetchEnv& env, Policy& policy, int index, std::optional
     record.is_success = result.is_success;
     episode.episode_return += result.reward;
     episode.steps.push_back(std::move(record));
+    if (t + 1 == steps) episode.complete = true;
     if (on_step && !on_step(episode.steps.back(), &result)) break;
   }
   return episode;
@@ -59,6 +67,7 @@ nlohmann::json EpisodeJson(const EpisodeRecord& episode) {
   }
   return {{"index", episode.index},
           {"length", static_cast<int>(episode.steps.size()) - 1},
+          {"complete", episode.complete},
           {"return", JsonDouble(episode.episode_return)},
           {"is_success", !episode.steps.empty() && episode.steps.back().is_success},
           {"action_dtype", dtype},

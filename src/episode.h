@@ -29,6 +29,9 @@ struct EpisodeRecord {
   int index = 0;                  ///< episode number within the run
   std::vector<StepRecord> steps;  ///< steps[0] is the reset
   double episode_return = 0;      ///< sum of rewards
+  /// false when the episode was ended early (SIGINT/SIGTERM, an interrupted policy) before
+  /// all its steps: it is kept as far as it got and said so ("complete": false)
+  bool complete = true;
 };
 
 /// Called after the reset (t = 0) and after every step; return false to stop the episode early
@@ -46,7 +49,8 @@ nlohmann::json AssetsJson(const AssetSource& assets);
 /// is_success), as in the trajectory JSON; golden state files hold the same rows.
 nlohmann::json StepsJson(const EpisodeRecord& episode);
 
-/// One episode as JSON: {"index", "length", "return", "is_success", "steps": [...]}.
+/// One episode as JSON: {"index", "length", "complete", "return", "is_success",
+/// "action_dtype", "steps": [...]}.
 nlohmann::json EpisodeJson(const EpisodeRecord& episode);
 
 /// The trajectory file: env_id, seed, policy, assets, episodes.

@@ -20,4 +20,12 @@ class RunError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+/// A policy could not answer because the run is being stopped (SIGINT/SIGTERM), e.g. an exec:
+/// child that died of the same signal. An interruption, not a failure: the episode in progress
+/// ends there, incomplete (RunEpisode catches it).
+class PolicyInterrupted : public RunError {
+ public:
+  using RunError::RunError;
+};
+
 }  // namespace fetchscope

@@ -3,6 +3,7 @@
 #include <fcntl.h>
 #include <poll.h>
 #include <signal.h>
+#include <sys/prctl.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -11,6 +12,8 @@
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
+#include <functional>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -29,23 +32,64 @@ std::string Shorten(const std::string& s) {
   return s.size() > 80 ? out + "..." : out;
 }
 
+extern "C" char** environ;
+
+// The child's environment: ours, except that the bundle's launcher (tools/bundle.sh) put the
+// bundle's libraries first on LD_LIBRARY_PATH and kept the caller's value in
+// FETCHSCOPE_CALLER_LD_LIBRARY_PATH ("__unset__" when there was none): the child gets the
+// caller's back, so that e.g. a Python policy loads its own libraries, not ours.
+std::vector<std::string> ChildEnvironment() {
+  const char* caller = std::getenv("FETCHSCOPE_CALLER_LD_LIBRARY_PATH");
+  std::vector<std::string> env;
+  for (char** e = environ; e && *e; ++e) {
+    const std::string entry = *e;
+    if (caller && (entry.rfind("LD_LIBRARY_PATH=", 0) == 0 ||
+                   entry.rfind("FETCHSCOPE_CALLER_LD_LIBRARY_PATH=", 0) == 0)) {
+      continue;
+    }
+    env.push_back(entry);
+  }
+  if (caller && std::string(caller) != "__unset__") env.push_back("LD_LIBRARY_PATH=" + std::string(caller));
+  return env;
+}
+
 class ExecPolicy : public Policy {
  public:
-  ExecPolicy(std::string command, double timeout_s)
-      : command_(std::move(command)), timeout_s_(timeout_s) {
+  // The child runs in its own process group, so a terminal's Ctrl-C (sent to fetchscope's
+  // foreground group) reaches fetchscope, which stops the run, and not the child; and it dies
+  // with the thread that made it (PR_SET_PDEATHSIG: the creating thread, which owns this policy
+  // and lives as long as it), so no child outlives its worker.
+  ExecPolicy(std::string command, double timeout_s, std::function<bool()> stop_requested)
+      : command_(std::move(command)), timeout_s_(timeout_s),
+        stop_requested_(std::move(stop_requested)) {
     int to_child[2], from_child[2];
     if (pipe2(to_child, O_CLOEXEC) != 0 || pipe2(from_child, O_CLOEXEC) != 0) {
       throw RunError("exec policy: cannot create pipes: " + std::string(std::strerror(errno)));
     }
     signal(SIGPIPE, SIG_IGN);  // a child that exits early must not kill us: we see EPIPE
+    // everything the child needs is made before fork: only async-signal-safe calls after it
+    const std::vector<std::string> env = ChildEnvironment();
+    std::vector<char*> envp;
+    for (const std::string& e : env) envp.push_back(const_cast<char*>(e.c_str()));
+    envp.push_back(nullptr);
+    const char* argv[] = {"sh", "-c", command_.c_str(), nullptr};
+    const pid_t parent = getpid();
     pid_ = fork();
     if (pid_ < 0) throw RunError("exec policy: fork failed: " + std::string(std::strerror(errno)));
     if (pid_ == 0) {
+      setpgid(0, 0);
+      prctl(PR_SET_PDEATHSIG, SIGKILL);
+      if (getppid() != parent) _exit(127);  // the parent went before prctl
+      // a stop signal fetchscope ignores or handles must not be inherited as ignored
+      signal(SIGINT, SIG_DFL);
+      signal(SIGTERM, SIG_DFL);
+      signal(SIGPIPE, SIG_DFL);
       dup2(to_child[0], STDIN_FILENO);
       dup2(from_child[1], STDOUT_FILENO);
-      execl("/bin/sh", "sh", "-c", command_.c_str(), static_cast<char*>(nullptr));
+      execve("/bin/sh", const_cast<char* const*>(argv), envp.data());
       _exit(127);
     }
+    setpgid(pid_, pid_);  // also from this side, so that the group exists when we return
     close(to_child[0]);
     close(from_child[1]);
     in_ = to_child[1];
@@ -61,6 +105,7 @@ class ExecPolicy : public Policy {
         if (waitpid(pid_, nullptr, WNOHANG) == pid_) return;
         usleep(10000);
       }
+      kill(-pid_, SIGKILL);  // the child's group: a shell's own children go too
       kill(pid_, SIGKILL);
       waitpid(pid_, nullptr, 0);
     }
@@ -95,6 +140,8 @@ class ExecPolicy : public Policy {
   std::string name() const override { return "exec:" + command_; }
 
  private:
+  // The child closed its output: it exited or died. While the run is being stopped that is an
+  // interruption (PolicyInterrupted), whatever the child died of; otherwise a failure.
   std::string Died(int t) {
     int status = 0;
     std::string how = "closed its output";
@@ -106,6 +153,10 @@ class ExecPolicy : public Policy {
         break;
       }
       usleep(10000);
+    }
+    if (stop_requested_ && stop_requested_()) {
+      throw PolicyInterrupted("exec policy '" + command_ + "' " + how + " at step " +
+                              std::to_string(t) + " while the run was being stopped");
     }
     return "exec policy '" + command_ + "' " + how + " before answering step " + std::to_string(t) +
            ": it must read one JSON line per step on stdin and print one action line (4 numbers)";
@@ -145,6 +196,7 @@ class ExecPolicy : public Policy {
 
   std::string command_;
   double timeout_s_;
+  std::function<bool()> stop_requested_;
   pid_t pid_ = -1;
   int in_ = -1, out_ = -1;
   std::string buffer_;
@@ -202,8 +254,9 @@ std::array<double, 4> ParseActionLine(const std::string& line) {
   return a;
 }
 
-std::unique_ptr<Policy> MakeExecPolicy(const std::string& command, double timeout_s) {
-  return std::make_unique<ExecPolicy>(command, timeout_s);
+std::unique_ptr<Policy> MakeExecPolicy(const std::string& command, double timeout_s,
+                                       std::function<bool()> stop_requested) {
+  return std::make_unique<ExecPolicy>(command, timeout_s, std::move(stop_requested));
 }
 
 }  // namespace fetchscope

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <array>
+#include <functional>
 #include <memory>
 #include <string>
 
@@ -11,8 +12,12 @@ namespace fetchscope {
 
 class Policy;
 
-/// Starts `command` under /bin/sh; each answer must come within `timeout_s` seconds.
-std::unique_ptr<Policy> MakeExecPolicy(const std::string& command, double timeout_s);
+/// Starts `command` under /bin/sh, in its own process group, dying with the calling thread
+/// (PR_SET_PDEATHSIG); each answer must come within `timeout_s` seconds. When the child dies
+/// while `stop_requested` says the run is being stopped, Act throws PolicyInterrupted (an
+/// interruption) rather than RunError.
+std::unique_ptr<Policy> MakeExecPolicy(const std::string& command, double timeout_s,
+                                       std::function<bool()> stop_requested = nullptr);
 
 /// Parses one answer line into 4 finite numbers. Throws RunError describing what was wrong.
 std::array<double, 4> ParseActionLine(const std::string& line);

@@ -5,6 +5,9 @@
 #include "src/rng.h"
 #include "src/scripted_policy.h"
 #include "src/exec_policy.h"
+#include "src/trajectory_replay.h"
+
+#include <map>
 
 namespace fetchscope {
 namespace {
@@ -53,17 +56,131 @@ class ReplayPolicy : public Policy {
   int episode_ = 0;
 };
 
+// A trajectory JSON's episodes, each played by its own index.
+class TrajectoryReplayPolicy : public Policy {
+ public:
+  TrajectoryReplayPolicy(std::string spec, TrajectoryReplay replay)
+      : spec_(std::move(spec)), replay_(std::move(replay)) {}
+  void BeginEpisode(int episode, const Observation&) override {
+    actions_ = &replay_.episodes.at(episode).actions;
+  }
+  Action Act(const Observation&, int t) override { return actions_->at(static_cast<size_t>(t)); }
+  std::string name() const override { return spec_; }
+
+ private:
+  std::string spec_;
+  TrajectoryReplay replay_;
+  const std::vector<Action>* actions_ = nullptr;
+};
+
+std::string IndexList(const std::map<int, TrajectoryEpisode>& episodes) {
+  std::string s;
+  int shown = 0;
+  for (const auto& [k, e] : episodes) {
+    if (shown++ == 10) return s + ", ...";
+    s += (s.empty() ? "" : ", ") + std::to_string(k);
+  }
+  return s;
+}
+
+std::unique_ptr<Policy> MakeTrajectoryReplay(const std::string& spec, const std::string& path,
+                                             TrajectoryReplay replay, const PolicyContext& context) {
+  if (!context.replay_dtype.empty()) {
+    for (const auto& [k, e] : replay.episodes) {
+      if (e.dtype != "none" && e.dtype != context.replay_dtype) {
+        throw UsageError("--replay-dtype " + context.replay_dtype + ": replay file " + path +
+                         " records episode " + std::to_string(k) + " in " + e.dtype +
+                         " (its action_dtype); drop --replay-dtype, a trajectory JSON carries its "
+                         "own precision");
+      }
+    }
+  }
+  std::vector<int> wanted = context.episode_indices;
+  if (wanted.empty()) {
+    for (int k = 0; k < context.episodes; ++k) wanted.push_back(k);
+  }
+  const size_t steps = static_cast<size_t>(context.steps_per_episode);
+  for (int k : wanted) {
+    const auto it = replay.episodes.find(k);
+    if (it == replay.episodes.end()) {
+      throw RunError("replay file " + path + " holds episode(s) " + IndexList(replay.episodes) +
+                     " but this run plays episode " + std::to_string(k) +
+                     " (a trajectory's episodes replay under their own index)");
+    }
+    const TrajectoryEpisode& e = it->second;
+    if (e.actions.size() < steps) {
+      throw RunError("replay file " + path + ": episode " + std::to_string(k) + " has " +
+                     std::to_string(e.actions.size()) + " actions" +
+                     (e.complete ? "" : " (it is incomplete: interrupted while recording)") +
+                     " but --steps " + std::to_string(steps) + " needs " + std::to_string(steps) +
+                     ": pass --steps " + std::to_string(e.actions.size()) +
+                     (e.complete ? "" : ", or record that episode again"));
+    }
+  }
+  return std::make_unique<TrajectoryReplayPolicy>(spec, std::move(replay));
+}
+
+// --replay-dtype on rows read from a file: float32 rounds CSV/JSON-lines values to float32;
+// a .npy carries its dtype.
+void ApplyReplayDtype(std::vector<Action>* rows, const std::string& dtype, const std::string& path) {
+  if (dtype.empty()) return;
+  if (dtype != "float32" && dtype != "float64") {
+    throw UsageError("--replay-dtype '" + dtype + "' is not known; accepted: float32, float64");
+  }
+  const bool npy = path.size() >= 4 && (path.compare(path.size() - 4, 4, ".npy") == 0 ||
+                                        path.compare(path.size() - 4, 4, ".NPY") == 0);
+  if (npy) {
+    const bool f32 = !rows->empty() && rows->front().is_float32;
+    if (f32 != (dtype == "float32")) {
+      throw UsageError("--replay-dtype " + dtype + ": replay file " + path + " holds " +
+                       (f32 ? "float32" : "float64") +
+                       " (its .npy dtype); drop --replay-dtype, a .npy carries its own precision");
+    }
+    return;
+  }
+  if (dtype == "float64") return;
+  for (Action& a : *rows) {
+    for (double& v : a.value) v = static_cast<double>(static_cast<float>(v));
+    a.is_float32 = true;
+  }
+}
+
 }  // namespace
+
+std::optional<std::vector<int>> ReplayTrajectoryEpisodes(const std::string& spec,
+                                                         std::string* env_id, std::string* seed) {
+  if (spec.rfind("replay:", 0) != 0) return std::nullopt;
+  const std::optional<TrajectoryReplay> replay = ReadTrajectoryReplay(spec.substr(7));
+  if (!replay) return std::nullopt;
+  std::vector<int> indices;
+  for (const auto& [k, e] : replay->episodes) indices.push_back(k);
+  if (env_id) *env_id = replay->env_id;
+  if (seed) *seed = replay->seed;
+  return indices;
+}
 
 std::unique_ptr<Policy> MakePolicy(const std::string& spec, const EnvSpec& env,
                                    const PolicyContext& context) {
+  if (!context.replay_dtype.empty()) {
+    if (context.replay_dtype != "float32" && context.replay_dtype != "float64") {
+      throw UsageError("--replay-dtype '" + context.replay_dtype +
+                       "' is not known; accepted: float32, float64");
+    }
+    if (spec.rfind("replay:", 0) != 0) {
+      throw UsageError("--replay-dtype applies to --policy replay:FILE only, not to '" + spec + "'");
+    }
+  }
   if (spec == "random") return std::make_unique<RandomPolicy>(context.seed);
   if (spec == "zero") return std::make_unique<ZeroPolicy>();
   if (spec == "scripted") return MakeScriptedPolicy(env);
   if (spec.rfind("replay:", 0) == 0) {
     const std::string path = spec.substr(7);
     if (path.empty()) throw UsageError("--policy replay: needs a file, e.g. replay:actions.csv");
+    if (std::optional<TrajectoryReplay> replay = ReadTrajectoryReplay(path)) {
+      return MakeTrajectoryReplay(spec, path, std::move(*replay), context);
+    }
     std::vector<Action> rows = ReadReplayFile(path);
+    ApplyReplayDtype(&rows, context.replay_dtype, path);
     const size_t need = static_cast<size_t>(context.steps_per_episode) * context.episodes;
     if (rows.size() < need) {
       throw RunError("replay file '" + path + "' has " + std::to_string(rows.size()) +
@@ -77,8 +194,9 @@ std::unique_ptr<Policy> MakePolicy(const std::string& spec, const EnvSpec& env,
   if (spec.rfind("exec:", 0) == 0) {
     const std::string command = spec.substr(5);
     if (command.empty()) throw UsageError("--policy exec: needs a command, e.g. exec:'python3 my_policy.py'");
-    return MakeExecPolicy(command, context.exec_timeout_s);
+    return MakeExecPolicy(command, context.exec_timeout_s, context.stop_requested);
   }
+
   throw UsageError("unknown policy '" + spec + "': use " + kPolicyHelp);
 }
 

@@ -2,7 +2,9 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -39,6 +41,15 @@ struct PolicyContext {
   int steps_per_episode = 50;    ///< replay checks it has enough rows
   int episodes = 1;              ///< replay checks it has enough rows
   double exec_timeout_s = 10.0;  ///< exec: seconds to wait for each answer
+  /// True while the run is being stopped (SIGINT/SIGTERM): an exec: child that dies then is
+  /// an interruption (PolicyInterrupted), not a failure. May be empty.
+  std::function<bool()> stop_requested;
+  /// --replay-dtype: "" (the file's own), "float32" or "float64". CSV and JSON lines are read
+  /// in double precision and then, with float32, rounded to float32 and played on Gymnasium's
+  /// float32 path; .npy and trajectory JSON carry their dtype (a different one is refused).
+  std::string replay_dtype;
+  /// The episodes the run plays (replay checks the file has them); empty: 0 .. episodes-1.
+  std::vector<int> episode_indices;
 };
 
 /// Builds a policy from `--policy`: random | zero | scripted | replay:FILE | exec:CMD.
@@ -46,10 +57,24 @@ struct PolicyContext {
 std::unique_ptr<Policy> MakePolicy(const std::string& spec, const EnvSpec& env,
                                    const PolicyContext& context);
 
+/// For `replay:FILE.json` holding fetchscope's trajectory JSON: the file's episode indices,
+/// ascending (a run replaying it plays those episodes, each with its own reset); nullopt for
+/// any other policy. Throws RunError for a malformed trajectory file.
+std::optional<std::vector<int>> ReplayTrajectoryEpisodes(const std::string& spec,
+                                                         std::string* env_id = nullptr,
+                                                         std::string* seed = nullptr);
+
+/// --replay-dtype's help.
+inline constexpr const char* kReplayDtypeHelp =
+    "float32 or float64: the precision of a replay:FILE .csv or .jsonl's actions (default "
+    "float64; float32 rounds each value to float32 and plays it on Gymnasium's float32 path, "
+    "as a recorded random policy's actions). A .npy or trajectory .json carries its own";
+
 /// The accepted policy names, for --help.
 inline constexpr const char* kPolicyHelp =
     "random (seeded like action_space.seed + sample), zero, scripted, replay:FILE "
-    "(.csv with 4 columns, .npy T x 4 float32/float64, .jsonl), exec:CMD (child process "
-    "speaking JSON lines)";
+    "(.csv with 4 columns, .npy T x 4 float32/float64, .jsonl, or fetchscope's trajectory "
+    ".json: all its episodes, in their recorded precision), exec:CMD (child process speaking "
+    "JSON lines)";
 
 }  // namespace fetchscope

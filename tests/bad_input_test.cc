@@ -354,6 +354,16 @@ std::vector<Case> Matrix() {
        1, "step 5", kRecordOutputs},
       {"ExecHangsInRecord", record_long + "--exec-timeout 0.3 --policy \"exec:sleep 30\"", 1, "0.3",
        kRecordOutputs},
+      // ---- --out reuse, --replay-dtype (issue 13)
+      {"RecordOverwriteAndResume", record + "--overwrite --resume", 2, "--resume", kRecordOutputs},
+      {"RecordOutHoldsARun", record, 2, "already holds a record run", {"out/episode_000.mp4"},
+       file("out/manifest.json", "{}")},
+      {"ReplayDtypeUnknown", rollout + "--policy replay:{src}/tests/data/replay/replay.csv "
+       "--replay-dtype float16", 2, "float16", rollout_out},
+      {"ReplayDtypeNotReplay", rollout + "--replay-dtype float32", 2, "--replay-dtype",
+       rollout_out},
+      {"ReplayDtypeNpyDisagrees", rollout + "--policy replay:{src}/tests/data/replay/replay_f64.npy "
+       "--replay-dtype float32", 2, "float64", rollout_out},
       // ---- outputs that cannot be written, or a full disk (ulimit -f: writes fail with EFBIG)
       {"JsonOutParentIsFile", "describe --json-out {tmp}/f/d.json", 1, "{tmp}/f", {"f/d.json"},
        file("f", "x")},

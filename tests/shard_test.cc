@@ -268,8 +268,8 @@ TEST_F(ShardRunTest, MergeNamesMissingInterruptedAndForeignShards) {
             std::string::npos)
       << r.output;
 
-  // a deleted video is named
-  ASSERT_EQ(RunFetchscope(kRun + " --shard 2/3 --out " + dir.string()).exit_code, 0);
+  // a deleted video is named (shard 2 recorded again: --overwrite replaces its earlier files)
+  ASSERT_EQ(RunFetchscope(kRun + " --shard 2/3 --overwrite --out " + dir.string()).exit_code, 0);
   fs::remove(dir / "episode_004.mp4");
   r = RunFetchscope("merge-manifests " + dir.string());
   EXPECT_EQ(r.exit_code, 1) << r.output;

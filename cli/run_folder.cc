@@ -1,0 +1,280 @@
+#include "cli/run_folder.h"
+
+#include <algorithm>
+#include <cctype>
+#include <fstream>
+#include <sstream>
+
+#include "src/errors.h"
+
+namespace fetchscope::cli {
+namespace {
+
+namespace fs = std::filesystem;
+
+bool AllDigits(const std::string& s) {
+  return !s.empty() && std::all_of(s.begin(), s.end(), [](char c) { return std::isdigit(static_cast<unsigned char>(c)); });
+}
+
+bool EndsWith(const std::string& s, const std::string& tail) {
+  return s.size() >= tail.size() && s.compare(s.size() - tail.size(), tail.size(), tail) == 0;
+}
+
+// A visible name as record writes it; `stem` is the name without a temporary's decorations.
+std::optional<RunFileName> ParseVisible(const std::string& name) {
+  RunFileName parsed;
+  if (name == "manifest.json") {
+    parsed.manifest = true;
+    return parsed;
+  }
+  if (name.rfind("manifest_shard_", 0) == 0 && EndsWith(name, ".json")) {
+    parsed.manifest = true;
+    return parsed;
+  }
+  if (name.rfind("episode_", 0) != 0) return std::nullopt;
+  for (const char* tail : {"_sheet.png", ".mp4", ".json"}) {
+    if (!EndsWith(name, tail)) continue;
+    const std::string digits = name.substr(8, name.size() - 8 - std::string(tail).size());
+    if (!AllDigits(digits) || digits.size() > 9) return std::nullopt;
+    parsed.episode = std::stoi(digits);
+    return parsed;
+  }
+  return std::nullopt;
+}
+
+std::string ReadText(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+// The manifest at `path` as JSON; null when it is not a readable JSON object.
+nlohmann::json ReadManifest(const fs::path& path) {
+  nlohmann::json j = nlohmann::json::parse(ReadText(path), nullptr, /*allow_exceptions=*/false);
+  return j.is_object() ? j : nlohmann::json(nullptr);
+}
+
+std::string Shown(const nlohmann::json& value) {
+  if (value.is_null()) return "(not given)";
+  return value.is_string() ? value.get<std::string>() : value.dump();
+}
+
+// The first parameter that differs between `theirs` and `ours` (skipping `skip`), as
+// "--steps is 50 there and 20 here"; empty when they agree.
+std::string FirstDifference(const nlohmann::json& theirs, const nlohmann::json& ours,
+                            const std::string& skip) {
+  std::set<std::string> keys;
+  for (const auto& [k, v] : ours.items()) keys.insert(k);
+  for (const auto& [k, v] : theirs.items()) keys.insert(k);
+  for (const std::string& key : keys) {
+    if (key == skip) continue;
+    const nlohmann::json a = theirs.contains(key) ? theirs[key] : nlohmann::json(nullptr);
+    const nlohmann::json b = ours.contains(key) ? ours[key] : nlohmann::json(nullptr);
+    if (a != b) return key + " is " + Shown(a) + " there and " + Shown(b) + " here";
+  }
+  return "";
+}
+
+std::string Listed(const std::vector<std::string>& names) {
+  std::string s;
+  for (size_t i = 0; i < names.size() && i < 3; ++i) s += (i ? ", " : "") + names[i];
+  if (names.size() > 3) s += " and " + std::to_string(names.size() - 3) + " more";
+  return s;
+}
+
+}  // namespace
+
+std::optional<RunFileName> ParseRunFileName(const std::string& name) {
+  if (name.empty()) return std::nullopt;
+  if (name[0] != '.') return ParseVisible(name);
+  // .episode_NNN.partial.mp4 (VideoWriter) and .NAME.tmp-XXXX (WriteFileAtomically)
+  std::string inner = name.substr(1);
+  const size_t tmp = inner.find(".tmp-");
+  if (tmp != std::string::npos) {
+    inner = inner.substr(0, tmp);
+  } else if (EndsWith(inner, ".partial.mp4")) {
+    inner = inner.substr(0, inner.size() - 12) + ".mp4";
+  } else {
+    return std::nullopt;
+  }
+  std::optional<RunFileName> parsed = ParseVisible(inner);
+  if (parsed) parsed->hidden = true;
+  return parsed;
+}
+
+ReuseMode ParseReuseMode(bool overwrite, bool resume) {
+  if (overwrite && resume) {
+    throw UsageError("--overwrite and --resume contradict each other: --overwrite replaces the run "
+                     "in --out, --resume continues it; pass one");
+  }
+  return overwrite ? ReuseMode::kOverwrite : resume ? ReuseMode::kResume : ReuseMode::kRefuse;
+}
+
+bool RunFolder::Ours(const std::string& name) const {
+  const std::optional<RunFileName> parsed = ParseRunFileName(name);
+  if (!parsed) return false;
+  if (parsed->manifest) {
+    std::string visible = name;
+    if (parsed->hidden) visible = name.substr(1, name.find(".tmp-") - 1);
+    return visible == request_.manifest_name;
+  }
+  return !request_.sharded || request_.owns(parsed->episode);
+}
+
+RunFolder::RunFolder(const RunFolderRequest& request) : request_(request) {
+  const fs::path out = request.out.empty() ? fs::path(".") : fs::path(request.out);
+  const std::string quoted = "--out '" + request.out + "'";
+  std::error_code ec;
+  for (fs::path p = out; !p.empty() && !fs::exists(p, ec); p = p.parent_path()) {
+    created_dirs_.push_back(p);
+    if (p == p.parent_path()) break;
+  }
+  std::vector<std::string> run_files;   // this run's (or, unsharded, any run's) visible files
+  std::vector<std::string> hidden;      // leftover temporaries of those
+  std::vector<std::string> manifests;   // other manifests
+  if (created_dirs_.empty()) {
+    if (!fs::is_directory(out, ec)) {
+      throw RunError("cannot create output folder '" + request.out + "': a file is in the way");
+    }
+    for (const auto& entry : fs::directory_iterator(out, ec)) {
+      const std::string name = entry.path().filename().string();
+      const std::optional<RunFileName> parsed = ParseRunFileName(name);
+      if (!parsed) continue;
+      if (parsed->manifest && !parsed->hidden && name != request.manifest_name) {
+        manifests.push_back(name);
+      } else if (Ours(name)) {
+        (parsed->hidden ? hidden : run_files).push_back(name);
+      }
+    }
+    if (ec) throw RunError("cannot list " + quoted + ": " + ec.message());
+    std::sort(run_files.begin(), run_files.end());
+    std::sort(manifests.begin(), manifests.end());
+  }
+
+  // Other manifests: a sharded run shares the folder with the other shards of the same run;
+  // anything else is another run.
+  for (const std::string& name : manifests) {
+    const nlohmann::json m = ReadManifest(out / name);
+    const bool same_run = request.sharded && m.is_object() && m.contains("parameters") &&
+                          FirstDifference(m["parameters"], request.parameters, "--shard").empty();
+    if (same_run) continue;
+    if (!request.sharded && request.mode == ReuseMode::kOverwrite) {
+      run_files.push_back(name);  // replaced with the rest of the earlier run
+      continue;
+    }
+    std::string why;
+    if (m.is_object() && m.contains("parameters")) {
+      why = FirstDifference(m["parameters"], request.parameters, "");
+    }
+    throw UsageError(quoted + " holds another record run (" + name +
+                     (why.empty() ? "" : ": " + why) + "): choose another --out" +
+                     (request.sharded ? "" : ", or pass --overwrite to replace it"));
+  }
+
+  const bool has_manifest =
+      std::find(run_files.begin(), run_files.end(), request.manifest_name) != run_files.end();
+  std::vector<std::string> remove;
+  todo_ = request.episodes;
+  switch (request.mode) {
+    case ReuseMode::kRefuse:
+      if (has_manifest) {
+        throw UsageError(quoted + " already holds a record run (" + request.manifest_name +
+                         " and " + std::to_string(run_files.size() - 1) +
+                         " episode files): pass --resume to continue it, --overwrite to replace "
+                         "it, or choose another --out");
+      }
+      // a sharded run's own episodes without its manifest: an attempt that was killed (a
+      // retried pod), rewritten; unsharded, they could be any run's
+      if (!run_files.empty() && !request.sharded) {
+        throw UsageError(quoted + " holds files of another record run (" + Listed(run_files) +
+                         ") without its manifest: pass --overwrite to replace them, or choose "
+                         "another --out");
+      }
+      break;
+    case ReuseMode::kOverwrite:
+      remove = run_files;
+      remove.insert(remove.end(), hidden.begin(), hidden.end());
+      break;
+    case ReuseMode::kResume: {
+      if (!has_manifest) {
+        if (!run_files.empty() && !request.sharded) {
+          throw UsageError("cannot --resume " + quoted + ": it holds episode files (" +
+                           Listed(run_files) + ") but no " + request.manifest_name +
+                           " (the run was killed before writing it): pass --overwrite instead");
+        }
+        break;  // nothing to resume: a fresh run
+      }
+      const nlohmann::json m = ReadManifest(out / request.manifest_name);
+      if (!m.is_object() || !m.contains("parameters") || !m.contains("episodes")) {
+        throw UsageError("cannot --resume " + quoted + ": its " + request.manifest_name +
+                         " does not record the run's parameters (written by an older fetchscope, "
+                         "or not a record manifest): pass --overwrite instead");
+      }
+      const std::string why = FirstDifference(m["parameters"], request.parameters, "");
+      if (!why.empty()) {
+        throw UsageError("cannot --resume " + quoted + " with other parameters: " + why +
+                         "; pass the options of the run being resumed, or --overwrite to replace it");
+      }
+      std::set<int> done;
+      for (const nlohmann::json& e : m["episodes"]) {
+        const int k = e.value("index", -1);
+        if (!e.value("complete", false) || !std::binary_search(request.episodes.begin(), request.episodes.end(), k)) continue;
+        bool files = true;
+        for (const char* kind : {"video", "sheet", "trajectory"}) {
+          files = files && fs::is_regular_file(out / e.value(kind, std::string("?")), ec);
+        }
+        if (!files) continue;
+        kept_.push_back(e);
+        done.insert(k);
+      }
+      todo_.clear();
+      for (int k : request.episodes) {
+        if (!done.count(k)) todo_.push_back(k);
+      }
+      // the files of the episodes to redo go first (an incomplete one's); the manifest stays
+      // until the new one replaces it, so that a failed --resume leaves the run resumable
+      for (const std::string& name : run_files) {
+        const std::optional<RunFileName> parsed = ParseRunFileName(name);
+        if (!parsed->manifest && !done.count(parsed->episode)) remove.push_back(name);
+      }
+      remove.insert(remove.end(), hidden.begin(), hidden.end());
+      break;
+    }
+  }
+  for (const std::string& name : remove) {
+    fs::remove(out / name, ec);
+    if (ec) throw RunError("cannot remove '" + (out / name).string() + "': " + ec.message());
+  }
+
+  fs::create_directories(out, ec);
+  if (!fs::is_directory(out)) {
+    throw RunError("cannot create output folder '" + request.out + "': " +
+                   (ec ? ec.message() : std::string("a file is in the way")));
+  }
+  for (const auto& entry : fs::directory_iterator(out, ec)) {
+    before_.insert(entry.path().filename().string());
+  }
+}
+
+RunFolder::~RunFolder() {
+  if (!committed_) Cleanup();
+}
+
+void RunFolder::Cleanup() noexcept {
+  try {
+    const fs::path out = request_.out.empty() ? fs::path(".") : fs::path(request_.out);
+    std::error_code ec;
+    std::vector<fs::path> remove;
+    for (const auto& entry : fs::directory_iterator(out, ec)) {
+      const std::string name = entry.path().filename().string();
+      if (!before_.count(name) && Ours(name)) remove.push_back(entry.path());
+    }
+    for (const fs::path& p : remove) fs::remove(p, ec);
+    for (const fs::path& dir : created_dirs_) fs::remove(dir, ec);  // only when empty again
+  } catch (...) {
+    // best effort: the error that is being reported matters more
+  }
+}
+
+}  // namespace fetchscope::cli

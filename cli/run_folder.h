@@ -1,0 +1,88 @@
+// The output folder of one `record` run: never mixing two runs in it (refused, or replaced
+// whole with --overwrite, or continued with --resume), and leaving nothing behind when the run
+// fails.
+//
+// A run's files are the ones record writes: manifest.json / manifest_shard_IIII_of_NNNN.json,
+// episode_NNN.mp4, episode_NNN_sheet.png, episode_NNN.json and their hidden temporaries
+// (.episode_NNN.partial.mp4, .NAME.tmp-...). Anything else in the folder is the user's and is
+// never touched. The shards of one sharded run share a folder by design: a shard looks only at
+// its own manifest and episodes, and at the other manifests to see that they are of the same run.
+#pragma once
+
+#include <filesystem>
+#include <functional>
+#include <optional>
+#include <set>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+namespace fetchscope::cli {
+
+/// What to do with a folder that already holds a run.
+enum class ReuseMode {
+  kRefuse,     ///< the default: refuse (UsageError, exit 2)
+  kOverwrite,  ///< --overwrite: remove the earlier run's files, then record afresh
+  kResume,     ///< --resume: keep its complete episodes, record the rest
+};
+
+/// A record run file name, parsed. `episode` is -1 for a manifest; `hidden` for a temporary.
+struct RunFileName {
+  int episode = -1;
+  bool manifest = false;
+  bool hidden = false;
+};
+
+/// Parses `name` as one of the run's file names (see the top of this file); nullopt otherwise.
+std::optional<RunFileName> ParseRunFileName(const std::string& name);
+
+/// What a run asks of its folder.
+struct RunFolderRequest {
+  std::string out;                 ///< --out
+  ReuseMode mode = ReuseMode::kRefuse;
+  std::string manifest_name;       ///< this run's manifest (manifest.json or a shard's)
+  bool sharded = false;            ///< other shards' files may be there
+  std::function<bool(int)> owns;   ///< true for the episodes of this run (its shard)
+  std::vector<int> episodes;       ///< this run's episodes, ascending
+  /// What makes two manifests the same run: option name ("--steps") -> value. Stored in the
+  /// manifest as "parameters"; --resume refuses a folder whose run differs in any of them.
+  nlohmann::json parameters;
+};
+
+/// The folder, prepared: conflicts checked, earlier files removed as asked, the folder made.
+/// Until Commit(), destroying it removes what this run created: its files, and the folders
+/// it made when they are empty again (so a failed run leaves nothing that was not there).
+class RunFolder {
+ public:
+  /// Checks and prepares the folder. Throws UsageError (exit 2) for a folder holding another
+  /// run (naming it and the way out), for --resume with a differing parameter (naming it), and
+  /// RunError when the folder cannot be made.
+  explicit RunFolder(const RunFolderRequest& request);
+  ~RunFolder();
+  RunFolder(const RunFolder&) = delete;
+  RunFolder& operator=(const RunFolder&) = delete;
+
+  /// The episodes still to record (all of them, unless resuming).
+  const std::vector<int>& todo() const { return todo_; }
+  /// --resume: the earlier manifest's entries of the complete episodes kept, by index.
+  const std::vector<nlohmann::json>& kept() const { return kept_; }
+  /// The run ended as it should (done or interrupted, with its manifest): keep everything.
+  void Commit() { committed_ = true; }
+
+ private:
+  bool Ours(const std::string& name) const;
+  void Cleanup() noexcept;
+
+  RunFolderRequest request_;
+  std::vector<std::filesystem::path> created_dirs_;  // deepest first
+  std::set<std::string> before_;                     // names present before the run
+  std::vector<int> todo_;
+  std::vector<nlohmann::json> kept_;
+  bool committed_ = false;
+};
+
+/// Parses --overwrite/--resume into a mode; both at once is a UsageError.
+ReuseMode ParseReuseMode(bool overwrite, bool resume);
+
+}  // namespace fetchscope::cli

@@ -1,0 +1,239 @@
+// record's --out folder holds one run: a folder with another run's files is refused (exit 2),
+// --overwrite replaces that run wholly, --resume continues an interrupted run with the bytes of
+// an uninterrupted one, and a run that fails leaves nothing that was not there before.
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <set>
+#include <string>
+#include <thread>
+#include <tuple>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "cli/run_folder.h"
+#include "tests/test_util.h"
+
+namespace fetchscope {
+namespace {
+
+using testing::EpisodeFiles;
+using testing::ReadFile;
+using testing::RunFetchscope;
+using testing::TempDir;
+namespace fs = std::filesystem;
+
+const std::string kSmall =
+    "record --quiet --env-id FetchPush-v4 --width 32 --height 32 --steps 5 --policy random ";
+
+void WriteText(const fs::path& path, const std::string& text) {
+  std::ofstream(path, std::ios::binary) << text;
+}
+
+std::set<std::string> Names(const fs::path& dir) {
+  std::set<std::string> names;
+  for (const auto& e : fs::directory_iterator(dir)) names.insert(e.path().filename().string());
+  return names;
+}
+
+class RunFolderTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    unsetenv("DISPLAY");
+    for (const char* name : {"SLURM_ARRAY_TASK_ID", "JOB_COMPLETION_INDEX"}) unsetenv(name);
+  }
+};
+
+// Which names in a folder are a record run's (and so never the user's).
+TEST(RunFileName, NamesRecordWritesAndNothingElse) {
+  using cli::ParseRunFileName;
+  for (const char* name : {"manifest.json", "manifest_shard_0001_of_0004.json"}) {
+    ASSERT_TRUE(ParseRunFileName(name)) << name;
+    EXPECT_TRUE(ParseRunFileName(name)->manifest) << name;
+  }
+  for (const auto& [name, k, hidden] : std::vector<std::tuple<std::string, int, bool>>{
+           {"episode_000.mp4", 0, false},
+           {"episode_012_sheet.png", 12, false},
+           {"episode_1234.json", 1234, false},
+           {".episode_003.partial.mp4", 3, true},
+           {".episode_004.json.tmp-ab12", 4, true}}) {
+    const auto parsed = ParseRunFileName(name);
+    ASSERT_TRUE(parsed) << name;
+    EXPECT_EQ(parsed->episode, k) << name;
+    EXPECT_EQ(parsed->hidden, hidden) << name;
+  }
+  for (const char* name : {"notes.txt", "episode_x.mp4", "episode_001.txt", "my_manifest.json",
+                           "episode_.json", ".hidden", "results.json"}) {
+    EXPECT_FALSE(ParseRunFileName(name)) << name;
+  }
+}
+
+TEST_F(RunFolderTest, AFolderHoldingARunIsRefused) {
+  TempDir tmp;
+  const fs::path out = tmp.path() / "run";
+  auto r = RunFetchscope(kSmall + "--episodes 2 --seed 1 --out " + out.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto before = EpisodeFiles(out);
+  const std::string manifest = ReadFile(out / "manifest.json");
+  for (const char* seed : {"1", "2"}) {  // the same command, or another run
+    r = RunFetchscope(kSmall + "--episodes 2 --seed " + seed + " --out " + out.string());
+    EXPECT_EQ(r.exit_code, 2) << r.output;
+    EXPECT_NE(r.output.find("already holds a record run"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("--overwrite"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("--resume"), std::string::npos) << r.output;
+    EXPECT_TRUE(EpisodeFiles(out) == before);
+    EXPECT_EQ(ReadFile(out / "manifest.json"), manifest);
+  }
+  // episode files without a manifest (a run killed with SIGKILL) are another run's too
+  fs::remove(out / "manifest.json");
+  r = RunFetchscope(kSmall + "--episodes 2 --seed 1 --out " + out.string());
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("without its manifest"), std::string::npos) << r.output;
+  // a folder with only the user's own files is fine, and they stay
+  const fs::path mine = tmp.path() / "mine";
+  fs::create_directories(mine);
+  WriteText(mine / "notes.txt", "mine");
+  r = RunFetchscope(kSmall + "--episodes 1 --out " + mine.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(ReadFile(mine / "notes.txt"), "mine");
+}
+
+TEST_F(RunFolderTest, OverwriteReplacesTheRunWholly) {
+  TempDir tmp;
+  const fs::path out = tmp.path() / "run", fresh = tmp.path() / "fresh";
+  auto r = RunFetchscope(kSmall + "--episodes 3 --seed 1 --out " + out.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  WriteText(out / "notes.txt", "mine");
+  r = RunFetchscope(kSmall + "--episodes 2 --seed 2 --overwrite --out " + out.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  r = RunFetchscope(kSmall + "--episodes 2 --seed 2 --out " + fresh.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto files = EpisodeFiles(out);
+  EXPECT_EQ(files.size(), 6u);  // episode 2 of the earlier run is gone
+  EXPECT_TRUE(files == EpisodeFiles(fresh)) << "--overwrite differs from a fresh run";
+  EXPECT_EQ(ReadFile(out / "notes.txt"), "mine");
+  EXPECT_EQ(nlohmann::json::parse(ReadFile(out / "manifest.json"))["seed"], 2);
+  r = RunFetchscope(kSmall + "--episodes 2 --overwrite --resume --out " + out.string());
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+}
+
+// Starts `fetchscope ARGS` in the background; returns its pid.
+pid_t Spawn(const std::string& args, const fs::path& log) {
+  const std::string command =
+      "exec " + std::string(FETCHSCOPE_BIN) + " " + args + " </dev/null >" + log.string() + " 2>&1";
+  const pid_t pid = fork();
+  if (pid == 0) {
+    execl("/bin/sh", "sh", "-c", command.c_str(), static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  return pid;
+}
+
+int WaitExit(pid_t pid) {
+  int status = 0;
+  waitpid(pid, &status, 0);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+}
+
+// Interrupt a run with SIGINT, --resume it (with other --jobs): the episode files are those of
+// an uninterrupted run, byte for byte. The random policy's generator runs across episodes, so
+// the resumed run must position it as if the run had never stopped.
+TEST_F(RunFolderTest, ResumeAfterSigintGivesTheBytesOfAnUninterruptedRun) {
+  TempDir tmp;
+  const std::string run = "record --quiet --env-id FetchPickAndPlace-v4 --width 32 --height 32 "
+                          "--policy random --seed 7 --episodes 12 ";
+  const fs::path whole = tmp.path() / "whole", out = tmp.path() / "run";
+  auto r = RunFetchscope(run + "--out " + whole.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+
+  const pid_t pid = Spawn(run + "--out " + out.string(), tmp.path() / "log");
+  for (int i = 0; i < 1200 && !fs::exists(out / "episode_002.json"); ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  kill(pid, SIGINT);
+  ASSERT_EQ(WaitExit(pid), 130) << ReadFile(tmp.path() / "log");
+  const auto m = nlohmann::json::parse(ReadFile(out / "manifest.json"));
+  ASSERT_EQ(m["interrupted"], true);
+  ASSERT_LT(m["episodes"].size(), 12u) << "the run ended before the signal";
+  const auto& last = m["episodes"].back();
+  EXPECT_EQ(last["complete"].get<bool>(), last["steps"].get<int>() == 50);
+
+  // other parameters are refused, naming the first that differs
+  r = RunFetchscope(run + "--steps 49 --resume --out " + out.string());
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("--steps is 50 there and 49 here"), std::string::npos) << r.output;
+
+  r = RunFetchscope(run + "--resume --jobs 2 --out " + out.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto resumed = EpisodeFiles(out);
+  const auto expected = EpisodeFiles(whole);
+  ASSERT_EQ(resumed.size(), expected.size());
+  for (const auto& [name, bytes] : expected) {
+    EXPECT_TRUE(resumed.at(name) == bytes) << name << " differs after --resume";
+  }
+  const auto m2 = nlohmann::json::parse(ReadFile(out / "manifest.json"));
+  EXPECT_EQ(m2["interrupted"], false);
+  EXPECT_EQ(m2["resumed"], true);
+  const auto mw = nlohmann::json::parse(ReadFile(whole / "manifest.json"));
+  EXPECT_EQ(m2["episodes"], mw["episodes"]);
+  // resuming a finished run records nothing more
+  r = RunFetchscope(run + "--resume --out " + out.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(EpisodeFiles(out) == expected);
+}
+
+// merge-manifests counts an episode marked incomplete as missing, whatever its step count.
+TEST_F(RunFolderTest, MergeManifestsTreatsIncompleteEpisodesAsMissing) {
+  TempDir tmp;
+  const fs::path out = tmp.path() / "run";
+  auto r = RunFetchscope(kSmall + "--episodes 2 --out " + out.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  auto m = nlohmann::json::parse(ReadFile(out / "manifest.json"));
+  EXPECT_EQ(m["episodes"][1]["complete"], true);
+  m["episodes"][1]["complete"] = false;
+  WriteText(out / "manifest.json", m.dump());
+  r = RunFetchscope("merge-manifests --quiet --out " + (tmp.path() / "merged.json").string() +
+                    " " + out.string());
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("lacks episodes 1"), std::string::npos) << r.output;
+}
+
+// Run-time failures (a policy that crashes, one that hangs, an encoder that is not there)
+// leave nothing: neither the folders this run made nor files in a folder that was there.
+TEST_F(RunFolderTest, AFailedRunLeavesNothingBehind) {
+  TempDir tmp;
+  const std::string exec_run = "record --quiet --env-id FetchReach-v4 --width 32 --height 32 "
+                               "--steps 5 --episodes 3 ";
+  for (const std::string& failing :
+       {std::string("--policy \"exec:read l; echo 0 0 0 0; read l; exit 3\""),
+        std::string("--exec-timeout 0.3 --policy \"exec:sleep 30\""),
+        std::string("--policy random --codec h264_nvenc")}) {
+    SCOPED_TRACE(failing);
+    const fs::path nested = tmp.path() / "new" / "deeper" / "run";
+    auto r = RunFetchscope(exec_run + failing + " --out " + nested.string());
+    if (r.exit_code == 0 && failing.find("nvenc") != std::string::npos) {
+      fs::remove_all(tmp.path() / "new");  // this machine has NVENC: nothing fails
+      continue;
+    }
+    EXPECT_EQ(r.exit_code, 1) << r.output;
+    EXPECT_FALSE(fs::exists(tmp.path() / "new")) << r.output;
+
+    const fs::path existing = tmp.path() / "existing";
+    fs::create_directories(existing);
+    WriteText(existing / "notes.txt", "mine");
+    r = RunFetchscope(exec_run + failing + " --out " + existing.string());
+    EXPECT_EQ(r.exit_code, 1) << r.output;
+    EXPECT_EQ(Names(existing), std::set<std::string>{"notes.txt"}) << r.output;
+  }
+}
+
+}  // namespace
+}  // namespace fetchscope
