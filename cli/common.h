@@ -59,5 +59,7 @@ void RegisterProbeActions(CLI::App& app);
 void RegisterMergeManifests(CLI::App& app);
 void RegisterGolden(CLI::App& app);
 void RegisterListGpus(CLI::App& app);
+void RegisterReport(CLI::App& app);
+void RegisterCompare(CLI::App& app);
 
 }  // namespace fetchscope::cli

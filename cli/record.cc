@@ -27,6 +27,7 @@
 #include "cli/episode_scheduler.h"
 #include "cli/node_probe.h"
 #include "cli/render_common.h"
+#include "cli/report.h"
 #include "cli/shard.h"
 #include "render/contact_sheet.h"
 #include "render/png_io.h"
@@ -61,6 +62,7 @@ struct RecordOptions {
   std::string worker_mode = "process";
   std::string shard;                // "I/N"; empty: from the environment, else the whole run
   int shard_count = 0;              // with JOB_COMPLETION_INDEX; 0 = not given
+  bool no_report = false;           // no index.html (cli/report.h)
 };
 
 // Everything the parent decided before the workers start; workers only read it.
@@ -585,7 +587,8 @@ void RunRecord(const RecordOptions& o, const std::string& command_line) {
       {"interrupted", sig != 0},
       {"signal", sig == 0 ? nlohmann::json(nullptr) : nlohmann::json(sig == SIGINT ? "SIGINT" : "SIGTERM")},
       {"command_line", command_line}};
-  WriteJson((fs::path(o.out) / ShardManifestName(shard)).string(), manifest);
+  const fs::path manifest_path = fs::path(o.out) / ShardManifestName(shard);
+  WriteJson(manifest_path.string(), manifest);
   const size_t recorded = episodes_json.size();
   char summary[768];
   std::snprintf(summary, sizeof(summary),
@@ -598,6 +601,8 @@ void RunRecord(const RecordOptions& o, const std::string& command_line) {
                 first_worker.value("backend", "?").c_str(), codec_used.c_str(), o.out.c_str(),
                 sig ? " (interrupted)" : "");
   progress.Done(summary);
+  // a shard's episodes are only part of the run: merge-manifests writes the run's report
+  if (!o.no_report && !shard.sharded()) WriteRunReportOrWarn(manifest_path, o.quiet);
   if (sig) {
     ExitStatus() = 128 + sig;
     return;
@@ -639,6 +644,8 @@ void RegisterRecord(CLI::App& app) {
   sub->add_option("--shard-count", o->shard_count,
                   "Number of shards when the index comes from JOB_COMPLETION_INDEX (a Kubernetes "
                   "Indexed Job's completions)");
+  sub->add_flag("--no-report", o->no_report,
+                "Do not write the run's HTML report (index.html; see `fetchscope report`)");
   sub->callback([o]() { RunRecord(*o, CommandLine()); });
 }
 
