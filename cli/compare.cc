@@ -233,6 +233,13 @@ void CompareFrames(const CompareOptions& o, const RunFolder& a, const RunFolder&
   row["same"] = result->same;
 }
 
+// The last component of a folder's path ("runs/a/" -> "a").
+std::string FolderName(const std::string& dir) {
+  fs::path p = fs::absolute(dir).lexically_normal();
+  if (p.filename().empty()) p = p.parent_path();
+  return p.filename().string();
+}
+
 // The relative link from the compare folder to a run's report, or null when it has none.
 json ReportLink(const RunFolder& run, const std::string& out) {
   const fs::path page = run.dir / "index.html";
@@ -287,9 +294,13 @@ void RunCompare(const CompareOptions& o) {
     rows.push_back(std::move(c.row));
   }
 
-  const std::string title = a.manifest.value("env_id", std::string()) + " · " +
-                            a.manifest.value("policy", std::string()) + " vs " +
-                            b.manifest.value("policy", std::string());
+  // the title names what differs: the policies when they do, else the two folders
+  const std::string policy_a = a.manifest.value("policy", std::string());
+  const std::string policy_b = b.manifest.value("policy", std::string());
+  const std::string title =
+      a.manifest.value("env_id", std::string()) + " · " +
+      (policy_a != policy_b ? policy_a + " vs " + policy_b
+                            : FolderName(o.run_a) + " vs " + FolderName(o.run_b));
   const json summary = {{"same", same},
                         {"episodes", rows.size()},
                         {"differing_episodes", differing},

@@ -61,6 +61,16 @@ struct VideoReader::Impl {
       converter.reset(sws_getContext(w, h, static_cast<AVPixelFormat>(frame->format), w, h,
                                      AV_PIX_FMT_RGB24, SWS_BILINEAR, nullptr, nullptr, nullptr));
       if (!converter) throw RunError("cannot convert the frames of '" + path + "' to RGB");
+      // the matrix and range the stream says it uses (our writer: BT.709, limited range);
+      // FFmpeg's default would be BT.601 and shift every colour of a BT.709 video
+      const int matrix = frame->colorspace == AVCOL_SPC_BT709 ? SWS_CS_ITU709
+                         : frame->colorspace == AVCOL_SPC_BT2020_NCL || frame->colorspace == AVCOL_SPC_BT2020_CL
+                             ? SWS_CS_BT2020
+                             : SWS_CS_DEFAULT;
+      const int* coefficients = sws_getCoefficients(matrix);
+      sws_setColorspaceDetails(converter.get(), coefficients,
+                               /*srcRange=*/frame->color_range == AVCOL_RANGE_JPEG ? 1 : 0,
+                               coefficients, /*dstRange=*/1, 0, 1 << 16, 1 << 16);
     }
     if (w != decoder->width || h != decoder->height) {
       throw RunError("'" + path + "' changes frame size mid-stream: not supported");

@@ -334,7 +334,6 @@ TEST_F(CompareTest, AChangedPolicyIsCaughtAtStepOne) {
     EXPECT_EQ(e["state_difference"][0].get<double>(), 0.0);
     EXPECT_EQ(e["first_divergence_step"], 1);
     EXPECT_GT(e["max_state_difference"].get<double>(), 1e-3);
-    EXPECT_EQ(e["pixel_difference"][0], 0);  // frame 0 (reset) is the same picture
     EXPECT_GT(e["max_pixel_difference"].get<int>(), 32);
     int frames = 0;
     EXPECT_GT(HeatMapMax(out.path() / e["video"].get<std::string>(), &frames), 32);
@@ -373,12 +372,13 @@ TEST_F(CompareTest, BundledAgainstGenuineAssetsDivergesPlausibly) {
   ASSERT_EQ(r.exit_code, 1) << r.output;
   const json result = ReadJsonFile(tmp.path() / "cmp" / "compare.json");
   for (const json& e : result["episodes"]) {
-    ASSERT_FALSE(e["first_divergence_step"].is_null());
-    // the bundled models match the genuine ones to about a micrometre after settling: the
-    // reset states differ by far less than a millimetre, and the same task stays within reach
-    EXPECT_LT(e["state_difference"][0].get<double>(), 1e-3);
-    EXPECT_GT(e["max_state_difference"].get<double>(), 1e-9);
-    EXPECT_LT(e["max_state_difference"].get<double>(), 0.5);
+    // the bundled models match the genuine ones to about a micrometre after settling: the reset
+    // states differ, beyond 1e-9, but by far less than a millimetre, and so do the first steps
+    EXPECT_EQ(e["first_divergence_step"], 0);
+    for (int t = 0; t < 3; ++t) {
+      EXPECT_GT(e["state_difference"][t].get<double>(), 1e-9) << "step " << t;
+      EXPECT_LT(e["state_difference"][t].get<double>(), 1e-3) << "step " << t;
+    }
     // different meshes: the pictures differ from the first frame on
     EXPECT_GT(e["pixel_difference"][0].get<int>(), 0);
   }

@@ -38,8 +38,11 @@
       });
       series.push({label: 'tolerance', stroke: colors.threshold, dash: [6, 4], width: 1.5, points: {show: false}});
       values.push(steps.map(() => Math.max(s.tolerance, floor)));
-      return [{width, legend: {show: rows.length <= 12}, scales: {x: {time: false}, y: {distr: 3}},
-               axes: [{label: 'step', incrs: FS.integerSteps}, {label: 'max |A − B|', size: 70}], series}, values];
+      return [{width, legend: {show: rows.length <= 12}, scales: {x: {time: false}, y: {distr: 3, log: 10}},
+               axes: [{label: 'step', incrs: FS.integerSteps},
+                      {label: 'max |A − B|', size: 70,
+                       values: (u, splits) => splits.map((v) => (v === null ? '' : v.toExponential(0)))}],
+               series}, values];
     },
   }];
   if (!s.states_only) {
@@ -85,7 +88,7 @@
   ];
   const table = FS.sortableTable(columns, rows);
   table.id = 'episode-table';
-  page.append(table);
+  page.append(FS.scrolling(table));
 
   // --- side-by-side videos
   if (!s.states_only) {

@@ -87,6 +87,11 @@ const FS = (() => {
     return table;
   }
 
+  // A wide table scrolls sideways inside the page instead of widening it.
+  function scrolling(table) {
+    return el('div', {class: 'table-wrap'}, table);
+  }
+
   // uPlot charts in titled boxes inside `parent`: specs [{id, title, caption, wide, build}], where
   // build(width) returns [options, data]. Every box is placed first and then drawn at the width
   // the layout gave it.
@@ -122,5 +127,5 @@ const FS = (() => {
         'this page loads nothing from the network.');
   }
 
-  return {data, colors, el, num, percent, provenanceTable, sortableTable, plots, swatch, footer, integerSteps};
+  return {data, colors, el, num, percent, provenanceTable, sortableTable, plots, swatch, footer, integerSteps, scrolling};
 })();

@@ -102,7 +102,7 @@
     e.trajectory ? el('a', {href: e.trajectory}, 'json') : null])});
   const table = FS.sortableTable(columns, episodes, (e) => (e.status === 'missing' ? 'missing' : null));
   table.id = 'episode-table';
-  page.append(table);
+  page.append(FS.scrolling(table));
 
   // --- each episode
   page.append(el('h2', {}, 'Videos and contact sheets'));
