@@ -41,7 +41,12 @@
       return [{width, legend: {show: rows.length <= 12}, scales: {x: {time: false}, y: {distr: 3, log: 10}},
                axes: [{label: 'step', incrs: FS.integerSteps},
                       {label: 'max |A − B|', size: 70,
-                       values: (u, splits) => splits.map((v) => (v === null ? '' : v.toExponential(0)))}],
+                       // every decade gets a grid line, about six of them a label
+                       values: (u, splits) => {
+                         const decade = (v) => v !== null && v > 0 && Math.abs(Math.log10(v) - Math.round(Math.log10(v))) < 1e-9;
+                         const every = Math.max(1, Math.ceil(splits.filter(decade).length / 6));
+                         return splits.map((v) => (decade(v) && Math.round(Math.log10(v)) % every === 0 ? v.toExponential(0) : ''));
+                       }}],
                series}, values];
     },
   }];
@@ -50,7 +55,9 @@
     const xs = Array.from({length: frames}, (_, t) => t);
     specs.push({
       id: 'plot-pixels', title: 'Largest pixel difference per frame (0..255)',
-      caption: 'frame t shows the state after step t (frame 0: reset)',
+      caption: 'frame t shows the state after step t (frame 0: reset); frames are compared as decoded ' +
+               'from H.264, so frames of equal states can differ a little where the encoder chose differently ' +
+               'for the frames around them',
       build: (width) => {
         const series = [{label: 'frame'}];
         const values = [xs];
