@@ -65,5 +65,7 @@ void RegisterMergeManifests(CLI::App& app);
 void RegisterGolden(CLI::App& app);
 void RegisterListGpus(CLI::App& app);
 void RegisterAnatomy(CLI::App& app);
+void RegisterReport(CLI::App& app);
+void RegisterCompare(CLI::App& app);
 
 }  // namespace fetchscope::cli

@@ -35,6 +35,8 @@ int main(int argc, char** argv) {
   cli::RegisterMergeManifests(app);
   cli::RegisterGolden(app);
   cli::RegisterListGpus(app);
+  cli::RegisterReport(app);
+  cli::RegisterCompare(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "cli/common.h"
+#include "cli/report.h"
 #include "cli/shard.h"
 #include "src/errors.h"
 #include "src/json_util.h"
@@ -110,7 +111,7 @@ std::string RelativeTo(const fs::path& file, const fs::path& folder) {
       .string();
 }
 
-void Merge(const std::vector<std::string>& dirs, std::string out, bool quiet) {
+void Merge(const std::vector<std::string>& dirs, std::string out, bool quiet, bool report) {
   std::vector<ShardManifest> manifests;
   for (const std::string& dir : dirs) {
     for (ShardManifest& m : ReadManifests(dir)) manifests.push_back(std::move(m));
@@ -258,6 +259,7 @@ void Merge(const std::vector<std::string>& dirs, std::string out, bool quiet) {
     std::printf("merge-manifests: %zu shard(s) of %d, %d episode(s), success %d/%d -> %s\n",
                 by_shard.size(), count, episodes, successes, episodes, out.c_str());
   }
+  if (report) WriteRunReportOrWarn(out, quiet);
 }
 
 }  // namespace
@@ -266,6 +268,7 @@ void RegisterMergeManifests(CLI::App& app) {
   auto dirs = std::make_shared<std::vector<std::string>>();
   auto out = std::make_shared<std::string>();
   auto quiet = std::make_shared<bool>(false);
+  auto no_report = std::make_shared<bool>(false);
   CLI::App* sub = app.add_subcommand(
       "merge-manifests",
       "Merge the shard manifests of a sharded record run into one manifest.json; exit 1 naming "
@@ -275,7 +278,9 @@ void RegisterMergeManifests(CLI::App& app) {
   sub->add_option("--out", *out,
                   "Merged manifest path (default: DIR/manifest.json of the first DIR)");
   sub->add_flag("-q,--quiet", *quiet, "No summary on stdout");
-  sub->callback([=]() { Merge(*dirs, *out, *quiet); });
+  sub->add_flag("--no-report", *no_report,
+                "Do not write the run's HTML report (index.html beside the merged manifest)");
+  sub->callback([=]() { Merge(*dirs, *out, *quiet, !*no_report); });
 }
 
 }  // namespace fetchscope::cli

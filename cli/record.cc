@@ -30,6 +30,7 @@
 #include "cli/progress.h"
 #include "cli/render_common.h"
 #include "cli/run_folder.h"
+#include "cli/report.h"
 #include "cli/shard.h"
 #include "render/contact_sheet.h"
 #include "render/png_io.h"
@@ -71,6 +72,7 @@ struct RecordOptions {
   bool resume = false;              // continue the run already in --out
   std::string replay_dtype;         // --replay-dtype: "", float32, float64
   bool episodes_given = false;      // --episodes was on the command line
+  bool no_report = false;           // no index.html (cli/report.h)
 };
 
 // Everything the parent decided before the workers start; workers only read it.
@@ -690,7 +692,8 @@ void RunRecord(const RecordOptions& options, const std::string& command_line) {
       {"command_line", command_line},
       {"parameters", parameters},
       {"resumed", o.resume && !folder.kept().empty()}};
-  WriteJson((fs::path(o.out) / ShardManifestName(shard)).string(), manifest);
+  const fs::path manifest_path = fs::path(o.out) / ShardManifestName(shard);
+  WriteJson(manifest_path.string(), manifest);
   folder.Commit();
   const size_t recorded = result.results.size();
   char summary[768];
@@ -704,6 +707,8 @@ void RunRecord(const RecordOptions& options, const std::string& command_line) {
                 first_worker.value("backend", "?").c_str(), codec_used.c_str(), o.out.c_str(),
                 sig ? " (interrupted)" : "");
   progress.Done(summary);
+  // a shard's episodes are only part of the run: merge-manifests writes the run's report
+  if (!o.no_report && !shard.sharded()) WriteRunReportOrWarn(manifest_path, o.quiet);
   if (sig) {
     ExitStatus() = 128 + sig;
     return;
@@ -761,6 +766,8 @@ void RegisterRecord(CLI::App& app) {
   sub->add_option("--shard-count", o->shard_count,
                   "Number of shards when the index comes from JOB_COMPLETION_INDEX (a Kubernetes "
                   "Indexed Job's completions)");
+  sub->add_flag("--no-report", o->no_report,
+                "Do not write the run's HTML report (index.html; see `fetchscope report`)");
   sub->callback([o, sub]() {
     o->episodes_given = sub->count("--episodes") > 0;
     RunRecord(*o, CommandLine());

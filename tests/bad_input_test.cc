@@ -96,7 +96,14 @@ std::string Expand(std::string s, const fs::path& tmp) {
 // Files a record run would write for episode 0.
 const std::vector<std::string> kRecordOutputs = {
     "out/episode_000.mp4",  "out/episode_000.webm", "out/episode_000.gif",
-    "out/episode_000_sheet.png", "out/episode_000.json", "out/manifest.json"};
+    "out/episode_000_sheet.png", "out/episode_000.json", "out/manifest.json",
+    "out/index.html"};
+
+// A minimal record manifest for `report` and `compare` rows.
+std::string Manifest(const std::string& env, const std::string& episodes) {
+  return R"({"env_id": ")" + env + R"(", "seed": 0, "steps_per_episode": 3, "episodes_requested": 1,
+             "episodes": )" + episodes + "}";
+}
 
 const char kSmall[] = " --width 64 --height 48 --steps 3 ";
 const char kUlimit[] = "trap '' XFSZ; ulimit -f 16; ";  // 8 KiB: SIGXFSZ ignored -> EFBIG
@@ -199,6 +206,47 @@ std::vector<Case> Matrix() {
       {"GoldenMalformedManifest", "golden check --golden-dir {tmp}/gd --out {tmp}/g", 1,
        "manifest.json", {}, file("gd/manifest.json", "{\"scenes\": [")},
       {"MergeNoFolder", "merge-manifests", 2, "DIR"},
+      // ---- report and compare
+      {"ReportNoFolder", "report", 2, "DIR"},
+      {"ReportMissingFolder", "report {tmp}/nowhere", 2, "{tmp}/nowhere", {"nowhere/index.html"}},
+      {"ReportNoManifest", "report {tmp}", 2, "manifest.json", {"index.html"}},
+      {"ReportShardManifestsOnly", "report {tmp}/m", 2, "merge-manifests", {"m/index.html"},
+       file("m/manifest_shard_0000_of_0002.json", "{}")},
+      {"ReportManifestNotJson", "report {tmp}/m", 2, "not JSON", {"m/index.html"},
+       file("m/manifest.json", "{\"env_id\": ")},
+      {"ReportManifestNotARecordManifest", "report {tmp}/m", 2, "not a record manifest",
+       {"m/index.html"}, file("m/manifest.json", "[1, 2, 3]")},
+      {"CompareNoOut", "compare {tmp}/a {tmp}/b", 2, "--out"},
+      {"CompareMissingRun", "compare {tmp}/a {tmp}/b --out {tmp}/c", 2, "{tmp}/a",
+       {"c/index.html", "c/compare.json"}},
+      {"CompareNegativeTolerance", "compare {tmp}/a {tmp}/b --out {tmp}/c --tolerance -1", 2, "-1",
+       {"c/index.html", "c/compare.json"}},
+      {"ComparePixelToleranceOutOfRange",
+       "compare {tmp}/a {tmp}/b --out {tmp}/c --pixel-tolerance 300", 2, "300",
+       {"c/index.html", "c/compare.json"}},
+      {"CompareDifferentEnvs", "compare {tmp}/a {tmp}/b --out {tmp}/c", 2, "FetchPush-v4",
+       {"c/index.html", "c/compare.json"},
+       [](const fs::path& tmp) {
+         WriteBytes(tmp / "a/manifest.json", Manifest("FetchReach-v4", R"([{"index": 0}])"));
+         WriteBytes(tmp / "b/manifest.json", Manifest("FetchPush-v4", R"([{"index": 0}])"));
+         return true;
+       }},
+      {"CompareDifferentEpisodes", "compare {tmp}/a {tmp}/b --out {tmp}/c", 2, "different episodes",
+       {"c/index.html", "c/compare.json"},
+       [](const fs::path& tmp) {
+         WriteBytes(tmp / "a/manifest.json", Manifest("FetchReach-v4", R"([{"index": 0}])"));
+         WriteBytes(tmp / "b/manifest.json", Manifest("FetchReach-v4", R"([{"index": 1}])"));
+         return true;
+       }},
+      {"CompareMissingTrajectory", "compare {tmp}/a {tmp}/b --out {tmp}/c", 2, "episode_000.json",
+       {"c/index.html", "c/compare.json", "c/compare_episode_000.mp4"},
+       [](const fs::path& tmp) {
+         const std::string entry =
+             R"([{"index": 0, "trajectory": "episode_000.json", "video": "episode_000.mp4"}])";
+         WriteBytes(tmp / "a/manifest.json", Manifest("FetchReach-v4", entry));
+         WriteBytes(tmp / "b/manifest.json", Manifest("FetchReach-v4", entry));
+         return true;
+       }},
       {"MergeMissingFolder", "merge-manifests {tmp}/nowhere", 1, "{tmp}/nowhere",
        {"nowhere/manifest.json"}},
       {"MergeMalformedShard", "merge-manifests {tmp}/m", 1, "manifest_shard_0_of_2.json",

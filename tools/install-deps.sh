@@ -3,6 +3,8 @@
 #   tools/install-deps.sh           build + test dependencies
 #   tools/install-deps.sh --bench   also the benchmark peers (mujoco-record, xvfb)
 #   tools/install-deps.sh --ci      also what tools/ci-extra.sh needs (clang + libFuzzer, valgrind)
+# Then the npm packages of web/ (uPlot, embedded into the binary by the build; playwright-core,
+# which drives chromium in the browser tests), exactly as web/package-lock.json pins them.
 set -euo pipefail
 packages=(cmake g++ make pkg-config
   libmujoco-dev libqhull-dev
@@ -11,7 +13,10 @@ packages=(cmake g++ make pkg-config
   libavfilter-dev libssl-dev libfreetype-dev libfontconfig-dev fonts-dejavu-core
   libcli11-dev nlohmann-json3-dev libgtest-dev
   ffmpeg python3 python3-numpy
-  binutils xz-utils)
+  binutils xz-utils
+  chromium)
+# Node.js and npm: Debian's, unless a Node.js (e.g. NodeSource's, which bundles npm) is present
+if ! command -v node >/dev/null || ! command -v npm >/dev/null; then packages+=(nodejs npm); fi
 for flag in "$@"; do
   case "$flag" in
     --bench) packages+=(libmujoco-samples xvfb xauth time) ;;
@@ -26,11 +31,22 @@ for p in "${packages[@]}"; do
 done
 if [[ ${#missing[@]} -eq 0 ]]; then
   echo "install-deps: all ${#packages[@]} Debian packages present"
-  exit 0
+else
+  sudo=""
+  if [[ $(id -u) -ne 0 ]]; then sudo="sudo"; fi
+  echo "install-deps: installing ${missing[*]}"
+  $sudo apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
 fi
-sudo=""
-if [[ $(id -u) -ne 0 ]]; then sudo="sudo"; fi
-echo "install-deps: installing ${missing[*]}"
-$sudo apt-get update -qq
-DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+# npm ci again only when the lock file changed since the last install (a stamp in node_modules)
+web="$(cd "$(dirname "$0")/.." && pwd)/web"
+stamp="$web/node_modules/.fetchscope-lock.sha256"
+lock_sum=$(sha256sum "$web/package-lock.json" | cut -d' ' -f1)
+if [[ ! -f "$stamp" || "$(cat "$stamp")" != "$lock_sum" ]]; then
+  echo "install-deps: npm ci in web/"
+  (cd "$web" && npm ci --no-audit --no-fund --loglevel=error)
+  echo "$lock_sum" >"$stamp"
+else
+  echo "install-deps: web/node_modules matches web/package-lock.json"
+fi
 echo "install-deps: done"

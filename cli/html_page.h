@@ -1,0 +1,26 @@
+// The self-contained HTML pages of `report` and `compare`: one file that inlines uPlot (embedded
+// into the binary at build time from web/node_modules, see cli/CMakeLists.txt), the pages' own
+// script and style (web/src/) and the data as JSON, so that it opens offline from file:// or any
+// static server and fetches nothing.
+#pragma once
+
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+namespace fetchscope::cli {
+
+/// Which script draws the page from its data.
+enum class PageKind { kReport, kCompare };
+
+/// The whole HTML text of a page titled `title` whose script renders `data`.
+std::string HtmlPage(PageKind kind, const std::string& title, const nlohmann::json& data);
+
+/// The uPlot version embedded (from web/package.json at build time), for the page footer.
+const char* EmbeddedUplotVersion();
+
+/// Wilson score interval of a binomial proportion: `successes` of `n`, z = 1.96 (95 %).
+/// Returns {low, high}; {0, 1} when n is 0.
+std::pair<double, double> WilsonInterval(int successes, int n, double z = 1.959963984540054);
+
+}  // namespace fetchscope::cli

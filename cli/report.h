@@ -1,0 +1,61 @@
+// fetchscope report DIR: a record run folder -> DIR/index.html (see cli/html_page.h), and the
+// reading of run folders that `report` and `compare` share.
+#pragma once
+
+#include <filesystem>
+#include <map>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+namespace fetchscope::cli {
+
+/// A record run as its manifest describes it.
+struct RunFolder {
+  std::filesystem::path dir;            ///< the folder holding the manifest
+  std::filesystem::path manifest_path;  ///< dir/manifest.json (or a shard manifest)
+  nlohmann::json manifest;
+  std::vector<int> expected;                ///< the episodes the run was asked to record
+  std::map<int, nlohmann::json> recorded;   ///< manifest entries by episode index
+  std::map<int, std::string> failed;        ///< a worker's failure message by episode index
+};
+
+/// Reads `manifest_path` (a record or merge-manifests manifest). Throws UsageError when the file
+/// is missing or is not a record manifest, RunError when it cannot be read.
+RunFolder ReadRunManifest(const std::filesystem::path& manifest_path);
+
+/// Reads the run in folder `dir`: dir/manifest.json. Throws UsageError naming `dir` when it is
+/// not a folder or holds no manifest.json (saying so when it holds shard manifests instead).
+RunFolder ReadRunFolder(const std::string& dir);
+
+/// One step of a recorded trajectory, as the compare and report pages need it.
+struct TrajectoryStep {
+  std::vector<double> observation;
+  std::vector<double> achieved_goal;
+  std::vector<double> desired_goal;
+};
+
+/// The steps of the single episode in an episode_NNN.json trajectory file. Throws RunError naming
+/// the file when it is missing or malformed.
+std::vector<TrajectoryStep> ReadEpisodeTrajectory(const std::filesystem::path& path);
+
+/// Euclidean distance from achieved to desired goal.
+double GoalDistance(const TrajectoryStep& step);
+
+/// The run's provenance as {label, value} rows: env, seed, policy, assets and their hash, encoder,
+/// GL device(s), fetchscope version, command line...
+nlohmann::json RunProvenance(const RunFolder& run);
+
+/// The report page's data for `run` (see web/src/report.js): provenance, episodes with their
+/// distance curves, histogram and success rate.
+nlohmann::json ReportData(const RunFolder& run);
+
+/// Writes index.html beside the manifest, atomically. Returns its path. Throws on failure.
+std::filesystem::path WriteRunReport(const RunFolder& run);
+
+/// For record and merge-manifests: writes the report of `manifest_path`; a failure is a warning
+/// on stderr ("fetchscope: warning: ..."), never a failed run. Prints the path unless quiet.
+void WriteRunReportOrWarn(const std::filesystem::path& manifest_path, bool quiet);
+
+}  // namespace fetchscope::cli

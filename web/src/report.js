@@ -1,0 +1,136 @@
+// The report page of one record run (fetchscope report DIR): drawn from FS.data, see
+// cli/report.cc ReportData for its fields.
+(() => {
+  const {data, colors, el, num, percent} = FS;
+  const page = document.getElementById('page');
+  const episodes = data.episodes;
+  const recorded = episodes.filter((e) => e.status !== 'missing');
+  const s = data.summary;
+
+  page.append(el('h1', {}, data.title));
+  page.append(el('p', {class: 'subtitle'},
+      `${s.recorded} of ${s.expected} episodes recorded · success ${s.successes}/${s.complete}` +
+      (s.rate === null ? '' : ` = ${percent(s.rate)} (95 % Wilson interval ${percent(s.wilson_low)} – ${percent(s.wilson_high)})`)));
+  if (data.notes.length) page.append(el('ul', {class: 'notes', id: 'notes'}, data.notes.map((n) => el('li', {}, n))));
+
+  page.append(el('h2', {}, 'Provenance'));
+  page.append(FS.provenanceTable(data.provenance));
+
+  // --- plots
+  page.append(el('h2', {}, 'Plots'));
+  const withCurves = recorded.filter((e) => e.distances && e.distances.length);
+  const longest = Math.max(1, ...withCurves.map((e) => e.distances.length));
+  const steps = Array.from({length: longest}, (_, t) => t);
+  const h = data.returns_histogram;
+  const r = data.running_success;
+  FS.plots(page, [{
+    id: 'plot-distance', wide: true, title: 'Distance to goal over steps',
+    caption: [FS.swatch(colors.success), 'success', FS.swatch(colors.failure), 'failure',
+              FS.swatch(colors.threshold, true), `threshold ${data.threshold} m`],
+    build: (width) => {
+      const series = [{label: 'step'}];
+      const values = [steps];
+      for (const e of withCurves) {
+        series.push({label: `episode ${e.label}`, stroke: e.success ? colors.success : colors.failure,
+                     width: 1.25, points: {show: false}});
+        values.push(steps.map((t) => (t < e.distances.length ? e.distances[t] : null)));
+      }
+      series.push({label: 'threshold', stroke: colors.threshold, dash: [6, 4], width: 1.5, points: {show: false}});
+      values.push(steps.map(() => data.threshold));
+      return [{
+        width, legend: {show: false},
+        scales: {x: {time: false}, y: {range: (u, lo, hi) => [0, Math.max(hi, data.threshold) * 1.05]}},
+        axes: [{label: 'step', incrs: FS.integerSteps}, {label: 'distance (m)', size: 60}],
+        series,
+      }, values];
+    },
+  }, {
+    id: 'plot-returns', title: 'Histogram of returns',
+    caption: `${recorded.length} episode(s); bin width ${num(h.width, 3)}`,
+    build: (width) => {
+      const lo = h.centres.length ? h.centres[0] - h.width / 2 : 0;
+      const hi = h.centres.length ? h.centres[h.centres.length - 1] + h.width / 2 : 1;
+      return [{
+        width, legend: {show: false},
+        scales: {x: {time: false, range: [lo, hi]}, y: {range: (u, a, b) => [0, Math.max(1, b) * 1.1]}},
+        axes: [{label: 'return'}, {label: 'episodes', size: 50, incrs: FS.integerSteps}],
+        series: [{label: 'return'},
+                 {label: 'episodes', stroke: colors.accent, fill: 'rgba(44,109,178,0.55)',
+                  paths: uPlot.paths.bars({size: [0.92, Infinity], align: 0}), points: {show: false}}],
+      }, [h.centres, h.counts]];
+    },
+  }, {
+    id: 'plot-success', title: 'Success rate with its 95 % Wilson interval',
+    caption: s.rate === null ? 'no complete episode' :
+      `after ${s.complete} complete episode(s), in index order: ${s.successes}/${s.complete} = ${percent(s.rate)}, ` +
+      `interval ${percent(s.wilson_low)} – ${percent(s.wilson_high)}`,
+    build: (width) => [{
+      width, legend: {show: false},
+      scales: {x: {time: false, range: [0.5, Math.max(1, r.n.length) + 0.5]}, y: {range: [0, 1]}},
+      axes: [{label: 'episodes counted', incrs: FS.integerSteps}, {label: 'success rate', size: 50}],
+      series: [{label: 'episodes'},
+               {label: 'rate', stroke: colors.accent, width: 2, points: {show: r.n.length < 40, size: 6}},
+               {label: 'low', stroke: 'rgba(44,109,178,0.5)', width: 1, points: {show: false}},
+               {label: 'high', stroke: 'rgba(44,109,178,0.5)', width: 1, points: {show: false}}],
+      bands: [{series: [3, 2], fill: colors.band}],
+    }, [r.n, r.rate, r.low, r.high]],
+  }]);
+
+  // --- table
+  page.append(el('h2', {}, 'Episodes'));
+  const numeric = (v) => (typeof v === 'number' ? v : null);
+  const status = (e) => (e.status === 'missing' ? el('span', {}, 'missing') :
+      el('span', {class: e.success ? 'ok' : 'fail'}, e.success ? 'success' : 'failure'));
+  const columns = [
+    {label: 'episode', value: (e) => e.index, render: (e) => el('a', {href: `#episode-${e.label}`}, e.label), numeric: true},
+    {label: 'success', value: (e) => (e.status === 'missing' ? null : e.success ? 1 : 0), render: status},
+    {label: 'return', value: (e) => numeric(e.return), render: (e) => num(e.return, 3), numeric: true},
+    {label: 'final distance (m)', value: (e) => numeric(e.final_distance), render: (e) => num(e.final_distance, 4), numeric: true},
+    {label: 'length', value: (e) => numeric(e.length), render: (e) => num(e.length, 0), numeric: true},
+    {label: 'complete', value: (e) => (e.status === 'missing' ? null : e.complete ? 1 : 0),
+     render: (e) => (e.status === 'missing' ? e.reason : e.complete ? 'yes' : 'no (interrupted)')},
+  ];
+  if (data.has_hindsight) {
+    columns.push({label: 'HER relabelled successes', value: (e) => (e.hindsight ? e.hindsight.relabelled_successes : null),
+                  render: (e) => (e.hindsight ? String(e.hindsight.relabelled_successes) : '—'), numeric: true});
+    columns.push({label: 'original successes', value: (e) => (e.hindsight ? e.hindsight.original_successes : null),
+                  render: (e) => (e.hindsight ? String(e.hindsight.original_successes) : '—'), numeric: true});
+  }
+  columns.push({label: 'files', value: () => null, render: (e) => (e.status === 'missing' ? '' : [
+    e.video ? el('a', {href: e.video}, 'mp4') : null, ' ',
+    e.sheet ? el('a', {href: e.sheet}, 'sheet') : null, ' ',
+    e.trajectory ? el('a', {href: e.trajectory}, 'json') : null])});
+  const table = FS.sortableTable(columns, episodes, (e) => (e.status === 'missing' ? 'missing' : null));
+  table.id = 'episode-table';
+  page.append(FS.scrolling(table));
+
+  // --- each episode
+  page.append(el('h2', {}, 'Videos and contact sheets'));
+  const grid = el('div', {class: 'episodes'});
+  const preload = recorded.length <= 50 ? 'auto' : 'metadata';
+  for (const e of episodes) {
+    const card = el('section', {class: 'episode' + (e.status === 'missing' ? ' missing' : ''), id: `episode-${e.label}`});
+    if (e.status === 'missing') {
+      card.append(el('h3', {}, `episode ${e.label} — missing`), el('p', {}, e.reason));
+      grid.append(card);
+      continue;
+    }
+    const heading = `episode ${e.label} — ${e.success ? 'success' : 'failure'}, return ${num(e.return, 2)}, ` +
+        `final distance ${num(e.final_distance, 3)} m` + (e.complete ? '' : ', interrupted');
+    card.append(el('h3', {class: e.success ? 'ok' : 'fail'}, heading));
+    if (e.hindsight) {
+      card.append(el('p', {}, `hindsight (HER future, k = 4): ${e.hindsight.relabelled_successes} relabelled ` +
+          `successes against ${e.hindsight.original_successes} original`));
+    }
+    if (e.video) card.append(el('video', {src: e.video, controls: true, muted: true, playsinline: true, preload}));
+    if (e.sheet) card.append(el('a', {href: e.sheet}, el('img', {src: e.sheet, alt: `contact sheet of episode ${e.label}`, loading: 'lazy'})));
+    card.append(el('div', {class: 'links'}, [
+      e.video ? el('a', {href: e.video}, e.video) : null,
+      e.sheet ? el('a', {href: e.sheet}, 'contact sheet') : null,
+      e.trajectory ? el('a', {href: e.trajectory}, 'trajectory JSON') : null]));
+    grid.append(card);
+  }
+  page.append(grid);
+  page.append(FS.footer());
+  document.body.dataset.ready = '1';
+})();
