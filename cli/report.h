@@ -4,10 +4,9 @@
 
 #include <filesystem>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 namespace fetchscope::cli {
 
@@ -16,9 +15,9 @@ struct RunFolder {
   std::filesystem::path dir;            ///< the folder holding the manifest
   std::filesystem::path manifest_path;  ///< dir/manifest.json (or a shard manifest)
   nlohmann::json manifest;
-  std::vector<int> expected;                ///< the episodes the run was asked to record
-  std::map<int, nlohmann::json> recorded;   ///< manifest entries by episode index
-  std::map<int, std::string> failed;        ///< a worker's failure message by episode index
+  std::vector<int> expected;               ///< the episodes the run was asked to record
+  std::map<int, nlohmann::json> recorded;  ///< manifest entries by episode index
+  std::map<int, std::string> failed;       ///< a worker's failure message by episode index
 };
 
 /// Reads `manifest_path` (a record or merge-manifests manifest). Throws UsageError when the file

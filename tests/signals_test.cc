@@ -77,6 +77,9 @@ void ExpectFinalFilesWhole(const fs::path& out) {
       EXPECT_NO_THROW(ReadPng(e.path().string()));
     } else if (e.path().extension() == ".json") {
       EXPECT_NO_THROW(nlohmann::json::parse(ReadFile(e.path())));
+    } else if (name == "index.html") {  // the run's report
+      const std::string html = ReadFile(e.path());
+      EXPECT_EQ(html.substr(html.size() - 8), "</html>\n");
     } else {
       ADD_FAILURE() << "unexpected file";
     }
@@ -110,7 +113,7 @@ TEST_P(SignalsTest, RecordStopsCleanlyAndSaysInterrupted) {
   ASSERT_GE(m["episodes"].size(), 2u);
   EXPECT_LT(m["episodes"].size(), 40u);
   // every episode the manifest lists plays, with as many frames as it says
-  std::set<std::string> listed = {"manifest.json"};
+  std::set<std::string> listed = {"manifest.json", "index.html"};
   for (const auto& e : m["episodes"]) {
     for (const char* key : {"video", "sheet", "trajectory"}) {
       listed.insert(e[key].get<std::string>());
