@@ -14,7 +14,7 @@
 #include "cli/chapter.h"
 #include "cli/common.h"
 #include "cli/render_common.h"
-#include "render/bitmap_font.h"
+#include "render/text.h"
 #include "render/png_io.h"
 #include "render/projection.h"
 #include "render/renderer.h"
@@ -27,9 +27,9 @@ namespace fetchscope::cli {
 namespace {
 
 // ---- text: the one place that draws and measures label text -----------------------------------
-// (bitmap font for now; the FreeType text of render/text.h replaces it here and only here)
+// (DejaVu Sans through FreeType, render/text.h)
 
-constexpr int kTextScale = 2;  // 12 px per character, 20 px per line
+constexpr int kTextPixels = 15;  // em size: about 9 px per character, 18 px per line
 
 struct TextSize {
   int width;
@@ -37,12 +37,16 @@ struct TextSize {
 };
 
 TextSize MeasureText(const std::string& text) {
-  return {TextWidth(text, kTextScale), TextHeight(text, kTextScale)};
+  const TextMetrics m = Font::Default().Measure(text, kTextPixels);
+  return {m.width, m.height};
 }
 
 void DrawLabelText(std::vector<uint8_t>* rgb, int width, int height, int x, int y,
                    const std::string& text, Rgb color) {
-  DrawText(rgb->data(), width, height, x, y, text, kTextScale, color);
+  TextStyle style;
+  style.pixel_size = kTextPixels;
+  style.color = color;
+  Font::Default().Draw(rgb->data(), width, height, x, y, text, style);
 }
 
 // ---- 2D drawing on RGB24 frames (row 0 = top) --------------------------------------------------
@@ -471,7 +475,7 @@ void WriteAnatomyCard(const std::string& dir, const CardOptions& o) {
   WriteJson(sidecar, {{"image", "ch01_anatomy.png"},
                       {"width", card_width},
                       {"height", h},
-                      {"text_scale", kTextScale},
+                      {"text_pixels", kTextPixels},
                       {"panels", panels_json},
                       {"labels", labels_json}});
   std::printf("wrote %s\nwrote %s\n", png.c_str(), sidecar.c_str());

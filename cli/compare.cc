@@ -28,7 +28,8 @@ struct CompareOptions {
   std::string run_a;
   std::string run_b;
   std::string out;
-  double tolerance = 1e-9;   // states: largest |a - b| over a step's vector that still counts as equal
+  double tolerance =
+      1e-9;  // states: largest |a - b| over a step's vector that still counts as equal
   int pixel_tolerance = 0;   // frames: largest channel difference (0..255) that counts as equal
   bool states_only = false;  // no videos decoded or written
   bool quiet = false;
@@ -76,14 +77,15 @@ void HeatColour(int d, uint8_t* rgb) {
   const int i = std::min(3, static_cast<int>(x));
   const double f = x - i;
   for (int c = 0; c < 3; ++c) {
-    rgb[c] = static_cast<uint8_t>(std::lround(kAnchors[i][c] + f * (kAnchors[i + 1][c] - kAnchors[i][c])));
+    rgb[c] = static_cast<uint8_t>(
+        std::lround(kAnchors[i][c] + f * (kAnchors[i + 1][c] - kAnchors[i][c])));
   }
 }
 
 struct PixelStats {
-  int max = 0;              // largest channel difference in the frame
-  double mean = 0;          // mean of the per-pixel largest channel difference
-  double fraction = 0;      // pixels whose difference exceeds the pixel tolerance
+  int max = 0;          // largest channel difference in the frame
+  double mean = 0;      // mean of the per-pixel largest channel difference
+  double fraction = 0;  // pixels whose difference exceeds the pixel tolerance
 };
 
 // Writes A | B | heat map into `row` (3w x h) and measures the difference.
@@ -115,12 +117,12 @@ PixelStats SideBySide(const std::vector<uint8_t>& a, const std::vector<uint8_t>&
 }
 
 struct EpisodeComparison {
-  json row;          // for compare.json and the page
+  json row;  // for compare.json and the page
   bool same = true;
 };
 
 // The trajectories of episode k, step by step (throws on a bad file: nothing written yet).
-EpisodeComparison CompareStates(const CompareOptions& o, const RunFolder& a, const RunFolder& b,
+EpisodeComparison CompareStates(const CompareOptions& o, const RecordedRun& a, const RecordedRun& b,
                                 int k) {
   const json& ea = a.recorded.at(k);
   const json& eb = b.recorded.at(k);
@@ -146,7 +148,8 @@ EpisodeComparison CompareStates(const CompareOptions& o, const RunFolder& a, con
     double d = 0;
     for (size_t i = 0; i < sa.size(); ++i) {
       const double diff = std::fabs(sa[i] - sb[i]);
-      d = std::isnan(diff) ? (std::isnan(sa[i]) && std::isnan(sb[i]) ? d : HUGE_VAL) : std::max(d, diff);
+      d = std::isnan(diff) ? (std::isnan(sa[i]) && std::isnan(sb[i]) ? d : HUGE_VAL)
+                           : std::max(d, diff);
     }
     differences.push_back(JsonDouble(d));
     largest = std::max(largest, d);
@@ -159,10 +162,11 @@ EpisodeComparison CompareStates(const CompareOptions& o, const RunFolder& a, con
   row["max_state_difference"] = JsonDouble(largest);
   row["state_difference"] = std::move(differences);
   auto outcome = [](const json& entry, const std::vector<TrajectoryStep>& steps) {
-    return json{{"success", entry.value("is_success", false)},
-                {"return", entry.contains("return") ? entry["return"] : json(nullptr)},
-                {"final_distance", steps.empty() ? json(nullptr) : JsonDouble(GoalDistance(steps.back()))},
-                {"complete", entry.value("complete", true)}};
+    return json{
+        {"success", entry.value("is_success", false)},
+        {"return", entry.contains("return") ? entry["return"] : json(nullptr)},
+        {"final_distance", steps.empty() ? json(nullptr) : JsonDouble(GoalDistance(steps.back()))},
+        {"complete", entry.value("complete", true)}};
   };
   row["a"] = outcome(ea, ta);
   row["b"] = outcome(eb, tb);
@@ -174,7 +178,7 @@ EpisodeComparison CompareStates(const CompareOptions& o, const RunFolder& a, con
 }
 
 // Opens episode k's videos in A and B; throws UsageError when they differ in size.
-std::pair<VideoReader, VideoReader> OpenVideos(const RunFolder& a, const RunFolder& b, int k) {
+std::pair<VideoReader, VideoReader> OpenVideos(const RecordedRun& a, const RecordedRun& b, int k) {
   VideoReader ra((a.dir / a.recorded.at(k).value("video", "")).string());
   VideoReader rb((b.dir / b.recorded.at(k).value("video", "")).string());
   if (ra.width() != rb.width() || ra.height() != rb.height()) {
@@ -187,7 +191,7 @@ std::pair<VideoReader, VideoReader> OpenVideos(const RunFolder& a, const RunFold
 }
 
 // Episode k's frames: the side-by-side video A | B | heat map, and the pixel differences.
-void CompareFrames(const CompareOptions& o, const RunFolder& a, const RunFolder& b, int k, int fps,
+void CompareFrames(const CompareOptions& o, const RecordedRun& a, const RecordedRun& b, int k, int fps,
                    EpisodeComparison* result) {
   json& row = result->row;
   {
@@ -241,15 +245,18 @@ std::string FolderName(const std::string& dir) {
 }
 
 // The relative link from the compare folder to a run's report, or null when it has none.
-json ReportLink(const RunFolder& run, const std::string& out) {
+json ReportLink(const RecordedRun& run, const std::string& out) {
   const fs::path page = run.dir / "index.html";
   if (!fs::is_regular_file(page)) return nullptr;
-  return fs::absolute(page).lexically_normal().lexically_relative(fs::absolute(out).lexically_normal()).string();
+  return fs::absolute(page)
+      .lexically_normal()
+      .lexically_relative(fs::absolute(out).lexically_normal())
+      .string();
 }
 
 void RunCompare(const CompareOptions& o) {
-  const RunFolder a = ReadRunFolder(o.run_a);
-  const RunFolder b = ReadRunFolder(o.run_b);
+  const RecordedRun a = ReadRunFolder(o.run_a);
+  const RecordedRun b = ReadRunFolder(o.run_b);
   for (const char* key : kSameRun) {
     if (Value(a.manifest, key) != Value(b.manifest, key)) {
       throw UsageError(std::string("the runs differ in ") + (key + 1) + ": " +
@@ -277,8 +284,8 @@ void RunCompare(const CompareOptions& o) {
   std::error_code ec;
   fs::create_directories(o.out, ec);
   if (!fs::is_directory(o.out)) {
-    throw UsageError("cannot create output folder '" + o.out + "': " +
-                     (ec ? ec.message() : std::string("a file is in the way")));
+    throw UsageError("cannot create output folder '" + o.out +
+                     "': " + (ec ? ec.message() : std::string("a file is in the way")));
   }
   const int fps = a.manifest.contains("/video/fps"_json_pointer)
                       ? a.manifest.at("/video/fps"_json_pointer).get<int>()
@@ -307,12 +314,9 @@ void RunCompare(const CompareOptions& o) {
                         {"tolerance", JsonDouble(o.tolerance)},
                         {"pixel_tolerance", o.pixel_tolerance},
                         {"states_only", o.states_only}};
-  const json result = {{"run_a", o.run_a},
-                       {"run_b", o.run_b},
-                       {"summary", summary},
-                       {"episodes", rows},
-                       {"versions", VersionsJson()},
-                       {"command_line", CommandLine()}};
+  const json result = {{"run_a", o.run_a},           {"run_b", o.run_b},
+                       {"summary", summary},         {"episodes", rows},
+                       {"versions", VersionsJson()}, {"command_line", CommandLine()}};
   WriteJson((fs::path(o.out) / "compare.json").string(), result);
   const json page = {{"kind", "compare"},
                      {"title", title},
@@ -329,18 +333,20 @@ void RunCompare(const CompareOptions& o) {
                      {"summary", summary},
                      {"episodes", rows}};
   const fs::path html = fs::path(o.out) / "index.html";
-  WriteFileAtomically(html.string(), HtmlPage(PageKind::kCompare, "fetchscope compare: " + title, page));
+  WriteFileAtomically(html.string(),
+                      HtmlPage(PageKind::kCompare, "fetchscope compare: " + title, page));
 
   if (!o.quiet) {
     std::printf("compare: A = %s, B = %s\n", o.run_a.c_str(), o.run_b.c_str());
     std::printf("%-8s %-16s %-14s %-12s %-12s %s\n", "episode", "first diverges", "max |dstate|",
                 "max |dpixel|", "success A/B", "return A/B");
     for (const json& r : rows) {
-      const std::string diverge = r["first_divergence_step"].is_null()
-                                      ? "-"
-                                      : "step " + r["first_divergence_step"].dump();
+      const std::string diverge =
+          r["first_divergence_step"].is_null() ? "-" : "step " + r["first_divergence_step"].dump();
       char state[32];
-      std::snprintf(state, sizeof(state), "%.3g", r["max_state_difference"].is_number() ? r["max_state_difference"].get<double>() : HUGE_VAL);
+      std::snprintf(state, sizeof(state), "%.3g",
+                    r["max_state_difference"].is_number() ? r["max_state_difference"].get<double>()
+                                                          : HUGE_VAL);
       const std::string pixel = r["video"].is_null() ? "-" : r["max_pixel_difference"].dump();
       const std::string success = std::string(r["a"]["success"].get<bool>() ? "yes" : "no") + "/" +
                                   (r["b"]["success"].get<bool>() ? "yes" : "no");
@@ -348,9 +354,10 @@ void RunCompare(const CompareOptions& o) {
       std::printf("%-8s %-16s %-14s %-12s %-12s %s\n", r["label"].get<std::string>().c_str(),
                   diverge.c_str(), state, pixel.c_str(), success.c_str(), returns.c_str());
     }
-    std::printf("compare: %s: %d of %zu episode(s) differ (state tolerance %g, pixel tolerance %d) -> %s\n",
-                same ? "same" : "different", differing, rows.size(), o.tolerance,
-                o.pixel_tolerance, html.string().c_str());
+    std::printf(
+        "compare: %s: %d of %zu episode(s) differ (state tolerance %g, pixel tolerance %d) -> %s\n",
+        same ? "same" : "different", differing, rows.size(), o.tolerance, o.pixel_tolerance,
+        html.string().c_str());
   }
   ExitStatus() = same ? 0 : 1;
 }
@@ -365,23 +372,29 @@ void RegisterCompare(CLI::App& app) {
       "per-pixel difference heat map, the first step where the states differ beyond --tolerance "
       "and the state difference over steps; DIR/index.html, DIR/compare.json and a table on "
       "stdout. Exit 0: same run; 1: different; 2: could not compare (bad input)");
-  sub->add_option("RUN_A", o->run_a, "Folder of the first record run (holding manifest.json)")->required();
+  sub->add_option("RUN_A", o->run_a, "Folder of the first record run (holding manifest.json)")
+      ->required();
   sub->add_option("RUN_B", o->run_b, "Folder of the second record run")->required();
-  sub->add_option("--out", o->out, "Output folder for the page, videos and compare.json")->required();
+  sub->add_option("--out", o->out, "Output folder for the page, videos and compare.json")
+      ->required();
   sub->add_option("--tolerance", o->tolerance,
                   "Largest |A - B| of any state component (observation, achieved and desired "
                   "goal) at a step that still counts as equal")
-      ->capture_default_str()->check(CLI::NonNegativeNumber);
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
   sub->add_option("--pixel-tolerance", o->pixel_tolerance,
                   "Largest per-channel pixel difference (0..255) that still counts as equal")
-      ->capture_default_str()->check(CLI::Range(0, 255));
+      ->capture_default_str()
+      ->check(CLI::Range(0, 255));
   sub->add_flag("--states-only", o->states_only,
                 "Compare the trajectories only: no videos decoded or written (faster, for CI)");
   sub->add_flag("-q,--quiet", o->quiet, "No table on stdout");
   sub->callback([o]() {
     try {
       RunCompare(*o);
-    } catch (const RunError& e) {
+    } catch (const UsageError&) {
+      throw;
+    } catch (const std::exception& e) {
       // exit 1 means "different": a comparison that could not be made is exit 2
       throw UsageError(e.what());
     }

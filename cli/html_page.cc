@@ -32,11 +32,20 @@ std::string HtmlEscape(const std::string& text) {
   std::string out;
   for (char c : text) {
     switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      default: out += c;
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      default:
+        out += c;
     }
   }
   return out;
@@ -64,16 +73,20 @@ std::string HtmlPage(PageKind kind, const std::string& title, const nlohmann::js
   html += "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n";
   html += "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n";
   // nothing is fetched from anywhere: the page's own files (videos, sheets) are all it loads
-  html += "<meta http-equiv=\"Content-Security-Policy\" content=\"default-src 'self'; "
-          "script-src 'unsafe-inline'; style-src 'unsafe-inline'; img-src 'self' data:; "
-          "media-src 'self'\">\n";
+  html +=
+      "<meta http-equiv=\"Content-Security-Policy\" content=\"default-src 'self'; "
+      "script-src 'unsafe-inline'; style-src 'unsafe-inline'; img-src 'self' data:; "
+      "media-src 'self'\">\n";
   html += "<meta name=\"generator\" content=\"fetchscope " FETCHSCOPE_VERSION "\">\n";
   html += "<title>" + HtmlEscape(title) + "</title>\n";
+  // an empty icon, so that a web server is not asked for /favicon.ico
+  html += "<link rel=\"icon\" href=\"data:,\">\n";
   html += "<!-- uPlot " FETCHSCOPE_UPLOT_VERSION " (MIT, https://github.com/leeoniya/uPlot) -->\n";
   html += "<style>\n" + Text(kWebUplotCss, kWebUplotCss_size) + "\n</style>\n";
   html += "<style>\n" + Text(kWebPageCss, kWebPageCss_size) + "\n</style>\n";
-  html += "</head>\n<body>\n<noscript>This page draws its tables and plots with JavaScript; the "
-          "files it shows sit beside it.</noscript>\n<main id=\"page\"></main>\n";
+  html +=
+      "</head>\n<body>\n<noscript>This page draws its tables and plots with JavaScript; the "
+      "files it shows sit beside it.</noscript>\n<main id=\"page\"></main>\n";
   html += "<script id=\"fetchscope-data\" type=\"application/json\">" + ScriptSafe(data.dump()) +
           "</script>\n";
   html += "<script>\n" + ScriptSafe(Text(kWebUplotJs, kWebUplotJs_size)) + "\n</script>\n";

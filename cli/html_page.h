@@ -4,9 +4,8 @@
 // static server and fetches nothing.
 #pragma once
 
-#include <string>
-
 #include <nlohmann/json.hpp>
+#include <string>
 
 namespace fetchscope::cli {
 

@@ -15,7 +15,8 @@ void AddViewOptions(CLI::App* sub, ViewOptions* o) {
                   "gripper), or several joined by commas to tile them")
       ->capture_default_str();
   sub->add_option("--overlay", o->overlay,
-                  "Comma list of goal, achieved, hud, action, trail; or none")
+                  "Comma list of goal, achieved, hud, action, trail (spaces after the commas "
+                  "are fine); or all, or none")
       ->capture_default_str();
   sub->add_option("--width", o->width, "Frame width in pixels")->capture_default_str()->check(CLI::Range(1, 8192));
   sub->add_option("--height", o->height, "Frame height in pixels")->capture_default_str()->check(CLI::Range(1, 8192));

@@ -100,14 +100,15 @@ std::vector<std::string> GlDevices(const json& manifest) {
     add_workers(shard.value("workers", json()));
   }
   if (devices.empty()) {  // older manifests: the backend block only
-    AddUnique(&devices, Str(manifest, "/backend/device") + " " + Str(manifest, "/backend/gl_renderer"));
+    AddUnique(&devices,
+              Str(manifest, "/backend/device") + " " + Str(manifest, "/backend/gl_renderer"));
   }
   return devices;
 }
 
 }  // namespace
 
-json RunProvenance(const RunFolder& run) {
+json RunProvenance(const RecordedRun& run) {
   const json& m = run.manifest;
   json rows = json::array();
   auto row = [&](const std::string& label, const std::string& value) {
@@ -134,7 +135,8 @@ json RunProvenance(const RunFolder& run) {
   row("GPU choice", Str(m, "/gpu/choice"));
   row("camera", Str(m, "/camera"));
   row("overlay", Str(m, "/overlay"));
-  row("MSAA", Str(m, "/msaa") + (Str(m, "/msaa_reason").empty() ? "" : " (" + Str(m, "/msaa_reason") + ")"));
+  row("MSAA", Str(m, "/msaa") +
+                  (Str(m, "/msaa_reason").empty() ? "" : " (" + Str(m, "/msaa_reason") + ")"));
   std::vector<std::string> versions;
   AddUnique(&versions, Str(m, "/versions/fetchscope"));
   for (const json& shard : m.value("shards", json::array())) {
@@ -182,13 +184,13 @@ json Histogram(const std::vector<double>& values) {
 
 }  // namespace
 
-RunFolder ReadRunManifest(const fs::path& manifest_path) {
+RecordedRun ReadRunManifest(const fs::path& manifest_path) {
   std::error_code ec;
   if (!fs::is_regular_file(manifest_path, ec)) {
     throw UsageError("no manifest '" + manifest_path.string() +
                      "': give the folder of a record run (record --out DIR)");
   }
-  RunFolder run;
+  RecordedRun run;
   run.manifest_path = manifest_path;
   run.dir = manifest_path.parent_path().empty() ? fs::path(".") : manifest_path.parent_path();
   try {
@@ -223,10 +225,11 @@ RunFolder ReadRunManifest(const fs::path& manifest_path) {
   return run;
 }
 
-RunFolder ReadRunFolder(const std::string& dir) {
+RecordedRun ReadRunFolder(const std::string& dir) {
   std::error_code ec;
   if (!fs::is_directory(dir, ec)) {
-    throw UsageError("'" + dir + "' is not a folder: give the folder of a record run (record --out DIR)");
+    throw UsageError("'" + dir +
+                     "' is not a folder: give the folder of a record run (record --out DIR)");
   }
   const fs::path manifest = fs::path(dir) / "manifest.json";
   if (!fs::exists(manifest, ec)) {
@@ -280,7 +283,7 @@ double GoalDistance(const TrajectoryStep& step) {
   return std::sqrt(sum);
 }
 
-json ReportData(const RunFolder& run) {
+json ReportData(const RecordedRun& run) {
   const json& m = run.manifest;
   double threshold = 0.05;
   try {
@@ -301,7 +304,7 @@ json ReportData(const RunFolder& run) {
     if (it == run.recorded.end()) {
       e["status"] = "missing";
       const auto failure = run.failed.find(k);
-      e["reason"] = failure != run.failed.end() ? failure->second
+      e["reason"] = failure != run.failed.end()     ? failure->second
                     : m.value("interrupted", false) ? "not recorded: the run was interrupted"
                                                     : "not recorded";
       episodes.push_back(std::move(e));
@@ -335,7 +338,8 @@ json ReportData(const RunFolder& run) {
     e["final_distance"] = nullptr;
     if (e["trajectory"].is_string()) {
       try {
-        const std::vector<TrajectoryStep> steps = ReadEpisodeTrajectory(run.dir / e["trajectory"].get<std::string>());
+        const std::vector<TrajectoryStep> steps =
+            ReadEpisodeTrajectory(run.dir / e["trajectory"].get<std::string>());
         for (const TrajectoryStep& s : steps) distances.push_back(Micro(GoalDistance(s)));
         if (!steps.empty()) e["final_distance"] = JsonDouble(GoalDistance(steps.back()));
       } catch (const RunError& error) {
@@ -348,7 +352,9 @@ json ReportData(const RunFolder& run) {
 
   // success rate over the complete episodes, in index order, with its Wilson interval as it grows
   int n = 0, successes = 0;
-  json running = {{"n", json::array()}, {"rate", json::array()}, {"low", json::array()},
+  json running = {{"n", json::array()},
+                  {"rate", json::array()},
+                  {"low", json::array()},
                   {"high", json::array()}};
   for (const json& e : episodes) {
     if (e["status"] != "ok") continue;
@@ -368,34 +374,37 @@ json ReportData(const RunFolder& run) {
   } else if (missing > 0) {
     notes.insert(notes.begin(), std::to_string(missing) + " episode(s) missing (see the table)");
   }
-  return {{"kind", "report"},
-          {"title", Str(m, "/env_id") + " · " + Str(m, "/policy") + " · seed " + Str(m, "/seed")},
-          {"generator", std::string("fetchscope ") + FETCHSCOPE_VERSION},
-          {"uplot", EmbeddedUplotVersion()},
-          {"provenance", RunProvenance(run)},
-          {"notes", notes},
-          {"threshold", threshold},
-          {"steps_per_episode", steps_requested},
-          {"fps", m.contains("/video/fps"_json_pointer) ? m.at("/video/fps"_json_pointer) : json(25)},
-          {"has_hindsight", has_hindsight},
-          {"episodes", std::move(episodes)},
-          {"summary", {{"expected", all.size()},
-                       {"recorded", run.recorded.size()},
-                       {"complete", n},
-                       {"successes", successes},
-                       {"rate", n ? JsonDouble(static_cast<double>(successes) / n) : json(nullptr)},
-                       {"wilson_low", low},
-                       {"wilson_high", high},
-                       {"confidence", 0.95}}},
-          {"running_success", std::move(running)},
-          {"returns_histogram", Histogram(returns)}};
+  return {
+      {"kind", "report"},
+      {"title", Str(m, "/env_id") + " · " + Str(m, "/policy") + " · seed " + Str(m, "/seed")},
+      {"generator", std::string("fetchscope ") + FETCHSCOPE_VERSION},
+      {"uplot", EmbeddedUplotVersion()},
+      {"provenance", RunProvenance(run)},
+      {"notes", notes},
+      {"threshold", threshold},
+      {"steps_per_episode", steps_requested},
+      {"fps", m.contains("/video/fps"_json_pointer) ? m.at("/video/fps"_json_pointer) : json(25)},
+      {"has_hindsight", has_hindsight},
+      {"episodes", std::move(episodes)},
+      {"summary",
+       {{"expected", all.size()},
+        {"recorded", run.recorded.size()},
+        {"complete", n},
+        {"successes", successes},
+        {"rate", n ? JsonDouble(static_cast<double>(successes) / n) : json(nullptr)},
+        {"wilson_low", low},
+        {"wilson_high", high},
+        {"confidence", 0.95}}},
+      {"running_success", std::move(running)},
+      {"returns_histogram", Histogram(returns)}};
 }
 
-fs::path WriteRunReport(const RunFolder& run) {
+fs::path WriteRunReport(const RecordedRun& run) {
   const json data = ReportData(run);
   const fs::path out = run.dir / "index.html";
-  WriteFileAtomically(out.string(),
-                      HtmlPage(PageKind::kReport, "fetchscope report: " + data["title"].get<std::string>(), data));
+  WriteFileAtomically(
+      out.string(),
+      HtmlPage(PageKind::kReport, "fetchscope report: " + data["title"].get<std::string>(), data));
   return out;
 }
 
@@ -404,7 +413,8 @@ void WriteRunReportOrWarn(const fs::path& manifest_path, bool quiet) {
     const fs::path page = WriteRunReport(ReadRunManifest(manifest_path));
     if (!quiet) std::fprintf(stderr, "report: %s\n", page.string().c_str());
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "fetchscope: warning: the run is recorded but its report was not written: %s\n",
+    std::fprintf(stderr,
+                 "fetchscope: warning: the run is recorded but its report was not written: %s\n",
                  e.what());
   }
 }
@@ -420,7 +430,7 @@ void RegisterReport(CLI::App& app) {
   sub->add_option("DIR", *dir, "Folder of a record run (holding manifest.json)")->required();
   sub->add_flag("-q,--quiet", *quiet, "Do not print the page's path");
   sub->callback([=]() {
-    const RunFolder run = ReadRunFolder(*dir);
+    const RecordedRun run = ReadRunFolder(*dir);
     const fs::path page = WriteRunReport(run);
     if (!*quiet) std::printf("report: %s\n", page.string().c_str());
   });

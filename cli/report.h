@@ -4,30 +4,29 @@
 
 #include <filesystem>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 namespace fetchscope::cli {
 
 /// A record run as its manifest describes it.
-struct RunFolder {
+struct RecordedRun {
   std::filesystem::path dir;            ///< the folder holding the manifest
   std::filesystem::path manifest_path;  ///< dir/manifest.json (or a shard manifest)
   nlohmann::json manifest;
-  std::vector<int> expected;                ///< the episodes the run was asked to record
-  std::map<int, nlohmann::json> recorded;   ///< manifest entries by episode index
-  std::map<int, std::string> failed;        ///< a worker's failure message by episode index
+  std::vector<int> expected;               ///< the episodes the run was asked to record
+  std::map<int, nlohmann::json> recorded;  ///< manifest entries by episode index
+  std::map<int, std::string> failed;       ///< a worker's failure message by episode index
 };
 
 /// Reads `manifest_path` (a record or merge-manifests manifest). Throws UsageError when the file
 /// is missing or is not a record manifest, RunError when it cannot be read.
-RunFolder ReadRunManifest(const std::filesystem::path& manifest_path);
+RecordedRun ReadRunManifest(const std::filesystem::path& manifest_path);
 
 /// Reads the run in folder `dir`: dir/manifest.json. Throws UsageError naming `dir` when it is
 /// not a folder or holds no manifest.json (saying so when it holds shard manifests instead).
-RunFolder ReadRunFolder(const std::string& dir);
+RecordedRun ReadRunFolder(const std::string& dir);
 
 /// One step of a recorded trajectory, as the compare and report pages need it.
 struct TrajectoryStep {
@@ -45,14 +44,14 @@ double GoalDistance(const TrajectoryStep& step);
 
 /// The run's provenance as {label, value} rows: env, seed, policy, assets and their hash, encoder,
 /// GL device(s), fetchscope version, command line...
-nlohmann::json RunProvenance(const RunFolder& run);
+nlohmann::json RunProvenance(const RecordedRun& run);
 
 /// The report page's data for `run` (see web/src/report.js): provenance, episodes with their
 /// distance curves, histogram and success rate.
-nlohmann::json ReportData(const RunFolder& run);
+nlohmann::json ReportData(const RecordedRun& run);
 
 /// Writes index.html beside the manifest, atomically. Returns its path. Throws on failure.
-std::filesystem::path WriteRunReport(const RunFolder& run);
+std::filesystem::path WriteRunReport(const RecordedRun& run);
 
 /// For record and merge-manifests: writes the report of `manifest_path`; a failure is a warning
 /// on stderr ("fetchscope: warning: ..."), never a failed run. Prints the path unless quiet.

@@ -27,10 +27,10 @@ struct VideoReader::Impl {
   CodecContextPtr decoder;
   PacketPtr packet;
   FramePtr frame;
-  SwsContextPtr converter;   // made for the first frame's size and pixel format
+  SwsContextPtr converter;  // made for the first frame's size and pixel format
   int stream = -1;
-  bool input_done = false;   // demuxer exhausted, decoder flushed
-  bool decoder_done = false; // the decoder returned AVERROR_EOF
+  bool input_done = false;    // demuxer exhausted, decoder flushed
+  bool decoder_done = false;  // the decoder returned AVERROR_EOF
 
   [[noreturn]] void Fail(const std::string& what, int code) const {
     throw RunError("cannot " + what + " '" + path + "': " + AvErrorText(code));
@@ -63,10 +63,11 @@ struct VideoReader::Impl {
       if (!converter) throw RunError("cannot convert the frames of '" + path + "' to RGB");
       // the matrix and range the stream says it uses (our writer: BT.709, limited range);
       // FFmpeg's default would be BT.601 and shift every colour of a BT.709 video
-      const int matrix = frame->colorspace == AVCOL_SPC_BT709 ? SWS_CS_ITU709
-                         : frame->colorspace == AVCOL_SPC_BT2020_NCL || frame->colorspace == AVCOL_SPC_BT2020_CL
-                             ? SWS_CS_BT2020
-                             : SWS_CS_DEFAULT;
+      const int matrix =
+          frame->colorspace == AVCOL_SPC_BT709 ? SWS_CS_ITU709
+          : frame->colorspace == AVCOL_SPC_BT2020_NCL || frame->colorspace == AVCOL_SPC_BT2020_CL
+              ? SWS_CS_BT2020
+              : SWS_CS_DEFAULT;
       const int* coefficients = sws_getCoefficients(matrix);
       sws_setColorspaceDetails(converter.get(), coefficients,
                                /*srcRange=*/frame->color_range == AVCOL_RANGE_JPEG ? 1 : 0,

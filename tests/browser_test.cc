@@ -10,9 +10,8 @@
 #include <cstdlib>
 #include <filesystem>
 #include <iostream>
-#include <string>
-
 #include <nlohmann/json.hpp>
+#include <string>
 
 #include "tests/test_util.h"
 
@@ -48,12 +47,13 @@ fs::path ScreenshotDir() {
   return dir;
 }
 
-// Runs the page check and returns what it found.
-json CheckPage(const fs::path& page, const fs::path& screenshot, int sort_column) {
-  const auto r = RunCommand("node " + (SourceDir() / "web" / "test" / "check_page.mjs").string() +
-                            " --page " + page.string() + " --screenshot " + screenshot.string() +
-                            " --sort-column " + std::to_string(sort_column) + " --chromium " +
-                            Chromium());
+// Runs the page check on `page` (a file, or an http:// URL) and returns what it found.
+json CheckPage(const std::string& page, const fs::path& screenshot, int sort_column) {
+  const std::string where = page.rfind("http://", 0) == 0 ? " --url " : " --page ";
+  const auto r =
+      RunCommand("node " + (SourceDir() / "web" / "test" / "check_page.mjs").string() + where +
+                 page + " --screenshot " + screenshot.string() + " --sort-column " +
+                 std::to_string(sort_column) + " --chromium " + Chromium());
   const size_t line = r.output.rfind("\n{");
   const std::string last = r.output.substr(line == std::string::npos ? 0 : line + 1);
   json result = json::parse(last, nullptr, /*allow_exceptions=*/false);
@@ -109,8 +109,10 @@ void ExpectSorts(const json& table) {
   const std::vector<double> down = Numbers(table["second_click"]["cells"]);
   ASSERT_EQ(up.size(), down.size());
   std::vector<double> known_up, known_down;
-  for (double v : up) if (!std::isnan(v)) known_up.push_back(v);
-  for (double v : down) if (!std::isnan(v)) known_down.push_back(v);
+  for (double v : up)
+    if (!std::isnan(v)) known_up.push_back(v);
+  for (double v : down)
+    if (!std::isnan(v)) known_down.push_back(v);
   EXPECT_TRUE(std::is_sorted(known_up.begin(), known_up.end())) << table.dump();
   EXPECT_TRUE(std::is_sorted(known_down.rbegin(), known_down.rend())) << table.dump();
   // the clicks reorder the rows: the two orders are each other's reverse (ties aside)
@@ -128,10 +130,53 @@ TEST(BrowserTest, ReportLoadsPlaysPlotsAndSorts) {
   TempDir tmp;
   const auto r = RunFetchscope(Record(tmp.path() / "run", "scripted"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  const json result = CheckPage(tmp.path() / "run" / "index.html", ScreenshotDir() / "report.png",
-                                /*sort_column: return*/ 2);
+  const json result =
+      CheckPage((tmp.path() / "run" / "index.html").string(), ScreenshotDir() / "report.png",
+                /*sort_column: return*/ 2);
   ExpectHealthyPage(result, 3, 21 / 25.0, 96, 3);
   EXPECT_EQ(result["table"]["header"], "return");
+  ExpectSorts(result["table"]);
+}
+
+// A static web server (Python's http.server) on a free port, serving `dir`, for the test's life.
+class StaticServer {
+ public:
+  explicit StaticServer(const fs::path& dir) : log_(dir.parent_path() / "server.log") {
+    const auto r = RunCommand("python3 -u -m http.server 0 --bind 127.0.0.1 --directory " +
+                              dir.string() + " >" + log_.string() + " 2>&1 & echo $!");
+    pid_ = std::atoi(r.output.c_str());
+    for (int i = 0; i < 100 && port_ == 0; ++i) {  // "Serving HTTP on 127.0.0.1 port N ..."
+      const std::string text = ReadFile(log_);
+      const size_t at = text.find(" port ");
+      if (at != std::string::npos) port_ = std::atoi(text.c_str() + at + 6);
+      if (port_ == 0) RunCommand("sleep 0.1");
+    }
+  }
+  ~StaticServer() {
+    if (pid_ > 0) RunCommand("kill " + std::to_string(pid_));
+  }
+  int port() const { return port_; }
+
+ private:
+  fs::path log_;
+  int pid_ = 0;
+  int port_ = 0;
+};
+
+TEST(BrowserTest, ReportWorksFromAStaticServer) {
+  const std::string missing = MissingTool();
+  if (!missing.empty()) GTEST_SKIP() << missing;
+  if (RunCommand("command -v python3").exit_code != 0) GTEST_SKIP() << "python3 is not installed";
+  TempDir tmp;
+  const auto r = RunFetchscope(Record(tmp.path() / "run", "scripted"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  StaticServer server(tmp.path() / "run");
+  ASSERT_GT(server.port(), 0) << ReadFile(tmp.path() / "server.log");
+  const json result =
+      CheckPage("http://127.0.0.1:" + std::to_string(server.port()) + "/index.html",
+                ScreenshotDir() / "report_http.png", /*sort_column: final distance*/ 3);
+  // a request the server answers 404 (e.g. /favicon.ico) shows up as a console error
+  ExpectHealthyPage(result, 3, 21 / 25.0, 96, 3);
   ExpectSorts(result["table"]);
 }
 
@@ -143,11 +188,13 @@ TEST(BrowserTest, ComparePageLoadsPlaysPlotsAndSorts) {
     const auto r = RunFetchscope(Record(tmp.path() / policy, policy) + " --no-report");
     ASSERT_EQ(r.exit_code, 0) << r.output;
   }
-  const auto c = RunFetchscope("compare -q " + (tmp.path() / "scripted").string() + " " +
-                               (tmp.path() / "zero").string() + " --out " + (tmp.path() / "cmp").string());
+  const auto c =
+      RunFetchscope("compare -q " + (tmp.path() / "scripted").string() + " " +
+                    (tmp.path() / "zero").string() + " --out " + (tmp.path() / "cmp").string());
   ASSERT_EQ(c.exit_code, 1) << c.output;
-  const json result = CheckPage(tmp.path() / "cmp" / "index.html", ScreenshotDir() / "compare.png",
-                                /*sort_column: max state difference*/ 3);
+  const json result =
+      CheckPage((tmp.path() / "cmp" / "index.html").string(), ScreenshotDir() / "compare.png",
+                /*sort_column: max state difference*/ 3);
   ExpectHealthyPage(result, 3, 21 / 25.0, 3 * 96, 2);
   EXPECT_EQ(result["table"]["header"], "max state difference");
   ExpectSorts(result["table"]);

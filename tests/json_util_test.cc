@@ -147,7 +147,7 @@ TEST(JsonUtilTest, InvalidUtf8IsReplacedNotThrown) {
   std::string text;
   ASSERT_NO_THROW(text = DumpJson(doc, -1));
   EXPECT_EQ(text, "{\"path\":\"/data/\xEF\xBF\xBD\xEF\xBF\xBD/assets\"}");
-  EXPECT_NO_THROW(nlohmann::json::parse(text));
+  EXPECT_TRUE(nlohmann::json::accept(text));
 }
 
 }  // namespace

@@ -8,6 +8,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <string>
 #include <vector>
 
@@ -146,15 +147,27 @@ TEST(PngIo, MissingFileIsARunError) {
 
 TEST(PngIo, UnwritableFolderLeavesNothing) {
   testing::TempDir dir;
-  const std::string path = (dir.path() / "no_such_folder" / "x.png").string();
+  // a regular file where a folder should be (tests run as root, where mode bits do not stop us)
+  std::ofstream(dir.path() / "f") << "x";
+  const std::string folder = (dir.path() / "f" / "sub").string();
   const uint8_t pixel[3] = {1, 2, 3};
   try {
-    WritePng(path, 1, 1, 3, 8, pixel);
+    WritePng(folder + "/x.png", 1, 1, 3, 8, pixel);
     FAIL() << "expected RunError";
   } catch (const RunError& e) {
-    EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find(folder), std::string::npos) << e.what();
   }
-  EXPECT_TRUE(fs::is_empty(dir.path()));
+  EXPECT_EQ(std::distance(fs::directory_iterator(dir.path()), fs::directory_iterator()), 1);
+}
+
+TEST(PngIo, MissingFoldersAreCreated) {
+  testing::TempDir dir;
+  const fs::path path = dir.path() / "no_such_folder" / "deeper" / "x.png";
+  const uint8_t pixel[3] = {1, 2, 3};
+  WritePng(path.string(), 1, 1, 3, 8, pixel);
+  const Image image = ReadPng(path.string());
+  EXPECT_EQ(image.width, 1);
+  EXPECT_EQ(image.pixels, std::vector<uint8_t>(pixel, pixel + 3));
 }
 
 TEST(PngIo, BadArgumentsAreUsageErrors) {

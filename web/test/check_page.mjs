@@ -2,7 +2,7 @@
 // playwright-core) and prints what it found as one JSON object on stdout; the C++ test
 // (tests/browser_test.cc) makes the assertions.
 //   node check_page.mjs --page DIR/index.html --screenshot OUT.png [--sort-column N]
-//        [--chromium /usr/bin/chromium] [--timeout-ms 30000]
+//        [--chromium /usr/bin/chromium] [--timeout-ms 30000] [--url http://... instead of file://]
 import {mkdtempSync, rmSync} from 'node:fs';
 import {tmpdir} from 'node:os';
 import {join, resolve} from 'node:path';
@@ -11,7 +11,7 @@ import {chromium} from 'playwright-core';
 
 const args = {chromium: '/usr/bin/chromium', 'sort-column': '2', 'timeout-ms': '30000'};
 for (let i = 2; i < process.argv.length; i += 2) args[process.argv[i].replace(/^--/, '')] = process.argv[i + 1];
-if (!args.page || !args.screenshot) {
+if (!(args.page || args.url) || !args.screenshot) {
   console.error('usage: node check_page.mjs --page FILE.html --screenshot OUT.png [--sort-column N]');
   process.exit(2);
 }
@@ -30,9 +30,11 @@ try {
   const page = context.pages()[0] || await context.newPage();
   page.on('console', (m) => { if (m.type() === 'error') result.console_errors.push(m.text()); });
   page.on('pageerror', (e) => result.page_errors.push(String(e)));
-  page.on('request', (r) => { if (!/^(file|data|blob):/.test(r.url())) result.network_requests.push(r.url()); });
+  // any request beyond the page's own folder (file:// or the server that serves it) is a network fetch
+  const own = (u) => /^(file|data|blob):/.test(u) || (args.url && new URL(u).origin === new URL(args.url).origin);
+  page.on('request', (r) => { if (!own(r.url())) result.network_requests.push(r.url()); });
   page.on('requestfailed', (r) => result.failed_requests.push(`${r.url()}: ${r.failure() && r.failure().errorText}`));
-  const url = pathToFileURL(resolve(args.page)).href;
+  const url = args.url || pathToFileURL(resolve(args.page)).href;
   result.url = url;
   await page.goto(url, {waitUntil: 'load', timeout});
   await page.waitForSelector('body[data-ready="1"]', {timeout});
