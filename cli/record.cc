@@ -455,6 +455,7 @@ void RunRecord(const RecordOptions& o, const std::string& command_line) {
   plan.policy_context.episodes = o.episodes;
   plan.policy_context.exec_timeout_s = o.exec_timeout;
   ValidatePolicy(o.policy, *plan.spec, plan.policy_context);
+  Font::Default();  // the sheets' font: missing or unreadable, the run stops before any file
   plan.assets = ResolveAssets(o.env.assets);
   std::string model_path;
   {
