@@ -564,6 +564,7 @@ void RunRecord(const RecordOptions& options, const std::string& command_line) {
   plan.policy_context.replay_dtype = o.replay_dtype;
   plan.policy_context.episode_indices = episodes;
   ValidatePolicy(o.policy, *plan.spec, plan.policy_context);
+  Font::Default();  // the sheets' font: missing or unreadable, the run stops before any file
   plan.assets = ResolveAssets(o.env.assets);
   std::string model_path;
   {

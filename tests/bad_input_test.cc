@@ -195,6 +195,8 @@ std::vector<Case> Matrix() {
       {"RecordGifFpsText", record + "--format gif --gif-fps ten", 2, "ten", kRecordOutputs},
       {"RecordGifWidthTooSmall", record + "--format gif --gif-width 4", 2, "GIF width 4",
        kRecordOutputs},
+      {"RecordFontMissing", record, 1, "FETCHSCOPE_FONT='/nonexistent/fetchscope-font.ttf'",
+       kRecordOutputs, {}, "FETCHSCOPE_FONT=/nonexistent/fetchscope-font.ttf "},
       {"RecordGifWidthTooLarge", record + "--format webm --gif-width 9000", 2, "GIF width 9000",
        kRecordOutputs},
       {"GoldenUnknownSubcommand", "golden frob", 2, "frob"},
