@@ -92,10 +92,13 @@ void RegisterBench(CLI::App& app) {
   CLI::App* sub = app.add_subcommand("bench", "Measure simulation, rendering, encoding and record throughput");
   auto soak_frames = std::make_shared<int>(10000);
   sub->add_option("--what", *what,
-                  "sim, render, encode, record, all (those four), or soak: one long record run "
-                  "(--soak-frames, minutes) with its memory sampled every second; not part of all")
+                  "sim, render, encode, record, all (those four); node: what sizes a job on this "
+                  "machine (render frames/s of one context, sync and async readback; record "
+                  "frames/s at --jobs 1, cores/2 and cores as processes and as threads; the encoder); "
+                  "or soak: one long record run (--soak-frames, minutes) with its memory sampled "
+                  "every second. node and soak are not part of all")
       ->capture_default_str()
-      ->check(CLI::IsMember({"sim", "render", "encode", "record", "all", "soak"}));
+      ->check(CLI::IsMember({"sim", "render", "encode", "record", "all", "node", "soak"}));
   sub->add_option("--soak-frames", *soak_frames, "Frames of the soak run (whole 51-frame episodes)")
       ->capture_default_str()
       ->check(CLI::Range(51, 1000000));
@@ -128,6 +131,7 @@ void RegisterBench(CLI::App& app) {
     if (all || *what == "render") j["render"] = BenchRender(source, *backends, *seconds, *peers);
     if (all || *what == "encode") j["encode"] = BenchEncode(*seconds);
     if (all || *what == "record") j["record"] = BenchRecord(source, *backends, *seconds, *peers);
+    if (*what == "node") j["node"] = BenchNode(source, *backends, *seconds);
     if (*what == "soak") j["soak"] = BenchSoak(source, *backends, *soak_frames, 1.0);
     j["peak_rss_mib"] = PeakRssMiB();
     std::printf("peak RSS %.1f MiB\n", PeakRssMiB());

@@ -22,6 +22,10 @@ nlohmann::json BenchEncode(double budget_s);
 /// Record seconds per frame (msaa auto beside 4), --jobs 1 against --jobs 2 where record has
 /// --jobs, beside mujoco-record + ffmpeg.
 nlohmann::json BenchRecord(const AssetSource& assets, const std::string& backends, double budget_s, bool peers);
+/// What a user needs to size a job on this node, side by side: its cores, GPUs and encoder;
+/// one context's render frames/s (sync against async readback, msaa auto and 0) at 480x480;
+/// whole record runs at --jobs 1, cores/2 and cores, worker processes against threads.
+nlohmann::json BenchNode(const AssetSource& assets, const std::string& backends, double budget_s);
 /// One record run of about `target_frames` frames at 640x480 on the first of `backends`, its
 /// resident set sampled every `interval_s`: whether memory stays flat over a long run.
 nlohmann::json BenchSoak(const AssetSource& assets, const std::string& backends, int target_frames,

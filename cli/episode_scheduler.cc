@@ -81,9 +81,13 @@ std::optional<nlohmann::json> ReceiveMessage(int fd, std::string* inbox) {
   }
 }
 
+// "signal 9 (SIGKILL: Killed)": the number, the name users grep for, and the description.
 std::string SignalName(int sig) {
-  const char* name = strsignal(sig);
-  return "signal " + std::to_string(sig) + (name ? std::string(" (") + name + ")" : "");
+  const char* abbrev = sigabbrev_np(sig);
+  const char* description = sigdescr_np(sig);
+  std::string text = "signal " + std::to_string(sig);
+  if (abbrev) text += std::string(" (SIG") + abbrev + (description ? std::string(": ") + description : "") + ")";
+  return text;
 }
 
 std::string EpisodeList(const std::vector<int>& episodes) {

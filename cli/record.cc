@@ -315,9 +315,11 @@ class RecordRunner : public EpisodeRunner {
     renderer_.emplace(*gl_, sequence_.env().model(),
                       MakeRenderOptions(plan_.o->view, sequence_.env().model()));
     const size_t frame_bytes = static_cast<size_t>(renderer_->width()) * renderer_->height() * 3;
-    // 4 frames in flight between rendering and encoding, one held by each encoder, and a whole
-    // episode for each further encoder so that the render thread can run an episode ahead
-    const size_t frames = 4 + plan_.encoders + (plan_.encoders - 1) * (plan_.o->steps + 1);
+    // the frames being read back, 4 in flight between rendering and encoding, one held by each
+    // encoder, and a whole episode for each further encoder so that the render thread can run
+    // an episode ahead
+    const size_t frames = 4 + kReadbackDepth + plan_.encoders +
+                          (plan_.encoders - 1) * (plan_.o->steps + 1);
     pool_.emplace(frames, frame_bytes);
     const GlInfo& gi = gl_->info();
     return {{"worker", worker_},
@@ -329,7 +331,8 @@ class RecordRunner : public EpisodeRunner {
             {"gl_renderer", gi.renderer},
             {"gl_version", gi.version},
             {"msaa", renderer_->msaa_samples()},
-            {"msaa_reason", renderer_->msaa_reason()}};
+            {"msaa_reason", renderer_->msaa_reason()},
+            {"readback", renderer_->readback_reason()}};
   }
 
   void Run(int k, WorkerChannel& channel) override {
@@ -342,22 +345,41 @@ class RecordRunner : public EpisodeRunner {
     auto encoder = std::make_unique<EpisodeEncoder>(plan_, k, worker_, &*pool_, &channel);
     renderer_->ResetTrail();
     double sim_s = 0, render_s = 0;
+    // frames submitted to the renderer and not yet back, oldest first: with asynchronous
+    // readback the GPU draws frame t+1 while frame t comes back
+    std::deque<Frame*> in_flight;
+    auto collect_oldest = [&] {
+      renderer_->Collect();
+      encoder->Push(in_flight.front());
+      in_flight.pop_front();
+      channel.Progress(1);
+    };
     auto sim_start = Clock::now();
     auto on_step = [&](const StepRecord& record, const StepResult*) {
       const auto render_start = Clock::now();
       sim_s += std::chrono::duration<double>(render_start - sim_start).count();
       Frame* f = pool_->Acquire();
       const FrameInfo info = MakeFrameInfo(sequence_.env(), record);
-      renderer_->Render(sequence_.env().data(), info, f->rgb.data());
       f->t = record.t;
       f->label = TileLabel(info);
-      encoder->Push(f);
-      channel.Progress(1);
+      in_flight.push_back(f);
+      renderer_->Submit(sequence_.env().data(), info, f->rgb.data());
+      while (renderer_->pending() >= renderer_->pipeline_depth()) collect_oldest();
       sim_start = Clock::now();
       render_s += std::chrono::duration<double>(sim_start - render_start).count();
       return !channel.StopRequested();
     };
-    EpisodeRecord episode = sequence_.Play(k, on_step);  // a throw aborts `encoder`
+    EpisodeRecord episode;
+    try {
+      episode = sequence_.Play(k, on_step);
+      const auto drain_start = Clock::now();
+      while (!in_flight.empty()) collect_oldest();
+      render_s += Since(drain_start);
+    } catch (...) {
+      renderer_->DiscardPending();
+      for (Frame* f : in_flight) pool_->Release(f);
+      throw;  // aborts `encoder`
+    }
     encoder->Close(std::move(episode), sim_s, render_s);
     encoders_.push_back(std::move(encoder));
   }

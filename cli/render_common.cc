@@ -27,6 +27,13 @@ void AddViewOptions(CLI::App* sub, ViewOptions* o) {
                   "(llvmpipe, softpipe, swrast), where multisampling is about half the frame time")
       ->capture_default_str()
       ->check(CLI::IsMember(std::vector<std::string>(std::begin(kMsaaValues), std::end(kMsaaValues))));
+  sub->add_option("--readback", o->readback,
+                  "How frames come back from the GPU: auto, sync or async. async reads through "
+                  "pixel buffer objects, 3 frames in flight, so the GPU draws the next frame "
+                  "while one comes back (same pixels); auto: async on hardware GL, sync on a "
+                  "software rasterizer")
+      ->capture_default_str()
+      ->check(CLI::IsMember(std::vector<std::string>(std::begin(kReadbackValues), std::end(kReadbackValues))));
   sub->add_option("--gpu", o->gpu,
                   std::string("GPU(s) to render on: ") + kGpuForms +
                       ". Default: $MUJOCO_EGL_DEVICE_ID (EGL index), else cuda:0 when "
@@ -52,6 +59,13 @@ int ParseMsaa(const std::string& value) {
   throw UsageError("--msaa '" + value + "' is not accepted; use " + list);
 }
 
+Readback ParseReadback(const std::string& value) {
+  if (value == "auto") return Readback::kAuto;
+  if (value == "sync") return Readback::kSync;
+  if (value == "async") return Readback::kAsync;
+  throw UsageError("--readback '" + value + "' is not accepted; use auto, sync or async");
+}
+
 RenderOptions MakeRenderOptions(const ViewOptions& view, const mjModel* model) {
   RenderOptions options;
   options.width = view.width;
@@ -59,6 +73,7 @@ RenderOptions MakeRenderOptions(const ViewOptions& view, const mjModel* model) {
   options.cameras = ParseCameraList(view.camera, model);
   options.overlays = ParseOverlays(view.overlay);
   options.msaa_samples = ParseMsaa(view.msaa);
+  options.readback = ParseReadback(view.readback);
   return options;
 }
 

@@ -22,7 +22,12 @@ struct ViewOptions {
   std::string backend;                            ///< auto|egl|osmesa; empty: $MUJOCO_GL or auto
   std::string gpu;                                ///< see ParseGpuSpec; empty: from the environment
   std::string msaa = "auto";                      ///< see ParseMsaa
+  std::string readback = "auto";                  ///< see ParseReadback
 };
+
+/// The accepted --readback values, and RenderOptions::readback for one (UsageError otherwise).
+inline constexpr const char* kReadbackValues[] = {"auto", "sync", "async"};
+Readback ParseReadback(const std::string& value);
 
 /// The accepted --msaa values, in the order the help and errors list them.
 inline constexpr const char* kMsaaValues[] = {"auto", "0", "1", "2", "4", "8", "16"};

@@ -5,6 +5,8 @@
 #include <mujoco/mujoco.h>
 
 #include <cstdint>
+#include <deque>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -30,6 +32,16 @@ inline constexpr int kMsaaModel = -1;
 /// multisampling costs about half the frame time.
 inline constexpr int kMsaaAuto = -2;
 
+/// How a renderer reads frames back from the GL (RenderOptions::readback).
+enum class Readback {
+  kAuto,   ///< kAsync on hardware GL, kSync on a software rasterizer (where it measured no faster)
+  kSync,   ///< mjr_readPixels: the CPU waits for the GPU every frame
+  kAsync,  ///< pixel buffer objects, kReadbackDepth frames in flight (Submit/Collect)
+};
+/// Frames in flight with Readback::kAsync: the GPU draws frame k+1 and k+2 while frame k
+/// comes back.
+inline constexpr int kReadbackDepth = 3;
+
 /// Frame size, cameras and overlays of a renderer.
 struct RenderOptions {
   int width = 480;                  ///< pixels
@@ -38,6 +50,7 @@ struct RenderOptions {
   OverlaySet overlays;              ///< drawn by Render (not by the depth/segmentation layers)
   int msaa_samples = kMsaaModel;    ///< samples per pixel: 0 (off), 1, 2, 4, 8, 16, kMsaaModel
                                     ///< or kMsaaAuto; capped at the driver's maximum
+  Readback readback = Readback::kAuto;  ///< how Submit/Collect read frames back
 };
 
 /// The CPU rasterizer a GL_RENDERER string names ("llvmpipe", "softpipe", "swrast", "SWR",
@@ -63,6 +76,23 @@ class Renderer {
   /// Reads `data` only: the goal marker is placed by moving the target0 site's scene geom to
   /// info.goal after mjv_updateScene (Gymnasium moves the site and runs mj_forward instead).
   void Render(const mjData* data, const FrameInfo& info, uint8_t* rgb);
+
+  /// Pipelined rendering: draws the current state of `data` and starts reading it back into
+  /// `rgb` (width*height*3 bytes, row 0 = top), which stays untouched until the frame is
+  /// collected. With asynchronous readback up to pipeline_depth() frames are in flight; with
+  /// synchronous readback the frame is complete on return but still counts as pending until
+  /// collected. The pixels equal Render's. Call Collect when pending() == pipeline_depth().
+  void Submit(const mjData* data, const FrameInfo& info, uint8_t* rgb);
+  /// Completes the oldest pending frame (waits for the GPU if needed) and returns the `rgb`
+  /// it was submitted with; nullptr when nothing is pending.
+  uint8_t* Collect();
+  /// Drops every pending frame without copying it (after a failure).
+  void DiscardPending();
+  int pending() const { return static_cast<int>(pending_.size()); }
+  int pipeline_depth() const { return async_ ? kReadbackDepth : 1; }
+  /// Whether frames come back through pixel buffer objects, and why.
+  bool async_readback() const { return async_; }
+  const std::string& readback_reason() const { return readback_reason_; }
 
   /// Renders `layer` into `out` (resized; row 0 = top). Depth and segmentation show the scene
   /// with the goal marker but without overlays.
@@ -101,6 +131,11 @@ class Renderer {
   void Draw(const mjData* data, const FrameInfo& info, bool overlays);
   // Reads the rgb of the whole frame, row 0 at the top.
   void ReadRgb(uint8_t* rgb);
+  // Picks synchronous or asynchronous readback and makes the pixel buffers; sets
+  // readback_reason_.
+  void SetUpReadback();
+  // Starts the readback of the frame just drawn into pixel buffer `slot`.
+  void StartAsyncRead(int slot);
   // Copies the bottom-up rows of `src` (row_bytes each) into `dst` top-down.
   void FlipRows(const uint8_t* src, size_t row_bytes, uint8_t* dst) const;
 
@@ -124,6 +159,19 @@ class Renderer {
   std::optional<MjvScene> scene_;
   std::optional<MjrContext> context_;
   std::vector<uint8_t> rgb_bottom_up_;  // readback buffer, reused every frame
+  // Asynchronous readback: GL entry points, kReadbackDepth pixel buffer objects used in
+  // turn, and the destinations of the frames in flight (oldest first).
+  struct PboGl;
+  std::unique_ptr<PboGl> pbo_gl_;
+  bool async_ = false;
+  std::string readback_reason_;
+  unsigned pbos_[kReadbackDepth] = {0, 0, 0};
+  int next_slot_ = 0;
+  struct PendingFrame {
+    uint8_t* rgb;
+    int slot;  // -1: read synchronously, already in rgb
+  };
+  std::deque<PendingFrame> pending_;
   std::vector<float> depth_bottom_up_;
 };
 

@@ -74,6 +74,20 @@ TEST_P(JobsTest, ParallelWorkersWriteTheFilesOfOneJob) {
       EXPECT_TRUE(files[jobs][name] == bytes) << name << " differs with --jobs " << jobs;
     }
   }
+  // asynchronous readback (the default on hardware GL) writes the same files as well
+  const fs::path async_out = tmp.path() / "async";
+  auto r = RunFetchscope(run + " --jobs 2 --readback async --out " + async_out.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto async_files = EpisodeFiles(async_out);
+  ASSERT_EQ(async_files.size(), files[1].size());
+  for (const auto& [name, bytes] : files[1]) {
+    EXPECT_TRUE(async_files.at(name) == bytes) << name << " differs with --readback async";
+  }
+  const auto async_manifest = nlohmann::json::parse(ReadFile(async_out / "manifest.json"));
+  ASSERT_TRUE(async_manifest.contains("workers")) << async_manifest.dump();
+  for (const auto& w : async_manifest["workers"]) {
+    EXPECT_EQ(w.value("readback", "").rfind("async: requested", 0), 0u) << w.dump();
+  }
 }
 
 // Workers stop mid-episode on SIGTERM, finish what they recorded so it plays, and the manifest
@@ -82,9 +96,14 @@ TEST_P(JobsTest, SignalFinishesEveryWorkersVideo) {
   if (!HasBackend(GetParam())) GTEST_SKIP() << GetParam() << " is not available here";
   TempDir tmp;
   const fs::path out = tmp.path() / "run";
-  auto r = RunCommand("timeout --preserve-status -s TERM 4 " + std::string(FETCHSCOPE_BIN) +
+  // SIGTERM once the first episode is written (however long the workers take to start on a
+  // loaded machine), while the others are mid-episode
+  auto r = RunCommand(std::string(FETCHSCOPE_BIN) +
                       " record --quiet --jobs 2 --episodes 500 --width 64 --height 64 --backend " +
-                      GetParam() + " --out " + out.string());
+                      GetParam() + " --out " + out.string() + " & pid=$!; i=0; while [ ! -e " +
+                      (out / "episode_001.json").string() +
+                      " ] && [ $i -lt 1200 ]; do sleep 0.1; i=$((i+1)); done; sleep 0.3; "
+                      "kill -TERM $pid; wait $pid");
   EXPECT_EQ(r.exit_code, 143) << r.output;
   auto m = nlohmann::json::parse(ReadFile(out / "manifest.json"));
   EXPECT_EQ(m["interrupted"], true);

@@ -371,6 +371,67 @@ TEST_P(RendererTest, RenderingTwiceGivesTheSamePixels) {
   EXPECT_EQ(a, b);
 }
 
+// Asynchronous readback (pixel buffer objects, frames in flight) gives the synchronous
+// pixels, frame for frame, on both backends, with and without multisampling, at a width whose
+// rows are not a multiple of 4 bytes, and with the gripper moving between frames so that a
+// frame read from the wrong buffer would show.
+TEST_P(RendererTest, AsyncReadbackGivesTheSamePixelsFrameForFrame) {
+  for (const char* backend : {"egl", "osmesa"}) {
+    auto gl = Context(backend);
+    if (!gl) continue;
+    for (int msaa : {0, 4}) {
+      RenderOptions options = Options("goal,achieved,hud,action,trail", 161, 97);
+      options.msaa_samples = msaa;
+      options.readback = Readback::kSync;
+      RenderOptions async_options = options;
+      async_options.readback = Readback::kAsync;
+      Renderer sync(*gl, model_.get(), options);
+      Renderer async(*gl, model_.get(), async_options);
+      EXPECT_FALSE(sync.async_readback());
+      ASSERT_TRUE(async.async_readback()) << async.readback_reason();
+      EXPECT_EQ(async.pipeline_depth(), kReadbackDepth);
+      const size_t bytes = 161 * 97 * 3;
+      const int frames = 7;
+      std::vector<std::vector<uint8_t>> expected(frames, std::vector<uint8_t>(bytes));
+      std::vector<std::vector<uint8_t>> got(frames, std::vector<uint8_t>(bytes, 0x5A));
+      std::vector<uint8_t*> order;
+      const double x0 = data_->qpos[model_->jnt_qposadr[mj_name2id(model_.get(), mjOBJ_JOINT, "robot0:slide0")]];
+      for (int k = 0; k < frames; ++k) {
+        SetJoint("robot0:slide0", {x0 + 0.05 * k});
+        mj_forward(model_.get(), data_.get());
+        info_.step = k;
+        sync.Render(data_.get(), info_, expected[k].data());
+        async.Submit(data_.get(), info_, got[k].data());
+        EXPECT_LE(async.pending(), kReadbackDepth);
+        while (async.pending() >= async.pipeline_depth()) order.push_back(async.Collect());
+      }
+      while (uint8_t* done = async.Collect()) order.push_back(done);
+      EXPECT_EQ(async.Collect(), nullptr);
+      ASSERT_EQ(order.size(), static_cast<size_t>(frames));
+      for (int k = 0; k < frames; ++k) {
+        EXPECT_EQ(order[k], got[k].data()) << "frames come back in submission order";
+        EXPECT_TRUE(got[k] == expected[k]) << backend << " msaa " << msaa << " frame " << k;
+      }
+      EXPECT_NE(expected[0], expected[frames - 1]) << "the frames differ: the test can see a mix-up";
+      SetJoint("robot0:slide0", {x0});
+      mj_forward(model_.get(), data_.get());
+    }
+  }
+}
+
+TEST_P(RendererTest, AutoReadbackIsSyncOnSoftwareRasterizers) {
+  auto gl = Context();
+  if (!gl) GTEST_SKIP();
+  Renderer renderer(*gl, model_.get(), Options("none", 64, 64));
+  if (SoftwareRendererName(gl->info().renderer).empty()) {
+    EXPECT_TRUE(renderer.async_readback()) << renderer.readback_reason();
+  } else {
+    EXPECT_FALSE(renderer.async_readback());
+    EXPECT_NE(renderer.readback_reason().find("software"), std::string::npos) << renderer.readback_reason();
+    EXPECT_EQ(renderer.pipeline_depth(), 1);
+  }
+}
+
 TEST_P(RendererTest, RenderingDoesNotTouchTheSimulation) {
   auto gl = Context();
   if (!gl) GTEST_SKIP();

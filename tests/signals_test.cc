@@ -194,5 +194,123 @@ TEST(SignalsGolden, GoldenUpdateStopsAfterTheSceneInProgress) {
   EXPECT_LT(written, scenes);
 }
 
+// The pids of `parent`'s child processes (from /proc: PPid in each process's status).
+std::set<pid_t> ChildrenOf(pid_t parent) {
+  std::set<pid_t> children;
+  for (const auto& e : fs::directory_iterator("/proc")) {
+    const std::string name = e.path().filename().string();
+    if (name.find_first_not_of("0123456789") != std::string::npos) continue;
+    const std::string status = ReadFile(e.path() / "status");
+    const size_t at = status.find("PPid:");
+    if (at != std::string::npos && std::atoi(status.c_str() + at + 5) == parent) {
+      children.insert(std::atoi(name.c_str()));
+    }
+  }
+  return children;
+}
+
+// Whether process `pid` still exists (a zombie counts as gone: it runs nothing).
+bool Alive(pid_t pid) {
+  const std::string status = ReadFile(fs::path("/proc") / std::to_string(pid) / "status");
+  return !status.empty() && status.find("State:\tZ") == std::string::npos;
+}
+
+// Waits up to 10 s for every process of `pids` to be gone.
+bool AllGone(const std::set<pid_t>& pids) {
+  for (int i = 0; i < 100; ++i) {
+    bool any = false;
+    for (pid_t p : pids) any = any || Alive(p);
+    if (!any) return true;
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  return false;
+}
+
+const char kRecordJobs[] =
+    "record --env-id FetchPush-v4 --policy random --episodes 60 --steps 20 --width 64 --height 48 "
+    "--jobs 3 --out ";
+
+// With worker processes, SIGINT and SIGTERM reach the parent; it stops every worker, each
+// finishes the video it is writing so that it plays, the manifest says interrupted, and no
+// worker outlives the run.
+TEST_P(SignalsTest, WorkerProcessesStopCleanlyWithNoOrphans) {
+  const int sig = GetParam();
+  TempDir tmp;
+  const fs::path out = tmp.path() / "run";
+  const pid_t pid = Spawn(kRecordJobs + out.string(), tmp.path() / "log");
+  ASSERT_TRUE(WaitForFile(out / "episode_002.json", pid)) << ReadFile(tmp.path() / "log");
+  const std::set<pid_t> workers = ChildrenOf(pid);
+  EXPECT_EQ(workers.size(), 3u) << "one process per worker";
+  kill(pid, sig);
+  const int code = WaitExit(pid);
+  const std::string log = ReadFile(tmp.path() / "log");
+  EXPECT_EQ(code, 128 + sig) << log;
+  EXPECT_TRUE(AllGone(workers)) << "a worker outlived the run";
+  const auto m = nlohmann::json::parse(ReadFile(out / "manifest.json"));
+  EXPECT_EQ(m["interrupted"], true);
+  EXPECT_EQ(m["worker_mode"], "process");
+  ASSERT_GE(m["episodes"].size(), 3u);
+  EXPECT_LT(m["episodes"].size(), 60u);
+  std::set<long> manifest_pids;
+  for (const auto& w : m["workers"]) manifest_pids.insert(w["pid"].get<long>());
+  for (pid_t w : workers) EXPECT_TRUE(manifest_pids.count(w)) << "worker " << w << " not in the manifest";
+  for (const auto& e : m["episodes"]) {
+    EXPECT_EQ(DecodedFrames(out / e["video"].get<std::string>()), e["frames"].get<int>()) << e.dump();
+  }
+  ExpectFinalFilesWhole(out);
+}
+
+// A worker that dies (here SIGKILL, as the OOM killer would) is reported with the episode it
+// was recording; the other workers' finished episodes stay and the manifest says what is
+// missing; exit 1.
+TEST(SignalsWorkers, DeadWorkerIsReportedAndTheOthersEpisodesStay) {
+  unsetenv("DISPLAY");
+  TempDir tmp;
+  const fs::path out = tmp.path() / "run";
+  const pid_t pid = Spawn(kRecordJobs + out.string(), tmp.path() / "log");
+  ASSERT_TRUE(WaitForFile(out / "episode_001.json", pid)) << ReadFile(tmp.path() / "log");
+  const std::set<pid_t> workers = ChildrenOf(pid);
+  ASSERT_EQ(workers.size(), 3u);
+  const pid_t victim = *workers.begin();
+  kill(victim, SIGKILL);
+  const int code = WaitExit(pid);
+  const std::string log = ReadFile(tmp.path() / "log");
+  EXPECT_EQ(code, 1) << log;
+  EXPECT_NE(log.find("SIGKILL"), std::string::npos) << log;
+  EXPECT_TRUE(AllGone(workers));
+  ASSERT_TRUE(fs::exists(out / "manifest.json")) << log;
+  const auto m = nlohmann::json::parse(ReadFile(out / "manifest.json"));
+  ASSERT_EQ(m["failures"].size(), 1u) << m.dump();
+  const auto& failure = m["failures"][0];
+  ASSERT_GE(failure["episodes"].size(), 1u) << "the episode it was recording";
+  std::set<int> listed, missing;
+  for (const auto& e : m["episodes"]) listed.insert(e["index"].get<int>());
+  for (const auto& k : m["missing"]) missing.insert(k.get<int>());
+  EXPECT_GE(listed.size(), 2u);
+  for (const auto& k : failure["episodes"]) {
+    EXPECT_TRUE(missing.count(k.get<int>())) << "lost episode " << k << " not listed as missing";
+    EXPECT_FALSE(listed.count(k.get<int>()));
+  }
+  EXPECT_EQ(listed.size() + missing.size(), 60u) << "every episode is either recorded or missing";
+  for (const auto& e : m["episodes"]) {
+    EXPECT_EQ(DecodedFrames(out / e["video"].get<std::string>()), e["frames"].get<int>()) << e.dump();
+  }
+  ExpectFinalFilesWhole(out);
+}
+
+// SIGKILL of the parent cannot be caught: the workers die with it (PR_SET_PDEATHSIG).
+TEST(SignalsWorkers, WorkersDieWithAKilledParent) {
+  unsetenv("DISPLAY");
+  TempDir tmp;
+  const fs::path out = tmp.path() / "run";
+  const pid_t pid = Spawn(kRecordJobs + out.string(), tmp.path() / "log");
+  ASSERT_TRUE(WaitForFile(out / "episode_001.json", pid)) << ReadFile(tmp.path() / "log");
+  const std::set<pid_t> workers = ChildrenOf(pid);
+  ASSERT_EQ(workers.size(), 3u);
+  kill(pid, SIGKILL);
+  WaitExit(pid);
+  EXPECT_TRUE(AllGone(workers)) << "orphaned workers";
+}
+
 }  // namespace
 }  // namespace fetchscope
