@@ -626,8 +626,8 @@ void RunRecord(const RecordOptions& options, const std::string& command_line) {
       break;
     }
   }
-  if (result.signal == 0 && !result.failures.empty()) {
-    // a run-time failure: no manifest, and `folder` removes what this run wrote
+  if (result.results.empty() && result.signal == 0 && !result.failures.empty()) {
+    // nothing was recorded: no manifest, and `folder` removes what this run made
     const WorkerFailure& first = result.failures.front();
     if (first.usage) throw UsageError(first.message);
     throw RunError(DescribeFailures(result));
@@ -713,6 +713,10 @@ void RunRecord(const RecordOptions& options, const std::string& command_line) {
   if (sig) {
     ExitStatus() = 128 + sig;
     return;
+  }
+  if (!result.failures.empty()) {
+    throw RunError(DescribeFailures(result) + "; the manifest lists the missing episodes (" +
+                   std::to_string(result.missing.size()) + "): --resume records them");
   }
 }
 
