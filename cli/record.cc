@@ -443,13 +443,10 @@ void RunRecord(const RecordOptions& o, const std::string& command_line) {
   plan.seed = ParseSeed(o.env.seed);
   const Shard shard = ResolveShard(o.shard, o.shard_count);
   const WorkerMode mode = ParseWorkerMode(o.worker_mode);
-  plan.video.width = o.view.width;
-  plan.video.height = o.view.height;
   plan.video.fps = o.fps;
   plan.video.codec = o.codec;
   plan.video.crf = o.crf;
   plan.video.preset = o.preset;
-  ValidateVideoOptions(plan.video);
   const std::vector<int> episodes = ShardEpisodes(shard, o.episodes);
   const int jobs = ResolveJobs(o.jobs, static_cast<int>(episodes.size()));
   plan.encoders = EncodersPerWorker(jobs);
@@ -463,9 +460,12 @@ void RunRecord(const RecordOptions& o, const std::string& command_line) {
   std::string model_path;
   {
     FetchEnv env(*plan.spec, plan.assets);  // bad assets and bad cameras fail here
-    MakeRenderOptions(o.view, env.model());
+    const FrameDims frame = FrameSize(MakeRenderOptions(o.view, env.model()));
+    plan.video.width = frame.width;  // --width/--height size each camera's tile
+    plan.video.height = frame.height;
     model_path = env.model_path();
   }
+  ValidateVideoOptions(plan.video);
 
   // The GPUs and the encoder, decided once (driver work in a child process).
   const NodeProbe node = ProbeNode(o.view, &plan.video);
@@ -574,8 +574,8 @@ void RunRecord(const RecordOptions& o, const std::string& command_line) {
                    {"gl_version", first_worker.value("gl_version", "")}}},
       {"video", {{"codec", codec_used}, {"codec_reason", node.codec.reason},
                  {"crf", o.crf}, {"preset", o.preset.empty() ? kDefaultVideoPreset : o.preset},
-                 {"fps", o.fps}, {"width", o.view.width}, {"height", o.view.height},
-                 {"encoded_width", (o.view.width + 1) & ~1}, {"encoded_height", (o.view.height + 1) & ~1},
+                 {"fps", o.fps}, {"width", plan.video.width}, {"height", plan.video.height},
+                 {"encoded_width", (plan.video.width + 1) & ~1}, {"encoded_height", (plan.video.height + 1) & ~1},
                  {"encoder_threads", plan.video.threads}, {"encoders_per_worker", plan.encoders},
                  {"container", "mp4"}, {"pix_fmt", "yuv420p"}}},
       {"versions", VersionsJson()},
