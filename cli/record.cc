@@ -26,6 +26,7 @@
 #include "cli/common.h"
 #include "cli/episode_scheduler.h"
 #include "cli/node_probe.h"
+#include "cli/record_from.h"
 #include "cli/render_common.h"
 #include "cli/shard.h"
 #include "render/contact_sheet.h"
@@ -33,6 +34,7 @@
 #include "render/renderer.h"
 #include "render/video_writer.h"
 #include "src/errors.h"
+#include "src/hindsight.h"
 #include "src/json_util.h"
 
 namespace fetchscope::cli {
@@ -61,6 +63,7 @@ struct RecordOptions {
   std::string worker_mode = "process";
   std::string shard;                // "I/N"; empty: from the environment, else the whole run
   int shard_count = 0;              // with JOB_COMPLETION_INDEX; 0 = not given
+  std::string from;                 // record --from: a run folder or trajectory JSON
 };
 
 // Everything the parent decided before the workers start; workers only read it.
@@ -73,6 +76,8 @@ struct RecordPlan {
   VideoOptions video;      // codec already decided
   GpuChoice gpu;           // EGL devices, worker w on devices[w % size]
   int encoders = 1;        // episodes a worker encodes at once
+  const TrajectorySource* from = nullptr;  // record --from: the episodes to replay
+  bool hindsight = false;  // the hindsight overlay: run the episode first, then render it
 };
 
 // One rendered frame travelling from the render thread to an episode's encoder thread.
@@ -163,6 +168,8 @@ class EpisodeEncoder {
     render_s_ = render_s;
     Enqueue(nullptr, Command::kClose);
   }
+  /// Members added to the manifest entry (e.g. "hindsight"); call before Close.
+  void SetExtra(nlohmann::json extra) { extra_ = std::move(extra); }
   /// No more frames and no files: the partial video is removed.
   void Abort() { Enqueue(nullptr, Command::kAbort); }
   /// Waits for the thread; rethrows its failure.
@@ -252,7 +259,7 @@ class EpisodeEncoder {
     WriteJson((fs::path(o.out) / (name_ + ".json")).string(), trajectory);
     const double write_s = Since(t0);
     const bool success = episode_.steps.back().is_success;
-    channel_.Done(k_, {{"index", k_},
+    nlohmann::json entry = {{"index", k_},
                        {"video", name_ + ".mp4"},
                        {"sheet", name_ + "_sheet.png"},
                        {"trajectory", name_ + ".json"},
@@ -266,7 +273,9 @@ class EpisodeEncoder {
                        {"encoded_width", writer_->encoded_width()},
                        {"encoded_height", writer_->encoded_height()},
                        {"timings_s", {{"sim", sim_s_}, {"render", render_s_},
-                                      {"encode", encode_s_}, {"write", write_s}}}});
+                                      {"encode", encode_s_}, {"write", write_s}}}};
+    if (extra_.is_object()) entry.update(extra_);
+    channel_.Done(k_, entry);
   }
 
   const RecordPlan& plan_;
@@ -279,6 +288,7 @@ class EpisodeEncoder {
   std::optional<VideoWriter> writer_;
   std::vector<SheetTile> tiles_;
   EpisodeRecord episode_;
+  nlohmann::json extra_;
   double sim_s_ = 0, render_s_ = 0, encode_s_ = 0;
   std::exception_ptr error_;
   std::atomic<bool> finished_{false};
@@ -295,8 +305,9 @@ class RecordRunner : public EpisodeRunner {
   RecordRunner(const RecordPlan& plan, int worker)
       : plan_(plan), worker_(worker),
         sequence_(std::make_unique<FetchEnv>(*plan.spec, plan.assets),
-                  MakePolicy(plan.o->policy, *plan.spec, plan.policy_context), plan.seed,
-                  plan.o->steps) {}
+                  // --from replays recorded actions: the policy that made them is not run
+                  MakePolicy(plan.from ? "zero" : plan.o->policy, *plan.spec, plan.policy_context),
+                  plan.seed, plan.o->steps) {}
 
   ~RecordRunner() override {
     encoders_.clear();  // aborts and joins whatever is still running (a failure elsewhere)
@@ -341,8 +352,10 @@ class RecordRunner : public EpisodeRunner {
       const auto render_start = Clock::now();
       sim_s += std::chrono::duration<double>(render_start - sim_start).count();
       Frame* f = pool_->Acquire();
-      const FrameInfo info = MakeFrameInfo(sequence_.env(), record);
-      renderer_->Render(sequence_.env().data(), info, f->rgb.data());
+      FetchEnv& env = render_env_ ? *render_env_ : sequence_.env();
+      FrameInfo info = MakeFrameInfo(env, record);
+      AddRelabelled(record.t, &info);
+      renderer_->Render(env.data(), info, f->rgb.data());
       f->t = record.t;
       f->label = TileLabel(info);
       encoder->Push(f);
@@ -351,7 +364,8 @@ class RecordRunner : public EpisodeRunner {
       render_s += std::chrono::duration<double>(sim_start - render_start).count();
       return !channel.StopRequested();
     };
-    EpisodeRecord episode = sequence_.Play(k, on_step);  // a throw aborts `encoder`
+    EpisodeRecord episode = PlayEpisode(k, on_step, channel);  // a throw aborts `encoder`
+    encoder->SetExtra({{"hindsight", HindsightCounts(episode)}});
     encoder->Close(std::move(episode), sim_s, render_s);
     encoders_.push_back(std::move(encoder));
   }
@@ -365,9 +379,75 @@ class RecordRunner : public EpisodeRunner {
   }
 
  private:
+  // Plays episode k, calling on_step (which renders) at every step: live from the policy; or,
+  // for --from and the hindsight overlay, a replay of recorded actions (the recording's, or
+  // those of a first pass run here without rendering) with the hindsight goals sampled first.
+  EpisodeRecord PlayEpisode(int k, const StepCallback& on_step, WorkerChannel& channel) {
+    hindsight_.reset();
+    if (!plan_.from && !plan_.hindsight) return sequence_.Play(k, on_step);
+    EpisodeRecord first_pass;
+    const std::vector<StepRecord>* script = nullptr;
+    if (plan_.from) {
+      script = &plan_.from->episodes.at(k).steps;
+    } else {
+      first_pass = sequence_.Play(k, [&](const StepRecord&, const StepResult*) {
+        return !channel.StopRequested();
+      });
+      script = &first_pass.steps;
+    }
+    if (plan_.hindsight) hindsight_ = SampleEpisodeHindsight(k, *script);
+    if (!replayer_) {
+      if (!plan_.from) replay_env_ = std::make_unique<FetchEnv>(*plan_.spec, plan_.assets);
+      replayer_.emplace(plan_.from ? sequence_.env() : *replay_env_, plan_.seed);
+    }
+    // the replay renders from the env of sequence_ (--from) or replay_env_ (hindsight)
+    render_env_ = plan_.from ? &sequence_.env() : replay_env_.get();
+    const std::string check = plan_.from ? plan_.from->episodes.at(k).file : std::string();
+    EpisodeRecord episode = replayer_->Replay(k, *script, check, on_step);
+    render_env_ = nullptr;
+    return episode;
+  }
+
+  HindsightEpisode SampleEpisodeHindsight(int k, const std::vector<StepRecord>& steps) {
+    std::vector<std::array<double, 3>> achieved;
+    for (const StepRecord& s : steps) achieved.push_back(s.obs.achieved_goal);
+    const FetchEnv& env = sequence_.env();
+    return SampleHindsight(
+        achieved, steps.front().obs.desired_goal, HindsightSeed(plan_.seed, k), kHindsightK,
+        [&env](const auto& a, const auto& g) { return env.ComputeReward(a, g); },
+        [&env](const auto& a, const auto& g) { return env.IsSuccess(a, g); });
+  }
+
+  // The manifest entry's "hindsight": relabelled successes (of k per transition) against the
+  // episode's own successful transitions.
+  nlohmann::json HindsightCounts(const EpisodeRecord& episode) {
+    const HindsightEpisode h =
+        hindsight_ ? *hindsight_ : SampleEpisodeHindsight(episode.index, episode.steps);
+    const int transitions = static_cast<int>(episode.steps.size()) - 1;
+    return {{"relabelled_successes", h.relabelled_successes},
+            {"original_successes", h.original_successes},
+            {"k", kHindsightK},
+            {"transitions", transitions}};
+  }
+
+  // The hindsight overlay's goals for the frame after step t (the transition t-1 -> t).
+  void AddRelabelled(int t, FrameInfo* info) const {
+    if (!hindsight_ || t < 1 || t > static_cast<int>(hindsight_->transitions.size())) return;
+    int successes = 0;
+    for (const HindsightGoal& g : hindsight_->transitions[t - 1]) {
+      info->relabelled.push_back({g.goal, g.success});
+      successes += g.success;
+    }
+    info->relabelled_successes = successes;
+  }
+
   const RecordPlan& plan_;
   const int worker_;
   EpisodeSequence sequence_;
+  std::unique_ptr<FetchEnv> replay_env_;       // hindsight: the env the replay renders
+  std::optional<EpisodeReplayer> replayer_;
+  FetchEnv* render_env_ = nullptr;             // the env being replayed, while it is
+  std::optional<HindsightEpisode> hindsight_;  // this episode's relabelling (hindsight overlay)
   // Lifetime order: the GL context outlives the renderer; encoders go first (they hold frames).
   std::unique_ptr<GlContext> gl_;
   std::optional<Renderer> renderer_;
@@ -428,6 +508,25 @@ int EncodersPerWorker(int jobs) {
   return std::max(1, std::min(4, cores / std::max(1, jobs)));
 }
 
+// record --from: the recorded episodes' indices, ascending.
+std::vector<int> FromEpisodes(const TrajectorySource& from) {
+  std::vector<int> out;
+  for (const auto& [k, episode] : from.episodes) out.push_back(k);
+  return out;
+}
+
+void RunRecord(const RecordOptions& o, const std::string& command_line,
+               const TrajectorySource* from = nullptr);
+
+// record --from: the trajectory sets env, seed, policy, steps and episodes; then as record.
+void RunRecordFrom(RecordOptions o, const CLI::App& sub, const std::string& command_line) {
+  CheckFromFlags(sub, o.from);
+  const TrajectorySource source = LoadTrajectorySource(o.from);
+  ApplyFromSource(source, sub, &o.env.env_id, &o.env.seed, &o.policy, &o.steps, &o.episodes,
+                  &o.env.assets);
+  RunRecord(o, command_line, &source);
+}
+
 // Starting an exec: child is the only full check of it, and the workers do that; every other
 // policy is built once here so that a bad one fails before anything is written.
 void ValidatePolicy(const std::string& policy, const EnvSpec& spec, const PolicyContext& context) {
@@ -435,10 +534,13 @@ void ValidatePolicy(const std::string& policy, const EnvSpec& spec, const Policy
   MakePolicy(policy, spec, context);
 }
 
-void RunRecord(const RecordOptions& o, const std::string& command_line) {
+void RunRecord(const RecordOptions& o, const std::string& command_line,
+               const TrajectorySource* from) {
   const auto wall_start = Clock::now();
   RecordPlan plan;
   plan.o = &o;
+  plan.from = from;
+  plan.hindsight = ParseOverlays(o.view.overlay).hindsight;
   plan.spec = &FindEnvSpec(o.env.env_id);
   plan.seed = ParseSeed(o.env.seed);
   const Shard shard = ResolveShard(o.shard, o.shard_count);
@@ -447,7 +549,7 @@ void RunRecord(const RecordOptions& o, const std::string& command_line) {
   plan.video.codec = o.codec;
   plan.video.crf = o.crf;
   plan.video.preset = o.preset;
-  const std::vector<int> episodes = ShardEpisodes(shard, o.episodes);
+  const std::vector<int> episodes = from ? FromEpisodes(*from) : ShardEpisodes(shard, o.episodes);
   const int jobs = ResolveJobs(o.jobs, static_cast<int>(episodes.size()));
   plan.encoders = EncodersPerWorker(jobs);
 
@@ -455,7 +557,7 @@ void RunRecord(const RecordOptions& o, const std::string& command_line) {
   plan.policy_context.steps_per_episode = o.steps;
   plan.policy_context.episodes = o.episodes;
   plan.policy_context.exec_timeout_s = o.exec_timeout;
-  ValidatePolicy(o.policy, *plan.spec, plan.policy_context);
+  if (!from) ValidatePolicy(o.policy, *plan.spec, plan.policy_context);
   plan.assets = ResolveAssets(o.env.assets);
   std::string model_path;
   {
@@ -550,6 +652,7 @@ void RunRecord(const RecordOptions& o, const std::string& command_line) {
       {"env_id", plan.spec->id},
       {"seed", plan.seed},
       {"policy", o.policy},
+      {"from", from ? nlohmann::json(from->path) : nlohmann::json(nullptr)},
       {"episodes_requested", o.episodes},
       {"steps_per_episode", o.steps},
       {"sheet_every", o.sheet_every},
@@ -639,7 +742,11 @@ void RegisterRecord(CLI::App& app) {
   sub->add_option("--shard-count", o->shard_count,
                   "Number of shards when the index comes from JOB_COMPLETION_INDEX (a Kubernetes "
                   "Indexed Job's completions)");
-  sub->callback([o]() { RunRecord(*o, CommandLine()); });
+  AddFromOption(sub, &o->from);
+  sub->callback([o, sub]() {
+    if (!o->from.empty()) return RunRecordFrom(*o, *sub, CommandLine());
+    RunRecord(*o, CommandLine());
+  });
 }
 
 }  // namespace fetchscope::cli
