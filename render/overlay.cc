@@ -32,6 +32,16 @@ constexpr double kArrowWidth = 0.008;      // m
 constexpr double kLineWidth = 2.0;         // pixels for mjGEOM_LINE
 constexpr double kRelabelRadius = 0.014;   // hindsight goal markers: smaller than the goal (0.02)
 
+// Distance from the scene's camera (between the two eyes) to the geom, for the transparent sort.
+void SetCamdist(const mjvScene& scene, mjvGeom* g) {
+  float d2 = 0;
+  for (int k = 0; k < 3; ++k) {
+    const float head = 0.5f * (scene.camera[0].pos[k] + scene.camera[1].pos[k]);
+    d2 += (g->pos[k] - head) * (g->pos[k] - head);
+  }
+  g->camdist = std::sqrt(d2);
+}
+
 // Returns a fresh decor geom at the end of the scene, or nullptr when the scene is full.
 mjvGeom* NewGeom(mjvScene* scene, int type, const mjtNum size[3], const mjtNum pos[3],
                  const float rgba[4]) {
@@ -42,6 +52,12 @@ mjvGeom* NewGeom(mjvScene* scene, int type, const mjtNum size[3], const mjtNum p
   g->objtype = mjOBJ_UNKNOWN;
   g->objid = -1;
   g->segid = -1;  // overlays are not part of the segmentation layer
+  // mjv_updateScene fills these for the geoms it makes, not for ones added after it: left as
+  // they were, they would hold whatever the geom at this index had in an earlier frame (the
+  // transparent sort would then depend on the frames rendered before, e.g. with --jobs)
+  g->transparent = rgba[3] < 1.0f;
+  g->modelrbound = 0;
+  SetCamdist(*scene, g);
   return g;
 }
 
@@ -58,7 +74,9 @@ void AddConnector(mjvScene* scene, int type, double width, const std::array<doub
                             (b[2] - a[2]) * (b[2] - a[2]));
   if (length < 1e-6) return;  // a connector needs a direction
   mjvGeom* g = NewGeom(scene, type, nullptr, nullptr, rgba);
-  if (g) mjv_makeConnector(g, type, width, a[0], a[1], a[2], b[0], b[1], b[2]);
+  if (!g) return;
+  mjv_makeConnector(g, type, width, a[0], a[1], a[2], b[0], b[1], b[2]);
+  SetCamdist(*scene, g);
 }
 
 // The one place frame text is drawn (HUD, tile labels): the embedded bitmap font at an integer
