@@ -153,7 +153,7 @@ struct CheckRow {
   double badness = 0;   // how far over its limits, for sorting worst first
 };
 
-void WriteFailureImages(const std::string& out, const GoldenScene& s, const Image* golden,
+void WriteFailureImages(const std::string& out, const GoldenScene& s, const Image* golden, int width, int height,
                         const std::vector<uint8_t>& actual) {
   std::error_code ec;
   fs::create_directories(out, ec);
@@ -162,14 +162,14 @@ void WriteFailureImages(const std::string& out, const GoldenScene& s, const Imag
                    "': " + (ec ? ec.message() : std::string("a file is in the way")));
   }
   const fs::path dir(out);
-  WritePng((dir / (s.name + "_actual.png")).string(), s.width, s.height, 3, 8, actual.data());
+  WritePng((dir / (s.name + "_actual.png")).string(), width, height, 3, 8, actual.data());
   if (!golden) return;
   const std::vector<uint8_t> heat =
-      DiffHeatMap(golden->pixels.data(), actual.data(), s.width, s.height);
-  WritePng((dir / (s.name + "_diff.png")).string(), s.width, s.height, 3, 8, heat.data());
+      DiffHeatMap(golden->pixels.data(), actual.data(), width, height);
+  WritePng((dir / (s.name + "_diff.png")).string(), width, height, 3, 8, heat.data());
   const std::vector<uint8_t> side =
-      SideBySide(golden->pixels.data(), actual.data(), heat.data(), s.width, s.height);
-  WritePng((dir / (s.name + "_side.png")).string(), SideBySideWidth(s.width), s.height, 3, 8,
+      SideBySide(golden->pixels.data(), actual.data(), heat.data(), width, height);
+  WritePng((dir / (s.name + "_side.png")).string(), SideBySideWidth(width), height, 3, 8,
            side.data());
 }
 
@@ -198,18 +198,18 @@ CheckRow CheckScene(GlContext& gl, const GoldenManifest& m, const GoldenScene& s
     if (row.verdict.empty()) row.verdict = "no golden image (run golden update)";
   } else {
     golden = ReadPng(png);
-    if (golden->channels != 3 || golden->bit_depth != 8 || golden->width != s.width ||
-        golden->height != s.height) {
+    if (golden->channels != 3 || golden->bit_depth != 8 || golden->width != actual.width ||
+        golden->height != actual.height) {
       if (row.verdict.empty()) {
         row.verdict = "golden image is " + std::to_string(golden->width) + "x" +
                       std::to_string(golden->height) + " with " + std::to_string(golden->channels) +
-                      " channels, the scene " + std::to_string(s.width) + "x" +
-                      std::to_string(s.height) + " RGB (run golden update)";
+                      " channels, the scene " + std::to_string(actual.width) + "x" +
+                      std::to_string(actual.height) + " RGB (run golden update)";
       }
       golden.reset();
     } else {
       row.have_pixels = true;
-      row.stats = CompareRgb(golden->pixels.data(), actual.rgb.data(), s.width, s.height,
+      row.stats = CompareRgb(golden->pixels.data(), actual.rgb.data(), actual.width, actual.height,
                              s.tolerance.threshold);
       const double over = s.tolerance.max_fraction > 0
                               ? row.stats.fraction_over / s.tolerance.max_fraction
@@ -229,7 +229,7 @@ CheckRow CheckScene(GlContext& gl, const GoldenManifest& m, const GoldenScene& s
   }
   if (!row.state_equal) row.badness += 1e6;  // a changed state outranks any pixel difference
   if (!row.have_pixels) row.badness += 1e9;  // nothing to compare at all: worst
-  WriteFailureImages(out, s, golden ? &*golden : nullptr, actual.rgb);
+  WriteFailureImages(out, s, golden ? &*golden : nullptr, actual.width, actual.height, actual.rgb);
   if (!row.state_equal && !golden_state.is_null()) {
     WriteJson((fs::path(out) / (s.name + "_state_actual.json")).string(), actual.state);
   }
@@ -315,10 +315,10 @@ void RunUpdate(const GoldenOptions& o) {
     std::string change = "new";
     if (fs::exists(png)) {
       const Image old = ReadPng(png);
-      if (old.channels == 3 && old.bit_depth == 8 && old.width == s->width &&
-          old.height == s->height) {
-        const ImageDiffStats d = CompareRgb(old.pixels.data(), actual.rgb.data(), s->width,
-                                            s->height, s->tolerance.threshold);
+      if (old.channels == 3 && old.bit_depth == 8 && old.width == actual.width &&
+          old.height == actual.height) {
+        const ImageDiffStats d = CompareRgb(old.pixels.data(), actual.rgb.data(), actual.width,
+                                            actual.height, s->tolerance.threshold);
         char buf[96];
         std::snprintf(buf, sizeof(buf), "max diff %d, %.3f%% over threshold, rms %.3f", d.max_diff,
                       100 * d.fraction_over, d.rms);
@@ -328,7 +328,7 @@ void RunUpdate(const GoldenOptions& o) {
       }
     }
     // each file appears whole or not at all (temporary name, then rename)
-    WritePng(png, s->width, s->height, 3, 8, actual.rgb.data());
+    WritePng(png, actual.width, actual.height, 3, 8, actual.rgb.data());
     WriteJson(GoldenState(manifest, *s), actual.state);
     std::printf("wrote %s and %s_state.json (%s)\n", png.c_str(), s->name.c_str(), change.c_str());
     std::fflush(stdout);  // progress shows in CI logs as it happens

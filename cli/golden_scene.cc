@@ -308,7 +308,9 @@ SceneResult RenderScene(GlContext& gl, const GoldenScene& scene, const std::stri
   Renderer renderer(gl, env.model(), options);
 
   SceneResult result;
-  result.rgb.resize(static_cast<size_t>(scene.width) * scene.height * 3);
+  result.width = renderer.width();
+  result.height = renderer.height();
+  result.rgb.resize(static_cast<size_t>(result.width) * result.height * 3);
   // the trail overlay grows one point per rendered step: render every step for it
   StepCallback on_step;
   if (options.overlays.trail) {

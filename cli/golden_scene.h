@@ -41,7 +41,7 @@ struct GoldenScene {
   int steps = 0;                ///< policy steps before the frame (0 = the reset frame)
   std::string camera = "default";  ///< as --camera
   std::string overlay = "none";    ///< as --overlay
-  int width = 320;                 ///< pixels
+  int width = 320;                 ///< pixels of each camera tile (the frame is FrameSize)
   int height = 240;                ///< pixels
   int msaa = 4;                    ///< multisample count, pinned so goldens never follow a default
   GoldenTolerance tolerance;       ///< image tolerance
@@ -65,6 +65,8 @@ std::vector<const GoldenScene*> SelectScenes(const GoldenManifest& manifest,
 
 /// What one scene gives: its frame and the trajectory up to it.
 struct SceneResult {
+  int width = 0;             ///< frame width: the scene's width per camera tile (FrameSize)
+  int height = 0;            ///< frame height
   std::vector<uint8_t> rgb;  ///< width * height * 3 bytes, row 0 = top
   nlohmann::json state;      ///< see StateJson
 };

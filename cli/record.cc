@@ -28,6 +28,7 @@
 #include "cli/episode_scheduler.h"
 #include "cli/node_probe.h"
 #include "cli/progress.h"
+#include "cli/record_from.h"
 #include "cli/render_common.h"
 #include "cli/run_folder.h"
 #include "cli/report.h"
@@ -37,6 +38,7 @@
 #include "render/renderer.h"
 #include "render/video_writer.h"
 #include "src/errors.h"
+#include "src/hindsight.h"
 #include "src/json_util.h"
 
 namespace fetchscope::cli {
@@ -73,6 +75,7 @@ struct RecordOptions {
   std::string replay_dtype;         // --replay-dtype: "", float32, float64
   bool episodes_given = false;      // --episodes was on the command line
   bool no_report = false;           // no index.html (cli/report.h)
+  std::string from;                 // record --from: a run folder or trajectory JSON
 };
 
 // Everything the parent decided before the workers start; workers only read it.
@@ -86,6 +89,8 @@ struct RecordPlan {
   std::vector<std::string> formats;  // --format, in the order given
   GpuChoice gpu;           // EGL devices, worker w on devices[w % size]
   int encoders = 1;        // episodes a worker encodes at once
+  const TrajectorySource* from = nullptr;  // record --from: the episodes to replay
+  bool hindsight = false;  // the hindsight overlay: run the episode first, then render it
 };
 
 // One rendered frame travelling from the render thread to an episode's encoder thread.
@@ -195,6 +200,8 @@ class EpisodeEncoder {
     render_s_ = render_s;
     Enqueue(nullptr, Command::kClose);
   }
+  /// Members added to the manifest entry (e.g. "hindsight"); call before Close.
+  void SetExtra(nlohmann::json extra) { extra_ = std::move(extra); }
   /// No more frames and no files: the partial video is removed.
   void Abort() { Enqueue(nullptr, Command::kAbort); }
   /// Waits for the thread; rethrows its failure.
@@ -291,7 +298,7 @@ class EpisodeEncoder {
           {"frames", writers_[i].frames_encoded()}};
     }
     const VideoWriter& first = writers_.front();
-    channel_.Done(k_, {{"index", k_},
+    nlohmann::json entry = {{"index", k_},
                        {"video", fs::path(first.path()).filename().string()},
                        {"videos", videos},
                        {"sheet", name_ + "_sheet.png"},
@@ -306,7 +313,9 @@ class EpisodeEncoder {
                        {"encoded_width", first.encoded_width()},
                        {"encoded_height", first.encoded_height()},
                        {"timings_s", {{"sim", sim_s_}, {"render", render_s_},
-                                      {"encode", encode_s_}, {"write", write_s}}}});
+                                      {"encode", encode_s_}, {"write", write_s}}}};
+    if (extra_.is_object()) entry.update(extra_);
+    channel_.Done(k_, entry);
   }
 
   const RecordPlan& plan_;
@@ -319,6 +328,7 @@ class EpisodeEncoder {
   std::vector<VideoWriter> writers_;  // one per plan.formats entry, in that order
   std::vector<SheetTile> tiles_;
   EpisodeRecord episode_;
+  nlohmann::json extra_;
   double sim_s_ = 0, render_s_ = 0, encode_s_ = 0;
   std::exception_ptr error_;
   std::atomic<bool> finished_{false};
@@ -335,8 +345,9 @@ class RecordRunner : public EpisodeRunner {
   RecordRunner(const RecordPlan& plan, int worker)
       : plan_(plan), worker_(worker),
         sequence_(std::make_unique<FetchEnv>(*plan.spec, plan.assets),
-                  MakePolicy(plan.o->policy, *plan.spec, plan.policy_context), plan.seed,
-                  plan.o->steps) {}
+                  // --from replays recorded actions: the policy that made them is not run
+                  MakePolicy(plan.from ? "zero" : plan.o->policy, *plan.spec, plan.policy_context),
+                  plan.seed, plan.o->steps) {}
 
   ~RecordRunner() override {
     encoders_.clear();  // aborts and joins whatever is still running (a failure elsewhere)
@@ -393,11 +404,13 @@ class RecordRunner : public EpisodeRunner {
       const auto render_start = Clock::now();
       sim_s += std::chrono::duration<double>(render_start - sim_start).count();
       Frame* f = pool_->Acquire();
-      const FrameInfo info = MakeFrameInfo(sequence_.env(), record);
+      FetchEnv& env = render_env_ ? *render_env_ : sequence_.env();
+      FrameInfo info = MakeFrameInfo(env, record);
+      AddRelabelled(record.t, &info);
       f->t = record.t;
       f->label = TileLabel(info);
       in_flight.push_back(f);
-      renderer_->Submit(sequence_.env().data(), info, f->rgb.data());
+      renderer_->Submit(env.data(), info, f->rgb.data());
       while (renderer_->pending() >= renderer_->pipeline_depth()) collect_oldest();
       sim_start = Clock::now();
       render_s += std::chrono::duration<double>(sim_start - render_start).count();
@@ -405,7 +418,7 @@ class RecordRunner : public EpisodeRunner {
     };
     EpisodeRecord episode;
     try {
-      episode = sequence_.Play(k, on_step);
+      episode = PlayEpisode(k, on_step, channel);
       const auto drain_start = Clock::now();
       while (!in_flight.empty()) collect_oldest();
       render_s += Since(drain_start);
@@ -414,6 +427,7 @@ class RecordRunner : public EpisodeRunner {
       for (Frame* f : in_flight) pool_->Release(f);
       throw;  // aborts `encoder`
     }
+    encoder->SetExtra({{"hindsight", HindsightCounts(episode)}});
     encoder->Close(std::move(episode), sim_s, render_s);
     encoders_.push_back(std::move(encoder));
   }
@@ -427,9 +441,75 @@ class RecordRunner : public EpisodeRunner {
   }
 
  private:
+  // Plays episode k, calling on_step (which renders) at every step: live from the policy; or,
+  // for --from and the hindsight overlay, a replay of recorded actions (the recording's, or
+  // those of a first pass run here without rendering) with the hindsight goals sampled first.
+  EpisodeRecord PlayEpisode(int k, const StepCallback& on_step, WorkerChannel& channel) {
+    hindsight_.reset();
+    if (!plan_.from && !plan_.hindsight) return sequence_.Play(k, on_step);
+    EpisodeRecord first_pass;
+    const std::vector<StepRecord>* script = nullptr;
+    if (plan_.from) {
+      script = &plan_.from->episodes.at(k).steps;
+    } else {
+      first_pass = sequence_.Play(k, [&](const StepRecord&, const StepResult*) {
+        return !channel.StopRequested();
+      });
+      script = &first_pass.steps;
+    }
+    if (plan_.hindsight) hindsight_ = SampleEpisodeHindsight(k, *script);
+    if (!replayer_) {
+      if (!plan_.from) replay_env_ = std::make_unique<FetchEnv>(*plan_.spec, plan_.assets);
+      replayer_.emplace(plan_.from ? sequence_.env() : *replay_env_, plan_.seed);
+    }
+    // the replay renders from the env of sequence_ (--from) or replay_env_ (hindsight)
+    render_env_ = plan_.from ? &sequence_.env() : replay_env_.get();
+    const std::string check = plan_.from ? plan_.from->episodes.at(k).file : std::string();
+    EpisodeRecord episode = replayer_->Replay(k, *script, check, on_step);
+    render_env_ = nullptr;
+    return episode;
+  }
+
+  HindsightEpisode SampleEpisodeHindsight(int k, const std::vector<StepRecord>& steps) {
+    std::vector<std::array<double, 3>> achieved;
+    for (const StepRecord& s : steps) achieved.push_back(s.obs.achieved_goal);
+    const FetchEnv& env = sequence_.env();
+    return SampleHindsight(
+        achieved, steps.front().obs.desired_goal, HindsightSeed(plan_.seed, k), kHindsightK,
+        [&env](const auto& a, const auto& g) { return env.ComputeReward(a, g); },
+        [&env](const auto& a, const auto& g) { return env.IsSuccess(a, g); });
+  }
+
+  // The manifest entry's "hindsight": relabelled successes (of k per transition) against the
+  // episode's own successful transitions.
+  nlohmann::json HindsightCounts(const EpisodeRecord& episode) {
+    const HindsightEpisode h =
+        hindsight_ ? *hindsight_ : SampleEpisodeHindsight(episode.index, episode.steps);
+    const int transitions = static_cast<int>(episode.steps.size()) - 1;
+    return {{"relabelled_successes", h.relabelled_successes},
+            {"original_successes", h.original_successes},
+            {"k", kHindsightK},
+            {"transitions", transitions}};
+  }
+
+  // The hindsight overlay's goals for the frame after step t (the transition t-1 -> t).
+  void AddRelabelled(int t, FrameInfo* info) const {
+    if (!hindsight_ || t < 1 || t > static_cast<int>(hindsight_->transitions.size())) return;
+    int successes = 0;
+    for (const HindsightGoal& g : hindsight_->transitions[t - 1]) {
+      info->relabelled.push_back({g.goal, g.success});
+      successes += g.success;
+    }
+    info->relabelled_successes = successes;
+  }
+
   const RecordPlan& plan_;
   const int worker_;
   EpisodeSequence sequence_;
+  std::unique_ptr<FetchEnv> replay_env_;       // hindsight: the env the replay renders
+  std::optional<EpisodeReplayer> replayer_;
+  FetchEnv* render_env_ = nullptr;             // the env being replayed, while it is
+  std::optional<HindsightEpisode> hindsight_;  // this episode's relabelling (hindsight overlay)
   // Lifetime order: the GL context outlives the renderer; encoders go first (they hold frames).
   std::unique_ptr<GlContext> gl_;
   std::optional<Renderer> renderer_;
@@ -449,6 +529,25 @@ void LimitLlvmpipeThreads(int jobs) {
 int EncodersPerWorker(int jobs) {
   const int cores = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   return std::max(1, std::min(4, cores / std::max(1, jobs)));
+}
+
+// record --from: the recorded episodes' indices, ascending.
+std::vector<int> FromEpisodes(const TrajectorySource& from) {
+  std::vector<int> out;
+  for (const auto& [k, episode] : from.episodes) out.push_back(k);
+  return out;
+}
+
+void RunRecord(const RecordOptions& o, const std::string& command_line,
+               const TrajectorySource* from = nullptr);
+
+// record --from: the trajectory sets env, seed, policy, steps and episodes; then as record.
+void RunRecordFrom(RecordOptions o, const CLI::App& sub, const std::string& command_line) {
+  CheckFromFlags(sub, o.from);
+  const TrajectorySource source = LoadTrajectorySource(o.from);
+  ApplyFromSource(source, sub, &o.env.env_id, &o.env.seed, &o.policy, &o.steps, &o.episodes,
+                  &o.env.assets);
+  RunRecord(o, command_line, &source);
 }
 
 // Starting an exec: child is the only full check of it, and the workers do that; every other
@@ -533,17 +632,18 @@ std::vector<int> RecordEpisodeList(RecordOptions* o, const Shard& shard, const R
   return mine;
 }
 
-void RunRecord(const RecordOptions& options, const std::string& command_line) {
+void RunRecord(const RecordOptions& options, const std::string& command_line,
+               const TrajectorySource* from) {
   const auto wall_start = Clock::now();
   RecordOptions o = options;  // a trajectory replay sets the episodes
   RecordPlan plan;
   plan.o = &o;
+  plan.from = from;
+  plan.hindsight = ParseOverlays(o.view.overlay).hindsight;
   plan.spec = &FindEnvSpec(o.env.env_id);
   plan.seed = ParseSeed(o.env.seed);
   const Shard shard = ResolveShard(o.shard, o.shard_count);
   const WorkerMode mode = ParseWorkerMode(o.worker_mode);
-  plan.video.width = o.view.width;
-  plan.video.height = o.view.height;
   plan.video.fps = o.fps;
   plan.video.codec = o.codec;
   plan.video.crf = o.crf;
@@ -552,7 +652,7 @@ void RunRecord(const RecordOptions& options, const std::string& command_line) {
   plan.video.gif_width = o.gif_width;
   plan.formats = ParseVideoFormats(o.formats);
   ValidateVideoOptions(plan.video);
-  const std::vector<int> episodes = RecordEpisodeList(&o, shard, plan);
+  const std::vector<int> episodes = from ? FromEpisodes(*from) : RecordEpisodeList(&o, shard, plan);
   const int jobs = ResolveJobs(o.jobs, static_cast<int>(episodes.size()));
   plan.encoders = EncodersPerWorker(jobs);
 
@@ -563,15 +663,18 @@ void RunRecord(const RecordOptions& options, const std::string& command_line) {
   plan.policy_context.stop_requested = [] { return StopSignal() != 0; };
   plan.policy_context.replay_dtype = o.replay_dtype;
   plan.policy_context.episode_indices = episodes;
-  ValidatePolicy(o.policy, *plan.spec, plan.policy_context);
+  if (!from) ValidatePolicy(o.policy, *plan.spec, plan.policy_context);
   Font::Default();  // the sheets' font: missing or unreadable, the run stops before any file
   plan.assets = ResolveAssets(o.env.assets);
   std::string model_path;
   {
     FetchEnv env(*plan.spec, plan.assets);  // bad assets and bad cameras fail here
-    MakeRenderOptions(o.view, env.model());
+    const FrameDims frame = FrameSize(MakeRenderOptions(o.view, env.model()));
+    plan.video.width = frame.width;  // --width/--height size each camera's tile
+    plan.video.height = frame.height;
     model_path = env.model_path();
   }
+  ValidateVideoOptions(plan.video);
 
   // The GPUs and the encoder, decided once (driver work in a child process).
   const NodeProbe node = ProbeNode(o.view, &plan.video);
@@ -654,6 +757,7 @@ void RunRecord(const RecordOptions& options, const std::string& command_line) {
       {"env_id", plan.spec->id},
       {"seed", plan.seed},
       {"policy", o.policy},
+      {"from", from ? nlohmann::json(from->path) : nlohmann::json(nullptr)},
       {"episodes_requested", o.episodes},
       {"steps_per_episode", o.steps},
       {"sheet_every", o.sheet_every},
@@ -678,8 +782,8 @@ void RunRecord(const RecordOptions& options, const std::string& command_line) {
                    {"gl_version", first_worker.value("gl_version", "")}}},
       {"video", {{"codec", codec_used}, {"codec_reason", node.codec.reason},
                  {"crf", o.crf}, {"preset", o.preset.empty() ? kDefaultVideoPreset : o.preset},
-                 {"fps", o.fps}, {"width", o.view.width}, {"height", o.view.height},
-                 {"encoded_width", (o.view.width + 1) & ~1}, {"encoded_height", (o.view.height + 1) & ~1},
+                 {"fps", o.fps}, {"width", plan.video.width}, {"height", plan.video.height},
+                 {"encoded_width", (plan.video.width + 1) & ~1}, {"encoded_height", (plan.video.height + 1) & ~1},
                  {"encoder_threads", plan.video.threads}, {"encoders_per_worker", plan.encoders},
                  {"container", plan.formats.front()}, {"formats", plan.formats},
                  {"gif", {{"fps", std::min(o.gif_fps, o.fps)}, {"width", o.gif_width}}},
@@ -773,8 +877,10 @@ void RegisterRecord(CLI::App& app) {
                   "Indexed Job's completions)");
   sub->add_flag("--no-report", o->no_report,
                 "Do not write the run's HTML report (index.html; see `fetchscope report`)");
+  AddFromOption(sub, &o->from);
   sub->callback([o, sub]() {
     o->episodes_given = sub->count("--episodes") > 0;
+    if (!o->from.empty()) return RunRecordFrom(*o, *sub, CommandLine());
     RunRecord(*o, CommandLine());
   });
 }

@@ -19,6 +19,29 @@ std::string LayerPath(const std::string& path, const std::string& layer) {
   return (p.parent_path() / (p.stem().string() + "_" + layer + p.extension().string())).string();
 }
 
+// frame_segmentation.png -> frame_segmentation_legend.json
+std::string LegendPath(const std::string& png) {
+  std::filesystem::path p(png);
+  return (p.parent_path() / (p.stem().string() + "_legend.json")).string();
+}
+
+nlohmann::json SegmentationLegendJson(const std::vector<SegmentObject>& objects) {
+  nlohmann::json list = nlohmann::json::array();
+  for (const SegmentObject& o : objects) {
+    char hex[8];
+    std::snprintf(hex, sizeof(hex), "#%02x%02x%02x", o.color[0], o.color[1], o.color[2]);
+    list.push_back({{"color", hex},
+                    {"rgb", {o.color[0], o.color[1], o.color[2]}},
+                    {"body", o.body},
+                    {"geoms", o.geoms},
+                    {"site", o.site.empty() ? nlohmann::json(nullptr) : nlohmann::json(o.site)},
+                    {"pixels", o.pixels}});
+  }
+  return {{"background", "#000000"},
+          {"note", "one colour per body (all its geoms) or site; fixed palette, the same in every frame"},
+          {"objects", list}};
+}
+
 }  // namespace
 
 void RegisterRender(CLI::App& app) {
@@ -37,8 +60,10 @@ void RegisterRender(CLI::App& app) {
       ->check(CLI::Range(0, 50));
   sub->add_option("--policy", *policy_spec, kPolicyHelp)->capture_default_str();
   sub->add_option("--layers", *layers,
-                  "Comma list of rgb, depth (16-bit PNG, millimetres), segmentation (colour per "
-                  "object); extra layers go to NAME_depth.png, NAME_segmentation.png")
+                  "Comma list of rgb, depth (16-bit PNG, millimetres), segmentation (a fixed, "
+                  "distinct colour per body or site, black background, with a legend JSON "
+                  "NAME_legend.json beside it naming each colour's body and geoms); extra layers "
+                  "go to NAME_depth.png, NAME_segmentation.png")
       ->capture_default_str();
   sub->add_option("-o,--output", *output, "Output PNG")->required();
   sub->add_flag("-v,--verbose", *verbose, "Print the GL vendor, renderer and version, and the MSAA samples used and why");
@@ -78,23 +103,25 @@ void RegisterRender(CLI::App& app) {
     }
     const FrameInfo info = MakeFrameInfo(fetch, episode.steps.back());
     if (want_rgb) {
-      std::vector<uint8_t> rgb(static_cast<size_t>(view->width) * view->height * 3);
+      std::vector<uint8_t> rgb(static_cast<size_t>(renderer.width()) * renderer.height() * 3);
       renderer.Render(fetch.data(), info, rgb.data());
-      WritePng(*output, view->width, view->height, 3, 8, rgb.data());
+      WritePng(*output, renderer.width(), renderer.height(), 3, 8, rgb.data());
       std::printf("wrote %s\n", output->c_str());
     }
     std::vector<uint8_t> layer;
     if (want_depth) {
       renderer.RenderLayer(fetch.data(), info, Layer::kDepth, &layer);
       const std::string path = want_rgb ? LayerPath(*output, "depth") : *output;
-      WritePng(path, view->width, view->height, 1, 16, layer.data());
+      WritePng(path, renderer.width(), renderer.height(), 1, 16, layer.data());
       std::printf("wrote %s (depth, 16-bit, millimetres)\n", path.c_str());
     }
     if (want_seg) {
       renderer.RenderLayer(fetch.data(), info, Layer::kSegmentation, &layer);
       const std::string path = (want_rgb || want_depth) ? LayerPath(*output, "segmentation") : *output;
-      WritePng(path, view->width, view->height, 3, 8, layer.data());
-      std::printf("wrote %s (segmentation)\n", path.c_str());
+      WritePng(path, renderer.width(), renderer.height(), 3, 8, layer.data());
+      const std::string legend = LegendPath(path);
+      WriteJson(legend, SegmentationLegendJson(renderer.segmentation_legend()));
+      std::printf("wrote %s (segmentation) and %s (its colours)\n", path.c_str(), legend.c_str());
     }
   });
 }

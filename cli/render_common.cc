@@ -15,11 +15,25 @@ void AddViewOptions(CLI::App* sub, ViewOptions* o) {
                   "gripper), or several joined by commas to tile them")
       ->capture_default_str();
   sub->add_option("--overlay", o->overlay,
-                  "Comma list of goal, achieved, hud, action, trail (spaces after the commas "
-                  "are fine); or all, or none")
+                  "Comma list of goal, achieved, hud, action, trail, labels (camera names on "
+                  "tiled views; on by default), hindsight (record only: the goals HER's future "
+                  "strategy relabels each transition with, green = relabelled success, red = "
+                  "failure); or all, or none. Spaces after the commas are fine")
       ->capture_default_str();
-  sub->add_option("--width", o->width, "Frame width in pixels")->capture_default_str()->check(CLI::Range(1, 8192));
-  sub->add_option("--height", o->height, "Frame height in pixels")->capture_default_str()->check(CLI::Range(1, 8192));
+  sub->add_option("--width", o->width,
+                  "Width in pixels of each camera's view: N tiled cameras make a frame N views "
+                  "wide (a near-square grid from 4 on)")
+      ->capture_default_str()->check(CLI::Range(1, 8192));
+  sub->add_option("--height", o->height, "Height in pixels of each camera's view")
+      ->capture_default_str()->check(CLI::Range(1, 8192));
+  sub->add_option("--hud-position", o->hud_position,
+                  "Corner of the HUD: top-left, top-right, bottom-left or bottom-right (within "
+                  "the tile at that corner). The HUD text grows with the view and is left out "
+                  "of views too small to read it")
+      ->capture_default_str();
+  sub->add_option("--hud-opacity", o->hud_opacity,
+                  "Opacity of the black box behind the HUD and tile labels: 0 (none) .. 1")
+      ->capture_default_str();
   sub->add_option("--backend", o->backend,
                   "auto (EGL, then OSMesa), egl or osmesa; default: $MUJOCO_GL, else auto");
   sub->add_option("--msaa", o->msaa,
@@ -75,6 +89,8 @@ RenderOptions MakeRenderOptions(const ViewOptions& view, const mjModel* model) {
   options.overlays = ParseOverlays(view.overlay);
   options.msaa_samples = ParseMsaa(view.msaa);
   options.readback = ParseReadback(view.readback);
+  options.hud_position = ParseHudPosition(view.hud_position);
+  options.hud_opacity = CheckHudOpacity(view.hud_opacity);
   return options;
 }
 

@@ -16,13 +16,15 @@ namespace fetchscope::cli {
 /// --camera, --overlay, --width, --height, --backend, --gpu, --msaa.
 struct ViewOptions {
   std::string camera = "default";                 ///< see ParseCameraList
-  std::string overlay = "goal,achieved,hud";      ///< see ParseOverlays
+  std::string overlay = "goal,achieved,hud,labels";///< see ParseOverlays
   int width = 480;                                ///< pixels
   int height = 480;                               ///< pixels
   std::string backend;                            ///< auto|egl|osmesa; empty: $MUJOCO_GL or auto
   std::string gpu;                                ///< see ParseGpuSpec; empty: from the environment
   std::string msaa = "auto";                      ///< see ParseMsaa
   std::string readback = "auto";                  ///< see ParseReadback
+  std::string hud_position = "top-left";          ///< see ParseHudPosition
+  double hud_opacity = 0.6;                       ///< see CheckHudOpacity
 };
 
 /// The accepted --readback values, and RenderOptions::readback for one (UsageError otherwise).
@@ -37,7 +39,8 @@ inline constexpr const char* kMsaaValues[] = {"auto", "0", "1", "2", "4", "8", "
 /// value and listing kMsaaValues.
 int ParseMsaa(const std::string& value);
 
-/// The renderer options for `view` on `model` (parses --camera and --overlay).
+/// The renderer options for `view` on `model` (parses --camera, --overlay, --hud-position and
+/// checks --hud-opacity). The frame is FrameSize(result): --width/--height size each tile.
 RenderOptions MakeRenderOptions(const ViewOptions& view, const mjModel* model);
 
 /// Adds the view options to `sub`.

@@ -10,6 +10,8 @@
 #include <cstddef>
 #include <memory>
 #include <type_traits>
+#include <map>
+#include <set>
 #include <string>
 
 #include "src/errors.h"
@@ -73,19 +75,38 @@ GlLimits QueryLimits(const GlContext& gl) {
   return limits;
 }
 
-// Tiles for n cameras: one row up to three, then a near-square grid; row 0 at the top.
-std::vector<mjrRect> TileFrame(int n, int width, int height) {
-  int cols = n <= 3 ? n : static_cast<int>(std::ceil(std::sqrt(static_cast<double>(n))));
-  int rows = (n + cols - 1) / cols;
+// Columns and rows of the tile grid for n cameras: one row up to three, then near-square.
+std::pair<int, int> TileGrid(int n) {
+  const int cols = n <= 3 ? n : static_cast<int>(std::ceil(std::sqrt(static_cast<double>(n))));
+  return {cols, (n + cols - 1) / cols};
+}
+
+// Tiles of tile_w x tile_h for n cameras in a frame of frame_h rows (GL: bottom-left origin).
+std::vector<mjrRect> TileFrame(int n, int tile_w, int tile_h, int frame_h) {
+  const int cols = TileGrid(n).first;
   std::vector<mjrRect> tiles;
   for (int i = 0; i < n; ++i) {
-    int col = i % cols, row = i / cols;
-    int left = col * width / cols, right = (col + 1) * width / cols;
-    int top = row * height / rows, bottom = (row + 1) * height / rows;  // from the top
-    tiles.push_back(mjrRect{left, height - bottom, right - left, bottom - top});
+    const int col = i % cols, row = i / cols;
+    tiles.push_back(mjrRect{col * tile_w, frame_h - (row + 1) * tile_h, tile_w, tile_h});
   }
   return tiles;
 }
+
+// The tile's rectangle with row 0 at the top, as the read-back frame has it.
+PixelRect TopDown(const mjrRect& t, int frame_h) {
+  return PixelRect{t.left, frame_h - t.bottom - t.height, t.width, t.height};
+}
+
+// A tile's label: the camera as named (free cameras as "free").
+std::string CameraLabel(const CameraSpec& spec) {
+  if (spec.name.rfind("free:", 0) == 0) return "free";
+  return spec.name;
+}
+
+// Kelly's colours of maximum contrast, white and black left out.
+constexpr uint32_t kKelly[] = {0xF3C300, 0x875692, 0xF38400, 0xA1CAF1, 0xBE0032, 0xC2B280, 0x848482,
+                               0x008856, 0xE68FAC, 0x0067A5, 0xF99379, 0x604E97, 0xF6A600, 0xB3446C,
+                               0xDCD300, 0x882D17, 0x8DB600, 0x654522, 0xE25822, 0x2B3D26};
 
 }  // namespace
 
@@ -129,6 +150,39 @@ struct Renderer::PboGl {
     return missing;
   }
 };
+std::array<uint8_t, 3> SegmentationColor(int index) {
+  constexpr int n = static_cast<int>(sizeof(kKelly) / sizeof(kKelly[0]));
+  if (index >= 0 && index < n) {
+    const uint32_t c = kKelly[index];
+    return {static_cast<uint8_t>(c >> 16), static_cast<uint8_t>(c >> 8), static_cast<uint8_t>(c)};
+  }
+  // golden-angle hues in integer arithmetic (no platform-dependent rounding): hue in 1/3600
+  // turns, saturation 65%, value alternating 95% / 70%
+  const int i = std::max(0, index - n);
+  const int hue = (i * 2221) % 3600;  // 2221/3600 ~ 0.617 turn; 2221 is prime: no repeats
+  const int v = (i % 2 == 0) ? 242 : 178;
+  const int lo = v * 35 / 100;
+  const int sector = hue / 600, f = hue % 600;
+  const int up = lo + (v - lo) * f / 600, down = v - (v - lo) * f / 600;
+  int r = v, g = lo, b = lo;
+  switch (sector) {
+    case 0: r = v; g = up; b = lo; break;
+    case 1: r = down; g = v; b = lo; break;
+    case 2: r = lo; g = v; b = up; break;
+    case 3: r = lo; g = down; b = v; break;
+    case 4: r = up; g = lo; b = v; break;
+    default: r = v; g = lo; b = down; break;
+  }
+  std::array<uint8_t, 3> c = {static_cast<uint8_t>(r), static_cast<uint8_t>(g), static_cast<uint8_t>(b)};
+  if (c[0] == 0 && c[1] == 0 && c[2] == 0) c[2] = 1;  // black is the background
+  return c;
+}
+
+FrameDims FrameSize(const RenderOptions& options) {
+  const int n = std::max<int>(1, static_cast<int>(options.cameras.size()));
+  const auto [cols, rows] = TileGrid(n);
+  return FrameDims{cols * options.width, rows * options.height};
+}
 
 std::string SoftwareRendererName(const std::string& gl_renderer) {
   std::string lower = gl_renderer;
@@ -175,13 +229,13 @@ int Renderer::ResolveMsaa(int max_samples) {
 }
 
 Renderer::Renderer(GlContext& gl, mjModel* model, const RenderOptions& options)
-    : gl_(gl), model_(model), options_(options) {
-  const int w = options_.width, h = options_.height;
-  if (w <= 0 || h <= 0) {
-    throw UsageError("frame size " + std::to_string(w) + "x" + std::to_string(h) +
-                     " is not positive; accepted: 1.." + std::to_string(kMaxFrameSide) +
-                     " pixels per side");
+    : gl_(gl), model_(model), options_(options), frame_(FrameSize(options)) {
+  if (options_.width <= 0 || options_.height <= 0) {
+    throw UsageError("frame size " + std::to_string(options_.width) + "x" +
+                     std::to_string(options_.height) + " is not positive; accepted: 1.." +
+                     std::to_string(kMaxFrameSide) + " pixels per side");
   }
+  const int w = frame_.width, h = frame_.height;
   const int msaa = options_.msaa_samples;
   if (msaa != kMsaaAuto && msaa != kMsaaModel && msaa != 0 && !IsPowerOfTwoUpTo16(msaa)) {
     throw UsageError("msaa " + std::to_string(msaa) + " is not accepted; use auto, 0, 1, 2, 4, 8 or " +
@@ -200,7 +254,7 @@ Renderer::Renderer(GlContext& gl, mjModel* model, const RenderOptions& options)
     options_.cameras.push_back(CameraSpec{CameraSpec::kDefault, "default", DefaultFreeCamera()});
   }
   for (const CameraSpec& spec : options_.cameras) cameras_.push_back(ToMjvCamera(spec, model_));
-  tiles_ = TileFrame(static_cast<int>(cameras_.size()), w, h);
+  tiles_ = TileFrame(static_cast<int>(cameras_.size()), options_.width, options_.height, h);
   long covered = 0;
   for (const mjrRect& t : tiles_) covered += static_cast<long>(t.width) * t.height;
   tiles_leave_gaps_ = covered < static_cast<long>(w) * h;
@@ -254,7 +308,7 @@ Renderer::~Renderer() {
     std::fprintf(stderr,
                  "fetchscope profile: %ld frames %dx%d msaa %d on %s, ms/frame: scene %.2f, "
                  "submit %.2f, raster %.2f, readback %.2f, flip %.2f\n",
-                 p.frames, options_.width, options_.height, msaa_samples_,
+                 p.frames, frame_.width, frame_.height, msaa_samples_,
                  gl_.info().renderer.c_str(), p.scene_ms / n, p.submit_ms / n, p.raster_ms / n,
                  p.readback_ms / n, p.flip_ms / n);
   }
@@ -292,13 +346,13 @@ void Renderer::SetUpReadback() {
   int alignment = 4;
   gl->GetIntegerv(kGlPackAlignment, &alignment);
   if (alignment < 1) alignment = 1;
-  const size_t row = static_cast<size_t>(options_.width) * 3;
+  const size_t row = static_cast<size_t>(frame_.width) * 3;
   gl->row_stride = (row + alignment - 1) / alignment * alignment;
   gl->GenBuffers(kReadbackDepth, pbos_);
   for (unsigned pbo : pbos_) {
     gl->BindBuffer(kGlPixelPackBuffer, pbo);
     gl->BufferData(kGlPixelPackBuffer,
-                   static_cast<std::ptrdiff_t>(gl->row_stride * options_.height), nullptr,
+                   static_cast<std::ptrdiff_t>(gl->row_stride * frame_.height), nullptr,
                    kGlStreamRead);
   }
   gl->BindBuffer(kGlPixelPackBuffer, 0);
@@ -313,7 +367,7 @@ void Renderer::StartAsyncRead(int slot) {
   const auto start = Clock::now();
   PboGl& g = *pbo_gl_;
   mjrContext* con = context_->get();
-  const int w = options_.width, h = options_.height;
+  const int w = frame_.width, h = frame_.height;
   // as mjr_readPixels: resolve the multisampled buffer with a blit, then read the colour
   if (con->offSamples) {
     g.BindFramebuffer(kGlReadFramebuffer, con->offFBO);
@@ -342,13 +396,14 @@ void Renderer::Submit(const mjData* data, const FrameInfo& info, uint8_t* rgb) {
   Draw(data, info, /*overlays=*/true);
   if (!async_) {
     ReadRgb(rgb);
-    pending_.push_back({rgb, -1});
+    DrawText2d(info, rgb);
+    pending_.push_back({rgb, -1, {}});
     return;
   }
   const int slot = next_slot_;
   next_slot_ = (next_slot_ + 1) % kReadbackDepth;
   StartAsyncRead(slot);
-  pending_.push_back({rgb, slot});
+  pending_.push_back({rgb, slot, info});
 }
 
 uint8_t* Renderer::Collect() {
@@ -360,7 +415,7 @@ uint8_t* Renderer::Collect() {
   const auto start = Clock::now();
   PboGl& g = *pbo_gl_;
   const size_t stride = g.row_stride;
-  const int h = options_.height;
+  const int h = frame_.height;
   g.BindBuffer(kGlPixelPackBuffer, pbos_[frame.slot]);
   const auto* mapped = static_cast<const uint8_t*>(g.MapBufferRange(
       kGlPixelPackBuffer, 0, static_cast<std::ptrdiff_t>(stride * h), kGlMapReadBit));
@@ -371,10 +426,11 @@ uint8_t* Renderer::Collect() {
   }
   const auto copy_start = Clock::now();
   // the flip is the copy out of the buffer: rows come bottom-up
-  const size_t row = static_cast<size_t>(options_.width) * 3;
+  const size_t row = static_cast<size_t>(frame_.width) * 3;
   for (int r = 0; r < h; ++r) std::memcpy(frame.rgb + r * row, mapped + (h - 1 - r) * stride, row);
   g.UnmapBuffer(kGlPixelPackBuffer);
   g.BindBuffer(kGlPixelPackBuffer, 0);
+  DrawText2d(frame.info, frame.rgb);  // the HUD and tile labels, as Render draws them
   if (profile_) {
     profile_->readback_ms += std::chrono::duration<double, std::milli>(copy_start - start).count();
     profile_->flip_ms += MsSince(copy_start);
@@ -389,7 +445,7 @@ void Renderer::Draw(const mjData* data, const FrameInfo& info, bool overlays) {
   mjvScene* scene = scene_->get();
   mjrContext* con = context_->get();
   mjr_setBuffer(mjFB_OFFSCREEN, con);
-  const mjrRect frame{0, 0, options_.width, options_.height};
+  const mjrRect frame{0, 0, frame_.width, frame_.height};
   if (tiles_leave_gaps_) mjr_rectangle(frame, 0, 0, 0, 1);  // empty grid cells stay black
 
   // mjv_updateScene takes a non-const mjData but only reads it (positions, orientations,
@@ -418,7 +474,7 @@ void Renderer::Draw(const mjData* data, const FrameInfo& info, bool overlays) {
         AddOverlayGeoms(options_.overlays, info, grip, trail_, !placed, scene);
         if (options_.extra_geoms) options_.extra_geoms(scene);
       } else if (!placed) {
-        AddOverlayGeoms(OverlaySet{false, false, false, false, false}, info, {}, trail_, true,
+        AddOverlayGeoms(ParseOverlays("none"), info, {}, trail_, true,
                         scene);
       }
     } else {
@@ -430,10 +486,6 @@ void Renderer::Draw(const mjData* data, const FrameInfo& info, bool overlays) {
     submit_ms += MsSince(submit_start);
   }
   const auto hud_start = Clock::now();
-  if (overlays && options_.overlays.hud) {
-    HudText hud = FormatHud(info, options_.overlays);
-    mjr_overlay(mjFONT_NORMAL, mjGRID_TOPLEFT, frame, hud.labels.c_str(), hud.values.c_str(), con);
-  }
   if (profile_) {
     // GL queues the drawing; finishing here separates rasterisation from the readback
     // (only while profiling: it costs the overlap of the two)
@@ -448,14 +500,14 @@ void Renderer::Draw(const mjData* data, const FrameInfo& info, bool overlays) {
 }
 
 void Renderer::ReadRgb(uint8_t* rgb) {
-  const mjrRect frame{0, 0, options_.width, options_.height};
+  const mjrRect frame{0, 0, frame_.width, frame_.height};
   const auto start = Clock::now();
   // MuJoCo resolves the multisampled buffer (a blit) and reads GL_RGB rows bottom-up. On
   // llvmpipe this is ~0.5 ms of a 15-40 ms frame (README, "Where a frame's time goes"); on
   // hardware GL Submit/Collect read through pixel buffers instead, overlapping the next frame.
   mjr_readPixels(rgb_bottom_up_.data(), nullptr, frame, context_->get());
   const auto flip_start = Clock::now();
-  FlipRows(rgb_bottom_up_.data(), static_cast<size_t>(options_.width) * 3, rgb);
+  FlipRows(rgb_bottom_up_.data(), static_cast<size_t>(frame_.width) * 3, rgb);
   if (profile_) {
     profile_->readback_ms += std::chrono::duration<double, std::milli>(flip_start - start).count();
     profile_->flip_ms += MsSince(flip_start);
@@ -463,7 +515,7 @@ void Renderer::ReadRgb(uint8_t* rgb) {
 }
 
 void Renderer::FlipRows(const uint8_t* src, size_t row_bytes, uint8_t* dst) const {
-  const int h = options_.height;
+  const int h = frame_.height;
   for (int row = 0; row < h; ++row) {
     std::memcpy(dst + row * row_bytes, src + (h - 1 - row) * row_bytes, row_bytes);
   }
@@ -472,12 +524,42 @@ void Renderer::FlipRows(const uint8_t* src, size_t row_bytes, uint8_t* dst) cons
 void Renderer::Render(const mjData* data, const FrameInfo& info, uint8_t* rgb) {
   Draw(data, info, /*overlays=*/true);
   ReadRgb(rgb);
+  DrawText2d(info, rgb);
+}
+
+void Renderer::DrawText2d(const FrameInfo& info, uint8_t* rgb) const {
+  const OverlaySet& o = options_.overlays;
+  std::optional<PixelRect> hud_box;
+  size_t hud_tile = 0;
+  if (o.hud) {
+    // the tile whose corner is the frame's corner at hud_position (tile 0 where a grid leaves
+    // that cell empty): the HUD never crosses a tile boundary
+    const HudPosition pos = options_.hud_position;
+    const bool right = pos == HudPosition::kTopRight || pos == HudPosition::kBottomRight;
+    const bool bottom = pos == HudPosition::kBottomLeft || pos == HudPosition::kBottomRight;
+    const int cx = right ? frame_.width - 1 : 0, cy = bottom ? frame_.height - 1 : 0;
+    for (size_t i = 0; i < tiles_.size(); ++i) {
+      const PixelRect t = TopDown(tiles_[i], frame_.height);
+      if (cx >= t.x && cx < t.x + t.width && cy >= t.y && cy < t.y + t.height) hud_tile = i;
+    }
+    const HudText hud = FormatHud(info, o);
+    const PixelRect tile = TopDown(tiles_[hud_tile], frame_.height);
+    hud_box = PlaceHud(hud, tile, pos);
+    DrawHud(rgb, frame_.width, frame_.height, tile, hud, pos, options_.hud_opacity);
+  }
+  if (o.labels && tiles_.size() > 1) {
+    for (size_t i = 0; i < tiles_.size(); ++i) {
+      DrawTileLabel(rgb, frame_.width, frame_.height, TopDown(tiles_[i], frame_.height),
+                    CameraLabel(options_.cameras[i]), options_.hud_opacity,
+                    i == hud_tile ? hud_box : std::nullopt);
+    }
+  }
 }
 
 void Renderer::RenderLayer(const mjData* data, const FrameInfo& info, Layer layer,
                            std::vector<uint8_t>* out) {
-  const size_t pixels = static_cast<size_t>(options_.width) * options_.height;
-  const mjrRect frame{0, 0, options_.width, options_.height};
+  const size_t pixels = static_cast<size_t>(frame_.width) * frame_.height;
+  const mjrRect frame{0, 0, frame_.width, frame_.height};
   if (layer == Layer::kRgb) {
     out->resize(pixels * 3);
     Render(data, info, out->data());
@@ -492,6 +574,7 @@ void Renderer::RenderLayer(const mjData* data, const FrameInfo& info, Layer laye
     scene->flags[mjRND_IDCOLOR] = 0;
     out->resize(pixels * 3);
     ReadRgb(out->data());
+    ColourSegments(out);
     return;
   }
 
@@ -514,7 +597,74 @@ void Renderer::RenderLayer(const mjData* data, const FrameInfo& info, Layer laye
   }
   out->resize(pixels * 2);
   FlipRows(reinterpret_cast<const uint8_t*>(millimetres.data()),
-           static_cast<size_t>(options_.width) * 2, out->data());
+           static_cast<size_t>(frame_.width) * 2, out->data());
+}
+
+}  // namespace fetchscope
+
+namespace fetchscope {
+
+void Renderer::ColourSegments(std::vector<uint8_t>* rgb) {
+  const mjvScene& scene = *scene_->get();
+  // scene segid -> palette index (-1: not an object, e.g. overlays)
+  std::vector<int> object_of(static_cast<size_t>(scene.ngeom) + 1, -1);
+  std::map<int, SegmentObject> objects;
+  std::vector<std::set<int>> seen_geoms(static_cast<size_t>(model_->nbody));
+  std::vector<int> geom_of_seg(static_cast<size_t>(scene.ngeom) + 1, -1);
+  for (int i = 0; i < scene.ngeom; ++i) {
+    const mjvGeom& g = scene.geoms[i];
+    if (g.segid < 0 || g.segid >= scene.ngeom) continue;
+    int index = -1, body = -1;
+    if (g.objtype == mjOBJ_GEOM && g.objid >= 0 && g.objid < model_->ngeom) {
+      body = model_->geom_bodyid[g.objid];
+      index = body;
+      geom_of_seg[g.segid] = g.objid;
+    } else if (g.objtype == mjOBJ_SITE && g.objid >= 0 && g.objid < model_->nsite) {
+      body = model_->site_bodyid[g.objid];
+      index = model_->nbody + g.objid;
+    }
+    if (index < 0) continue;
+    object_of[g.segid] = index;
+    if (!objects.count(index)) {
+      SegmentObject o;
+      o.index = index;
+      o.color = SegmentationColor(index);
+      const char* name = mj_id2name(model_, mjOBJ_BODY, body);
+      o.body = name ? name : "body " + std::to_string(body);
+      if (g.objtype == mjOBJ_SITE) {
+        const char* site = mj_id2name(model_, mjOBJ_SITE, g.objid);
+        o.site = site ? site : "site " + std::to_string(g.objid);
+      }
+      objects.emplace(index, std::move(o));
+    }
+  }
+  uint8_t* p = rgb->data();
+  const size_t pixels = rgb->size() / 3;
+  for (size_t i = 0; i < pixels; ++i, p += 3) {
+    const int id = p[0] + 256 * p[1] + 65536 * p[2];  // segid + 1; 0 = background
+    const int index = id > 0 && id <= scene.ngeom ? object_of[id - 1] : -1;
+    if (index < 0) {
+      p[0] = p[1] = p[2] = 0;
+      continue;
+    }
+    SegmentObject& o = objects[index];
+    ++o.pixels;
+    if (index < model_->nbody && geom_of_seg[id - 1] >= 0) seen_geoms[index].insert(geom_of_seg[id - 1]);
+    p[0] = o.color[0];
+    p[1] = o.color[1];
+    p[2] = o.color[2];
+  }
+  legend_.clear();
+  for (auto& [index, o] : objects) {
+    if (o.pixels == 0) continue;
+    if (index < model_->nbody) {
+      for (int geom : seen_geoms[index]) {
+        const char* name = mj_id2name(model_, mjOBJ_GEOM, geom);
+        o.geoms.push_back(name ? name : "geom " + std::to_string(geom));
+      }
+    }
+    legend_.push_back(std::move(o));
+  }
 }
 
 }  // namespace fetchscope

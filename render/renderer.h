@@ -4,6 +4,7 @@
 
 #include <mujoco/mujoco.h>
 
+#include <array>
 #include <cstdint>
 #include <deque>
 #include <functional>
@@ -24,7 +25,23 @@ enum class Layer {
   kRgb,           ///< width*height*3 bytes, as Render
   kDepth,         ///< width*height uint16 (host byte order): mm along the view axis; 0 = none
                   ///< (sky, or farther than 65.535 m)
-  kSegmentation,  ///< width*height*3 bytes: r + 256 g + 65536 b = scene geom segid + 1, 0 = none
+  kSegmentation,  ///< width*height*3 bytes: a fixed colour per object (see SegmentationColor),
+                  ///< black = none; Renderer::segmentation_legend() names the colours
+};
+
+/// The colour of segmentation object `index` (see SegmentObject): Kelly's 20 colours of
+/// maximum contrast (white and black left out), then golden-angle hues at two brightnesses.
+/// Deterministic: an object has the same colour in every frame, camera and run.
+std::array<uint8_t, 3> SegmentationColor(int index);
+
+/// One object of the segmentation layer: a body (all its geoms share its colour) or a site.
+struct SegmentObject {
+  int index = 0;                   ///< palette index: body id, or nbody + site id for a site
+  std::array<uint8_t, 3> color{};  ///< SegmentationColor(index)
+  std::string body;                ///< the body's name (the site's body for a site)
+  std::vector<std::string> geoms;  ///< the body's geoms seen in the frame ("geom N" if unnamed)
+  std::string site;                ///< the site's name; empty for a body
+  long pixels = 0;                 ///< pixels of this colour in the frame
 };
 
 /// RenderOptions::msaa_samples: the model's offsamples (4 in the Fetch models, as Gymnasium).
@@ -43,12 +60,14 @@ enum class Readback {
 /// comes back.
 inline constexpr int kReadbackDepth = 3;
 
-/// Frame size, cameras and overlays of a renderer.
+/// Tile size, cameras and overlays of a renderer.
 struct RenderOptions {
-  int width = 480;                  ///< pixels
-  int height = 480;                 ///< pixels
+  int width = 480;                  ///< pixels of each camera's tile (see FrameSize)
+  int height = 480;                 ///< pixels of each camera's tile
   std::vector<CameraSpec> cameras;  ///< tiled left to right (grid from 4 on); empty = default
   OverlaySet overlays;              ///< drawn by Render (not by the depth/segmentation layers)
+  HudPosition hud_position = HudPosition::kTopLeft;  ///< corner of the frame the HUD sits in
+  double hud_opacity = 0.6;         ///< HUD and tile-label box: 0 = none .. 1 = opaque black
   int msaa_samples = kMsaaModel;    ///< samples per pixel: 0 (off), 1, 2, 4, 8, 16, kMsaaModel
                                     ///< or kMsaaAuto; capped at the driver's maximum
   Readback readback = Readback::kAuto;  ///< how Submit/Collect read frames back
@@ -56,6 +75,17 @@ struct RenderOptions {
   /// only; must stay within scene->maxgeom (kMaxOverlayGeoms are free when overlays are off).
   std::function<void(mjvScene*)> extra_geoms;
 };
+
+/// Width and height of a whole frame.
+struct FrameDims {
+  int width = 0;   ///< pixels
+  int height = 0;  ///< pixels
+};
+
+/// The frame size for `options`: each camera gets a width x height tile; up to three cameras
+/// sit in one row, from four on a near-square grid (columns = ceil(sqrt(n))). Every frame
+/// buffer, video and PNG of a renderer has this size.
+FrameDims FrameSize(const RenderOptions& options);
 
 /// The CPU rasterizer a GL_RENDERER string names ("llvmpipe", "softpipe", "swrast", "SWR",
 /// Mesa's classic "Software Rasterizer"), or "" for hardware GL.
@@ -103,11 +133,14 @@ class Renderer {
   void RenderLayer(const mjData* data, const FrameInfo& info, Layer layer,
                    std::vector<uint8_t>* out);
 
+  /// The objects of the last segmentation layer rendered, by palette index (those with pixels).
+  const std::vector<SegmentObject>& segmentation_legend() const { return legend_; }
+
   /// Starts a new episode's trail.
   void ResetTrail() { trail_.Clear(); }
 
-  int width() const { return options_.width; }    ///< frame width in pixels
-  int height() const { return options_.height; }  ///< frame height in pixels
+  int width() const { return frame_.width; }    ///< frame width in pixels (FrameSize)
+  int height() const { return frame_.height; }  ///< frame height in pixels (FrameSize)
   /// Multisamples per pixel actually used (auto and the driver's maximum resolved).
   int msaa_samples() const { return msaa_samples_; }
   /// Why msaa_samples() has its value, e.g. "auto: software renderer llvmpipe".
@@ -140,12 +173,16 @@ class Renderer {
   void SetUpReadback();
   // Starts the readback of the frame just drawn into pixel buffer `slot`.
   void StartAsyncRead(int slot);
+  // Draws the HUD (once, in the tile at options_.hud_position's corner) and the tile labels
+  // into the read-back frame.
+  void DrawText2d(const FrameInfo& info, uint8_t* rgb) const;
   // Copies the bottom-up rows of `src` (row_bytes each) into `dst` top-down.
   void FlipRows(const uint8_t* src, size_t row_bytes, uint8_t* dst) const;
 
   GlContext& gl_;
   mjModel* model_;
   RenderOptions options_;
+  FrameDims frame_;
   std::vector<mjvCamera> cameras_;
   std::vector<mjrRect> tiles_;
   bool tiles_leave_gaps_ = false;  // a grid with empty cells: clear the frame first
@@ -173,10 +210,14 @@ class Renderer {
   int next_slot_ = 0;
   struct PendingFrame {
     uint8_t* rgb;
-    int slot;  // -1: read synchronously, already in rgb
+    int slot;        // -1: read synchronously, already in rgb (text included)
+    FrameInfo info;  // for the text drawn once the pixels are back (async only)
   };
   std::deque<PendingFrame> pending_;
   std::vector<float> depth_bottom_up_;
+  std::vector<SegmentObject> legend_;
+  // Turns the segid colours of a segmentation readback into palette colours; fills legend_.
+  void ColourSegments(std::vector<uint8_t>* rgb);
 };
 
 }  // namespace fetchscope

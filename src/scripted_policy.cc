@@ -38,7 +38,7 @@ class ScriptedReach : public Policy {
 // Push and Slide: line up behind the object on the goal line, then drive through it.
 class ScriptedPush : public Policy {
  public:
-  explicit ScriptedPush(bool slide) : slide_(slide) {}
+  ScriptedPush(bool slide, double threshold) : slide_(slide), threshold_(threshold) {}
   void BeginEpisode(int, const Observation&) override {
     phase_ = kLineUp;
     released_ = false;
@@ -48,6 +48,8 @@ class ScriptedPush : public Policy {
     const Vec3 grip = At(obs.observation, 0);
     const Vec3 object = At(obs.observation, 3);
     const Vec3 goal = obs.desired_goal;
+    // Push: once the block is in the goal (is_success), stop there instead of pushing on
+    if (!slide_ && Norm(Sub(obs.achieved_goal, goal)) < threshold_) return Toward(grip, grip, 0.0);
     Vec3 to_goal = Sub(goal, object);
     to_goal[2] = 0;
     const double dist = NormXY(to_goal);
@@ -110,6 +112,7 @@ class ScriptedPush : public Policy {
   static constexpr double kSlideFriction = 0.1;  // puck-table sliding friction, calibrated
   bool released_ = false;
   bool slide_;
+  double threshold_;  // the env's distance_threshold
   Phase phase_ = kLineUp;
   Vec3 last_grip_{};
 };
@@ -117,9 +120,11 @@ class ScriptedPush : public Policy {
 // PickAndPlace: open above the block, descend, close, lift and carry to the goal.
 class ScriptedPickAndPlace : public Policy {
  public:
-  void BeginEpisode(int, const Observation&) override {
+  void BeginEpisode(int, const Observation& obs) override {
     phase_ = kAbove;
     close_steps_ = 0;
+    lifted_ = false;
+    rest_z_ = obs.achieved_goal[2];  // the block resting on the table
   }
   Action Act(const Observation& obs, int) override {
     const Vec3 grip = At(obs.observation, 0);
@@ -148,12 +153,23 @@ class ScriptedPickAndPlace : public Policy {
         if (Norm(Sub(object, grip)) > 0.04) {
           phase_ = kAbove;
           close_steps_ = 0;
+          lifted_ = false;
           return Toward(grip, {grip[0], grip[1], grip[2] + 0.05}, 1.0);
         }
+        // Lift to a carry height, travel there, and come down onto a goal on the table only
+        // near it: the height the block travels at depends on the distance left alone, so it
+        // never alternates between lifting and descending. (The old rule re-lifted whenever
+        // the block dipped below a fixed 0.44 m while heading for a goal on the table: a 3 cm
+        // sawtooth from step 15 to 25.)
+        const double carry_z = rest_z_ + kCarryClearance;
+        const double far = NormXY(Sub(goal, object));
+        if (!lifted_ && object[2] >= carry_z - 0.01) lifted_ = true;
+        if (!lifted_ && far > 0.02) return Toward(grip, {grip[0], grip[1], carry_z + 0.01}, -1.0);
         Vec3 target = goal;
-        // lift first so the block does not drag on the table
-        if (grip[2] < object[2] + 0.005 && NormXY(Sub(goal, object)) > 0.02 && object[2] < 0.44) {
-          target = {grip[0], grip[1], grip[2] + 0.05};
+        if (goal[2] < carry_z) {
+          // from carry height at 6 cm and farther down to the goal's height at 1 cm
+          const double blend = std::clamp((far - 0.01) / 0.05, 0.0, 1.0);
+          target[2] = goal[2] + blend * (carry_z - goal[2]);
         }
         return Toward(grip, target, -1.0);
       }
@@ -164,8 +180,11 @@ class ScriptedPickAndPlace : public Policy {
 
  private:
   enum Phase { kAbove, kDescend, kClose, kCarry };
+  static constexpr double kCarryClearance = 0.03;  // m above the resting block
   Phase phase_ = kAbove;
   int close_steps_ = 0;
+  bool lifted_ = false;  // the block has reached carry height since the grasp
+  double rest_z_ = 0.425;
 };
 
 }  // namespace
@@ -175,9 +194,9 @@ std::unique_ptr<Policy> MakeScriptedPolicy(const EnvSpec& env) {
     case Task::kReach:
       return std::make_unique<ScriptedReach>();
     case Task::kPush:
-      return std::make_unique<ScriptedPush>(false);
+      return std::make_unique<ScriptedPush>(false, env.distance_threshold);
     case Task::kSlide:
-      return std::make_unique<ScriptedPush>(true);
+      return std::make_unique<ScriptedPush>(true, env.distance_threshold);
     case Task::kPickAndPlace:
       return std::make_unique<ScriptedPickAndPlace>();
   }

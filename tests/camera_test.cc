@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 #include <mujoco/mujoco.h>
 
+#include <cmath>
 #include <fstream>
 #include <string>
 #include <vector>
@@ -214,17 +215,20 @@ TEST_P(OverlaySpec, Parses) {
   EXPECT_EQ(got.hud, want.hud);
   EXPECT_EQ(got.action, want.action);
   EXPECT_EQ(got.trail, want.trail);
+  EXPECT_EQ(got.labels, want.labels);
+  EXPECT_EQ(got.hindsight, want.hindsight);
 }
 
 INSTANTIATE_TEST_SUITE_P(
     Specs, OverlaySpec,
-    ::testing::Values(OverlayCase{"default", {true, true, true, false, false}},
-                      OverlayCase{"none", {false, false, false, false, false}},
-                      OverlayCase{"goal", {true, false, false, false, false}},
-                      OverlayCase{"hud,trail", {false, false, true, false, true}},
-                      OverlayCase{"default,action", {true, true, true, true, false}},
+    ::testing::Values(OverlayCase{"default", {true, true, true, false, false, true, false}},
+                      OverlayCase{"none", {false, false, false, false, false, false, false}},
+                      OverlayCase{"goal", {true, false, false, false, false, false, false}},
+                      OverlayCase{"hud,trail", {false, false, true, false, true, false, false}},
+                      OverlayCase{"default,action", {true, true, true, true, false, true, false}},
+                      OverlayCase{"labels,hindsight", {false, false, false, false, false, true, true}},
                       OverlayCase{"goal,achieved,hud,action,trail",
-                                  {true, true, true, true, true}}));
+                                  {true, true, true, true, true, false, false}}));
 
 TEST(OverlaySpec, RejectsUnknownNames) {
   for (const char* bad : {"sparkles", "goal,sparkles", "", "goal,", "GOAL"}) {
@@ -234,9 +238,59 @@ TEST(OverlaySpec, RejectsUnknownNames) {
     } catch (const UsageError& e) {
       std::string message = e.what();
       EXPECT_NE(message.find("is not known"), std::string::npos) << message;
-      EXPECT_NE(message.find("goal, achieved, hud, action, trail"), std::string::npos) << message;
+      EXPECT_NE(message.find("goal, achieved, hud, action, trail, labels, hindsight"),
+                std::string::npos)
+          << message;
     }
   }
+}
+
+TEST(HudPlacement, PositionsAndOpacityParse) {
+  EXPECT_EQ(ParseHudPosition("top-left"), HudPosition::kTopLeft);
+  EXPECT_EQ(ParseHudPosition("bottom-right"), HudPosition::kBottomRight);
+  for (HudPosition p : {HudPosition::kTopLeft, HudPosition::kTopRight, HudPosition::kBottomLeft,
+                        HudPosition::kBottomRight}) {
+    EXPECT_EQ(ParseHudPosition(HudPositionName(p)), p);
+  }
+  for (const char* bad : {"", "top", "TOP-LEFT", "center"}) {
+    try {
+      ParseHudPosition(bad);
+      FAIL() << bad;
+    } catch (const UsageError& e) {
+      EXPECT_NE(std::string(e.what()).find("top-left, top-right, bottom-left, bottom-right"),
+                std::string::npos);
+    }
+  }
+  EXPECT_EQ(CheckHudOpacity(0), 0);
+  EXPECT_EQ(CheckHudOpacity(1), 1);
+  EXPECT_THROW(CheckHudOpacity(1.5), UsageError);
+  EXPECT_THROW(CheckHudOpacity(-0.1), UsageError);
+  EXPECT_THROW(CheckHudOpacity(NAN), UsageError);
+}
+
+TEST(HudPlacement, GrowsWithTheTileAndStaysInside) {
+  FrameInfo info;
+  info.title = "FetchPickAndPlace-v4";
+  const HudText hud = FormatHud(info, OverlaySet{});
+  EXPECT_EQ(HudLineHeight(480, 480), 10);
+  EXPECT_EQ(HudLineHeight(1920, 1080), 20);
+  EXPECT_EQ(HudLineHeight(2160, 3840), 50);
+  const PixelRect tile{100, 50, 960, 960};
+  for (HudPosition p : {HudPosition::kTopLeft, HudPosition::kTopRight, HudPosition::kBottomLeft,
+                        HudPosition::kBottomRight}) {
+    const auto box = PlaceHud(hud, tile, p);
+    ASSERT_TRUE(box.has_value());
+    EXPECT_GE(box->x, tile.x);
+    EXPECT_GE(box->y, tile.y);
+    EXPECT_LE(box->x + box->width, tile.x + tile.width);
+    EXPECT_LE(box->y + box->height, tile.y + tile.height);
+  }
+  const auto small = PlaceHud(hud, PixelRect{0, 0, 480, 480}, HudPosition::kTopLeft);
+  const auto large = PlaceHud(hud, PixelRect{0, 0, 960, 960}, HudPosition::kTopLeft);
+  ASSERT_TRUE(small && large);
+  EXPECT_EQ(large->width, 2 * small->width);
+  EXPECT_EQ(large->height, 2 * small->height);
+  EXPECT_FALSE(PlaceHud(hud, PixelRect{0, 0, 160, 160}, HudPosition::kTopLeft).has_value());
 }
 
 }  // namespace

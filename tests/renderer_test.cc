@@ -13,6 +13,8 @@
 #include <cstring>
 #include <filesystem>
 #include <iostream>
+#include <map>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -176,7 +178,7 @@ class RendererTest : public ::testing::TestWithParam<const char*> {
 
   std::vector<uint8_t> RenderWith(GlContext& gl, const RenderOptions& options) {
     Renderer renderer(gl, model_.get(), options);
-    std::vector<uint8_t> rgb(static_cast<size_t>(options.width) * options.height * 3);
+    std::vector<uint8_t> rgb(static_cast<size_t>(renderer.width()) * renderer.height() * 3);
     renderer.Render(data_.get(), info_, rgb.data());
     Dump(options, rgb);
     return rgb;
@@ -191,7 +193,8 @@ class RendererTest : public ::testing::TestWithParam<const char*> {
     for (char& c : name) {
       if (c == '/') c = '_';
     }
-    WritePng((fs::path(dir) / name).string(), options.width, options.height, 3, 8, rgb.data());
+    const FrameDims frame = FrameSize(options);
+    WritePng((fs::path(dir) / name).string(), frame.width, frame.height, 3, 8, rgb.data());
   }
 
   static RenderOptions Options(const std::string& overlays, int width = kSize, int height = kSize) {
@@ -365,7 +368,7 @@ TEST_P(RendererTest, RenderingTwiceGivesTheSamePixels) {
   RenderOptions options = Options("goal,achieved,hud,action,trail");
   options.cameras = ParseCameraList("default,track", model_.get());
   Renderer renderer(*gl, model_.get(), options);
-  std::vector<uint8_t> a(kSize * kSize * 3), b(kSize * kSize * 3);
+  std::vector<uint8_t> a(2 * kSize * kSize * 3), b(2 * kSize * kSize * 3);
   renderer.Render(data_.get(), info_, a.data());
   renderer.Render(data_.get(), info_, b.data());
   EXPECT_EQ(a, b);
@@ -459,7 +462,7 @@ TEST_P(RendererTest, RenderingDoesNotTouchTheSimulation) {
   RenderOptions options = Options("goal,achieved,hud,action,trail");
   options.cameras = ParseCameraList("default,track,external_camera_0", model_.get());
   Renderer renderer(*gl, model_.get(), options);
-  std::vector<uint8_t> rgb(kSize * kSize * 3), layer;
+  std::vector<uint8_t> rgb(3 * kSize * kSize * 3), layer;
   renderer.Render(data_.get(), info_, rgb.data());
   renderer.RenderLayer(data_.get(), info_, Layer::kDepth, &layer);
   renderer.RenderLayer(data_.get(), info_, Layer::kSegmentation, &layer);
@@ -493,39 +496,76 @@ TEST_P(RendererTest, SegmentationNamesObjects) {
   std::vector<uint8_t> layer;
   renderer.RenderLayer(data_.get(), info_, Layer::kSegmentation, &layer);
   ASSERT_EQ(layer.size(), kSize * kSize * 3u);
-  const mjvScene& scene = renderer.scene();
-  auto geom_at = [&](Pixel p) -> const mjvGeom* {
-    Rgb c = At(layer, kSize, p);
-    int id = c.r + 256 * c.g + 65536 * c.b;  // segid + 1
-    for (int i = 0; i < scene.ngeom; ++i) {
-      if (scene.geoms[i].segid == id - 1) return &scene.geoms[i];
+  const std::vector<SegmentObject>& legend = renderer.segmentation_legend();
+  auto object_at = [&](Pixel p) -> const SegmentObject* {
+    const Rgb c = At(layer, kSize, p);
+    for (const SegmentObject& o : legend) {
+      if (o.color[0] == c.r && o.color[1] == c.g && o.color[2] == c.b) return &o;
     }
     return nullptr;
   };
   const FreeCamera cam = DefaultFreeCamera();
-  const mjvGeom* goal = geom_at(Project(cam, info_.goal, kSize, kSize, Fovy()));
+  const SegmentObject* goal = object_at(Project(cam, info_.goal, kSize, kSize, Fovy()));
   ASSERT_NE(goal, nullptr);
-  EXPECT_EQ(goal->objtype, mjOBJ_SITE);
-  EXPECT_EQ(goal->objid, mj_name2id(model_.get(), mjOBJ_SITE, "target0"));
-  const mjvGeom* table = geom_at(Project(cam, {1.2, 0.6, 0.4}, kSize, kSize, Fovy()));
+  EXPECT_EQ(goal->site, "target0");
+  const SegmentObject* table = object_at(Project(cam, {1.2, 0.6, 0.4}, kSize, kSize, Fovy()));
   ASSERT_NE(table, nullptr);
-  ASSERT_EQ(table->objtype, mjOBJ_GEOM);
-  EXPECT_EQ(model_->geom_bodyid[table->objid], mj_name2id(model_.get(), mjOBJ_BODY, "table0"));
-  EXPECT_EQ(geom_at(Pixel{0, 0}), nullptr) << "the sky is background";
-  // every pixel is background or one scene geom: no blended ids at edges
-  for (size_t i = 0; i < layer.size(); i += 3) {
-    int id = layer[i] + 256 * layer[i + 1] + 65536 * layer[i + 2];
-    ASSERT_LE(id, scene.ngeom) << "pixel " << i / 3;
+  EXPECT_EQ(table->body, "table0");
+  EXPECT_TRUE(table->site.empty());
+  EXPECT_FALSE(table->geoms.empty());
+  const Rgb sky = At(layer, kSize, Pixel{0, 0});
+  EXPECT_EQ(sky.r + sky.g + sky.b, 0) << "the sky is background (black)";
+  EXPECT_EQ(object_at(Pixel{0, 0}), nullptr);
+  // distinct colours; every pixel is black or one object's colour, and the counts add up
+  std::map<std::array<uint8_t, 3>, long> count;
+  for (size_t i = 0; i < layer.size(); i += 3) ++count[{layer[i], layer[i + 1], layer[i + 2]}];
+  long background = count[{0, 0, 0}];
+  EXPECT_GT(background, 0);
+  std::set<std::array<uint8_t, 3>> colours;
+  for (const SegmentObject& o : legend) {
+    EXPECT_TRUE(colours.insert(o.color).second) << "colour shared: " << o.body << " " << o.site;
+    EXPECT_EQ(count[o.color], o.pixels) << o.body;
+    EXPECT_EQ(o.color, SegmentationColor(o.index));
+    background += o.pixels;
   }
+  EXPECT_EQ(background, static_cast<long>(kSize) * kSize) << "a pixel of no object's colour";
+  // the same object keeps its colour in another view
+  RenderOptions other = Options("default");
+  other.cameras = ParseCameraList("external_camera_0", model_.get());
+  Renderer second(*gl, model_.get(), other);
+  std::vector<uint8_t> layer2;
+  second.RenderLayer(data_.get(), info_, Layer::kSegmentation, &layer2);
+  bool found_table = false;
+  for (const SegmentObject& o : second.segmentation_legend()) {
+    if (o.body == "table0") {
+      EXPECT_EQ(o.color, table->color);
+      found_table = true;
+    }
+  }
+  EXPECT_TRUE(found_table);
+}
+
+TEST(SegmentationPalette, FixedDistinctAndNeverBlack) {
+  std::set<std::array<uint8_t, 3>> seen;
+  for (int i = 0; i < 200; ++i) {
+    const auto c = SegmentationColor(i);
+    EXPECT_EQ(c, SegmentationColor(i));
+    EXPECT_NE(c[0] + c[1] + c[2], 0) << i;
+    seen.insert(c);
+  }
+  EXPECT_EQ(seen.size(), 200u);
+  EXPECT_EQ(SegmentationColor(0), (std::array<uint8_t, 3>{0xF3, 0xC3, 0x00}));  // Kelly's first
 }
 
 TEST_P(RendererTest, CamerasTileOneFrame) {
   auto gl = Context();
   if (!gl) GTEST_SKIP();
   std::vector<uint8_t> single = RenderWith(*gl, Options("none"));
-  RenderOptions options = Options("none", 2 * kSize, kSize);
+  RenderOptions options = Options("none");  // --width/--height size each tile
   options.cameras = ParseCameraList("default,default", model_.get());
   Renderer renderer(*gl, model_.get(), options);
+  EXPECT_EQ(renderer.width(), 2 * kSize);
+  EXPECT_EQ(renderer.height(), kSize);
   ASSERT_EQ(renderer.tiles().size(), 2u);
   EXPECT_EQ(renderer.tiles()[1].left, kSize);
   EXPECT_EQ(renderer.tiles()[1].width, kSize);
@@ -546,6 +586,116 @@ TEST_P(RendererTest, CamerasTileOneFrame) {
     other.cameras = ParseCameraList(spec, model_.get());
     EXPECT_GT(Compare(single, RenderWith(*gl, other), kSize).fraction, 0.2) << spec;
   }
+}
+
+TEST_P(RendererTest, TiledCamerasGetFullSizeTilesEachLabelled) {
+  auto gl = Context();
+  if (!gl) GTEST_SKIP();
+  constexpr int kTileW = 240, kTileH = 200;
+  RenderOptions plain = Options("none", kTileW, kTileH);
+  plain.cameras = ParseCameraList("default,track,external_camera_0", model_.get());
+  const FrameDims dims = FrameSize(plain);
+  EXPECT_EQ(dims.width, 3 * kTileW);
+  EXPECT_EQ(dims.height, kTileH);
+  Renderer renderer(*gl, model_.get(), plain);
+  EXPECT_EQ(renderer.width(), 3 * kTileW);
+  ASSERT_EQ(renderer.tiles().size(), 3u);
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_EQ(renderer.tiles()[i].left, i * kTileW);
+    EXPECT_EQ(renderer.tiles()[i].width, kTileW);
+    EXPECT_EQ(renderer.tiles()[i].height, kTileH);
+  }
+  const std::vector<uint8_t> none = RenderWith(*gl, plain);
+  RenderOptions labelled = plain;
+  labelled.overlays = ParseOverlays("labels");
+  const std::vector<uint8_t> with_labels = RenderWith(*gl, labelled);
+  // each tile has its label: a small change near the top centre of every tile, nothing else
+  for (int tile = 0; tile < 3; ++tile) {
+    std::vector<uint8_t> a, b;
+    for (int row = 0; row < kTileH; ++row) {
+      const size_t at = (static_cast<size_t>(row) * dims.width + tile * kTileW) * 3;
+      a.insert(a.end(), none.begin() + at, none.begin() + at + kTileW * 3);
+      b.insert(b.end(), with_labels.begin() + at, with_labels.begin() + at + kTileW * 3);
+    }
+    const Difference d = Compare(a, b, kTileW);
+    EXPECT_GT(d.fraction, 0.003) << "tile " << tile;
+    EXPECT_LT(d.fraction, 0.08) << "tile " << tile;
+    EXPECT_LT(d.max_row, kTileH / 4) << "tile " << tile;
+    EXPECT_LT(std::abs((d.min_col + d.max_col) / 2 - kTileW / 2), 4) << "tile " << tile;
+  }
+  // a grid from four cameras: 2 x 2 tiles of the size asked
+  RenderOptions grid = Options("none", 100, 80);
+  grid.cameras = ParseCameraList("default,default,default,default", model_.get());
+  EXPECT_EQ(FrameSize(grid).width, 200);
+  EXPECT_EQ(FrameSize(grid).height, 160);
+}
+
+TEST_P(RendererTest, HudIsDrawnOnceInsideTheTileAtItsCorner) {
+  auto gl = Context();
+  if (!gl) GTEST_SKIP();
+  constexpr int kTile = 320;
+  for (const char* corner : {"top-left", "top-right", "bottom-left", "bottom-right"}) {
+    RenderOptions plain = Options("none", kTile, kTile);
+    plain.cameras = ParseCameraList("default,default", model_.get());
+    RenderOptions hud = plain;
+    hud.overlays = ParseOverlays("hud");
+    hud.hud_position = ParseHudPosition(corner);
+    const Difference d = Compare(RenderWith(*gl, plain), RenderWith(*gl, hud), 2 * kTile);
+    EXPECT_GT(d.fraction, 0.01) << corner;
+    const bool right = std::string(corner).find("right") != std::string::npos;
+    const bool bottom = std::string(corner).find("bottom") != std::string::npos;
+    // all of it in one tile: the left one, or the right one for the right corners
+    EXPECT_GE(d.min_col, right ? kTile : 0) << corner;
+    EXPECT_LT(d.max_col, right ? 2 * kTile : kTile) << corner;
+    // and in that corner's half of the tile
+    if (right) {
+      EXPECT_GT(d.min_col, kTile + kTile / 4) << corner;
+    } else {
+      EXPECT_LT(d.max_col, kTile - kTile / 4) << corner;
+    }
+    if (bottom) {
+      EXPECT_GT(d.min_row, kTile / 2) << corner;
+    } else {
+      EXPECT_LT(d.max_row, kTile / 2) << corner;
+    }
+  }
+}
+
+TEST_P(RendererTest, HudScalesWithTheFrameAndIsDroppedWhenTooSmall) {
+  auto gl = Context();
+  if (!gl) GTEST_SKIP();
+  auto hud_box = [&](int side) {
+    return Compare(RenderWith(*gl, Options("none", side, side)),
+                   RenderWith(*gl, Options("hud", side, side)), side);
+  };
+  const Difference small = hud_box(480), large = hud_box(960);
+  const double h_small = small.max_row - small.min_row + 1, h_large = large.max_row - large.min_row + 1;
+  const double w_small = small.max_col - small.min_col + 1, w_large = large.max_col - large.min_col + 1;
+  EXPECT_NEAR(h_large / h_small, 2.0, 0.15);
+  EXPECT_NEAR(w_large / w_small, 2.0, 0.15);
+  // the same share of the frame
+  EXPECT_NEAR(small.fraction, large.fraction, 0.25 * small.fraction);
+  // too small to read: no HUD at all, the frame is as without it
+  for (int side : {64, 120}) {
+    EXPECT_EQ(RenderWith(*gl, Options("none", side, side)), RenderWith(*gl, Options("hud", side, side)))
+        << side;
+  }
+}
+
+TEST_P(RendererTest, HudOpacitySetsTheBox) {
+  auto gl = Context();
+  if (!gl) GTEST_SKIP();
+  const std::vector<uint8_t> none = RenderWith(*gl, Options("none"));
+  RenderOptions opaque = Options("hud"), clear = Options("hud");
+  opaque.hud_opacity = 1.0;
+  clear.hud_opacity = 0.0;
+  const std::vector<uint8_t> a = RenderWith(*gl, opaque), b = RenderWith(*gl, clear);
+  const Difference da = Compare(none, a, kSize), db = Compare(none, b, kSize);
+  // opaque: the box's corner pixel is black; no box: only the text's pixels change
+  const size_t corner = (static_cast<size_t>(da.min_row) * kSize + da.min_col) * 3;
+  EXPECT_EQ(a[corner] + a[corner + 1] + a[corner + 2], 0);
+  EXPECT_GT(da.fraction, 3 * db.fraction);
+  EXPECT_GT(db.fraction, 0.001);
 }
 
 INSTANTIATE_TEST_SUITE_P(Models, RendererTest, ::testing::Values("genuine", "bundled"));
