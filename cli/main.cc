@@ -1,6 +1,5 @@
 // fetchscope: Gymnasium-Robotics Fetch episodes on MuJoCo, rendered headless.
 #include <CLI/CLI.hpp>
-#include <malloc.h>
 
 #include <cstdio>
 #include <exception>
@@ -13,11 +12,6 @@
 
 int main(int argc, char** argv) {
   using namespace fetchscope;
-  // Every heap block starts zero-filled. libx264 reads some bytes of its own buffers before
-  // writing them, so without this an episode's video bytes depended on what the process had
-  // freed before (measured: the same episode differed between --jobs 1, 2 and 3, a few LSBs).
-  // Large blocks come from fresh zero pages anyway; the cost is one memset per small block.
-  mallopt(M_PERTURB, 0xff);
   InstallMujocoHandlers();
   CLI::App app{
       "fetchscope " FETCHSCOPE_VERSION
