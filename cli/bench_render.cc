@@ -573,6 +573,7 @@ nlohmann::json BenchNode(const AssetSource& assets, const std::string& backends,
   const std::string self = fs::read_symlink("/proc/self/exe").string();
   const fs::path dir = fs::temp_directory_path() / ("fetchscope_bench_node_" + std::to_string(getpid()));
   nlohmann::json record_rows = nlohmann::json::array();
+  int auto_msaa = -1;  // the samples msaa auto gave (from the first run's manifest)
   std::printf("%-44s %-9s %12s %9s %s\n", "record FetchPush random, 50 steps", "size", "frames/s", "wall s",
               "encoder");
   for (const Case& c : cases) {
@@ -584,13 +585,14 @@ nlohmann::json BenchNode(const AssetSource& assets, const std::string& backends,
         dir);
     const std::string label = "--jobs " + std::to_string(c.jobs) + " " + (c.mode == "process" ? "processes" : "threads") +
                               ", msaa " + c.msaa;
-    if (c.msaa == "0" && !record_rows.empty() && record_rows.back().value("msaa", -1) == 0) continue;  // auto was 0
+    if (c.msaa == "0" && auto_msaa == 0) continue;  // auto already rendered without multisampling
     if (run.child.exit_code != 0) {
       record_rows.push_back({{"jobs", c.jobs}, {"worker_mode", c.mode}, {"msaa_requested", c.msaa},
                              {"skipped", "record failed (exit " + std::to_string(run.child.exit_code) + ")"}});
       std::printf("%-44s skipped: record failed (exit %d)\n", label.c_str(), run.child.exit_code);
       continue;
     }
+    if (c.msaa == "auto" && auto_msaa < 0) auto_msaa = ManifestMsaa(run.manifest, "auto");
     const int frames = episodes * 51;
     const nlohmann::json video = run.manifest.is_object() ? run.manifest.value("video", nlohmann::json::object())
                                                           : nlohmann::json::object();
