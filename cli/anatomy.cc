@@ -251,18 +251,19 @@ struct PanelContent {
   std::vector<std::pair<Vec3, Vec3>> lines;  // the markers' arrows and lines, kept clear of labels
 };
 
+// Where body `name` is in `env`'s current state; `fallback` when the model lacks it.
+Vec3 BodyPosition(const FetchEnv& env, const char* name, const Vec3& fallback) {
+  const int id = mj_name2id(env.model(), mjOBJ_BODY, name);
+  const mjtNum* x = env.data()->xpos;
+  return id < 0 ? fallback : Vec3{x[3 * id], x[3 * id + 1], x[3 * id + 2]};
+}
+
 PanelContent ReachContent(const FetchEnv& env, const StepRecord& s) {
   const bool obj = false;
   const Vec3 grip = {s.obs.observation[0], s.obs.observation[1], s.obs.observation[2]};
   const Vec3 goal = s.obs.desired_goal;
-  const mjModel* m = env.model();
-  const mjData* d = env.data();
-  auto body = [&](const char* name) {
-    const int id = mj_name2id(m, mjOBJ_BODY, name);
-    return id < 0 ? grip : Vec3{d->xpos[3 * id], d->xpos[3 * id + 1], d->xpos[3 * id + 2]};
-  };
-  const Vec3 right = body("robot0:r_gripper_finger_link");
-  const Vec3 left = body("robot0:l_gripper_finger_link");
+  const Vec3 right = BodyPosition(env, "robot0:r_gripper_finger_link", grip);
+  const Vec3 left = BodyPosition(env, "robot0:l_gripper_finger_link", grip);
   const double threshold = env.spec().distance_threshold;
   constexpr double kArrowLength = 0.25;  // drawn 5x the 0.05 m a unit action moves the target
   const Vec3 ax = Add(grip, {kArrowLength, 0, 0}), ay = Add(grip, {0, kArrowLength, 0}),
@@ -308,14 +309,8 @@ PanelContent PushContent(const FetchEnv& env, const StepRecord& s) {
   const Vec3 grip = {o[0], o[1], o[2]};
   const Vec3 object = {o[3], o[4], o[5]};
   const Vec3 goal = s.obs.desired_goal;
-  const mjModel* m = env.model();
-  const mjData* d = env.data();
-  auto body = [&](const char* name) {
-    const int id = mj_name2id(m, mjOBJ_BODY, name);
-    return id < 0 ? grip : Vec3{d->xpos[3 * id], d->xpos[3 * id + 1], d->xpos[3 * id + 2]};
-  };
-  const Vec3 right = body("robot0:r_gripper_finger_link");
-  const Vec3 left = body("robot0:l_gripper_finger_link");
+  const Vec3 right = BodyPosition(env, "robot0:r_gripper_finger_link", grip);
+  const Vec3 left = BodyPosition(env, "robot0:l_gripper_finger_link", grip);
   const double threshold = env.spec().distance_threshold;
   constexpr double kAxis = 0.09;
   const Vec3 ax = Add(grip, {kAxis, 0, 0}), ay = Add(grip, {0, kAxis, 0}),
