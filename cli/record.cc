@@ -100,19 +100,20 @@ struct Frame {
   std::string label;
 };
 
-// A fixed pool of frame buffers shared by a worker's render thread and its encoder threads:
+// A bounded pool of frame buffers shared by a worker's render thread and its encoder threads:
 // no per-frame allocation, and a render thread that runs ahead waits for a free one.
 class FramePool {
  public:
-  FramePool(size_t count, size_t bytes) {
-    for (size_t i = 0; i < count; ++i) {
-      pool_.push_back(std::make_unique<Frame>());
-      pool_.back()->rgb.resize(bytes);
-      free_.push_back(pool_.back().get());
-    }
-  }
+  /// At most `count` frames of `bytes` each, made when first needed: a run whose render thread
+  /// never gets ahead of its encoders never holds more than the few it cycles through.
+  FramePool(size_t count, size_t bytes) : count_(count), bytes_(bytes) {}
   Frame* Acquire() {
     std::unique_lock<std::mutex> lock(mutex_);
+    if (free_.empty() && pool_.size() < count_) {
+      pool_.push_back(std::make_unique<Frame>());
+      pool_.back()->rgb.resize(bytes_);
+      return pool_.back().get();
+    }
     cv_.wait(lock, [&] { return !free_.empty(); });
     Frame* f = free_.front();
     free_.pop_front();
@@ -128,6 +129,8 @@ class FramePool {
   }
 
  private:
+  const size_t count_;
+  const size_t bytes_;
   std::vector<std::unique_ptr<Frame>> pool_;
   std::deque<Frame*> free_;
   std::mutex mutex_;
