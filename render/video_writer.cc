@@ -16,6 +16,7 @@
 
 #include "render/av_handles.h"
 #include "src/errors.h"
+#include "src/suggest.h"
 
 extern "C" {
 #include <libavfilter/avfilter.h>
@@ -721,23 +722,18 @@ const std::string& VideoWriter::path() const { return impl_->final_path; }
 void ValidateVideoOptions(const VideoOptions& options) { ValidateOptions(options); }
 
 std::vector<std::string> ParseVideoFormats(const std::string& list) {
+  static const std::vector<std::string> kKnown = {"mp4", "webm", "gif"};
   std::vector<std::string> formats;
-  std::size_t start = 0;
-  while (true) {
-    const std::size_t end = list.find(',', start);
-    const std::string entry =
-        list.substr(start, end == std::string::npos ? std::string::npos : end - start);
-    if (entry != "mp4" && entry != "webm" && entry != "gif") {
+  for (const std::string& entry : SplitCommaList(list)) {  // "mp4, gif" as "mp4,gif"
+    if (std::find(kKnown.begin(), kKnown.end(), entry) == kKnown.end()) {
       throw UsageError("unknown --format " + Quoted(entry) + " in " + Quoted(list) +
-                       ": accepted a comma list of " + kVideoFormats);
+                       DidYouMean(entry, kKnown) + ": accepted a comma list of " + kVideoFormats);
     }
     if (std::find(formats.begin(), formats.end(), entry) != formats.end()) {
       throw UsageError("--format " + Quoted(list) + " names " + entry +
                        " twice: give each format once");
     }
     formats.push_back(entry);
-    if (end == std::string::npos) break;
-    start = end + 1;
   }
   return formats;
 }

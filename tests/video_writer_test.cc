@@ -485,12 +485,16 @@ void EncodeBandsAs(const fs::path& path, const std::string& format, int width, i
 TEST(VideoFormatsTest, ParsesCommaListsAndNamesBadEntries) {
   EXPECT_EQ(ParseVideoFormats("mp4"), std::vector<std::string>{"mp4"});
   EXPECT_EQ(ParseVideoFormats("webm,gif,mp4"), (std::vector<std::string>{"webm", "gif", "mp4"}));
+  // spaces after the commas, as every other list option takes them
+  EXPECT_EQ(ParseVideoFormats("mp4, gif"), (std::vector<std::string>{"mp4", "gif"}));
   for (const auto& [list, expected] : std::vector<std::pair<std::string, std::string>>{
            {"avi", "unknown --format 'avi' in 'avi': accepted a comma list of mp4, webm, gif"},
            {"mp4,", "unknown --format '' in 'mp4,'"},
            {"", "unknown --format ''"},
            {"MP4", "unknown --format 'MP4'"},
-           {"gif,webm,gif", "names gif twice"}}) {
+           {"gif,webm,gif", "names gif twice"},
+           {"mp4, gfi", "unknown --format 'gfi' in 'mp4, gfi' (did you mean 'gif'?)"},
+           {"mp4, mp4", "names mp4 twice"}}) {
     try {
       ParseVideoFormats(list);
       ADD_FAILURE() << "no exception for '" << list << "'";

@@ -61,10 +61,18 @@ static void* real_symbol(const char* name);
 static void load(void) {
   const char* real = getenv("FAKE_EGL_REAL");
   if (!real || !*real) real = "/usr/lib/x86_64-linux-gnu/libEGL.so.1";
-  // RTLD_DEEPBIND: the real library keeps its own symbols, not ours of the same names
-  g_real = dlopen(real, RTLD_NOW | RTLD_LOCAL | RTLD_DEEPBIND);
+  // No RTLD_DEEPBIND (AddressSanitizer refuses it): libglvnd's libEGL is linked -Bsymbolic, so
+  // its calls to its own egl* functions never reach ours of the same names, and dlsym on its
+  // handle searches only its own dependency scope. The check below catches a real library
+  // that would resolve to this fake.
+  g_real = dlopen(real, RTLD_NOW | RTLD_LOCAL);
   if (!g_real) {
     fprintf(stderr, "fake libEGL: cannot load the real libEGL %s: %s\n", real, dlerror());
+    abort();
+  }
+  if (dlsym(g_real, "eglGetProcAddress") == (void*)&eglGetProcAddress) {
+    fprintf(stderr, "fake libEGL: FAKE_EGL_REAL=%s resolves to this fake, not a real libEGL\n",
+            real);
     abort();
   }
   const char* spec = getenv("FAKE_EGL_DEVICES");
