@@ -6,6 +6,7 @@
 #include <string>
 
 #include "cli/bench.h"
+#include "cli/common.h"
 
 namespace fetchscope::cli {
 
@@ -26,7 +27,8 @@ nlohmann::json MachineJson() {
   for (std::string line; std::getline(release, line);) {
     if (line.rfind("PRETTY_NAME=", 0) == 0) os = line.substr(13, line.size() - 14);
   }
-  return {{"cpu", cpu}, {"cores", sysconf(_SC_NPROCESSORS_ONLN)}, {"memory_gib", mem_gib},
+  return {{"cpu", cpu}, {"cores", sysconf(_SC_NPROCESSORS_ONLN)},
+          {"usable_cores", UsableCores().usable}, {"memory_gib", mem_gib},
           {"os", os}, {"kernel", u.release}};
 }
 

@@ -500,7 +500,8 @@ nlohmann::json NodeRenderRow(GlContext& gl, const AssetSource& assets, int w, in
 
 nlohmann::json BenchNode(const AssetSource& assets, const std::string& backends, double budget_s) {
   nlohmann::json result;
-  const int cores = static_cast<int>(std::max(1L, sysconf(_SC_NPROCESSORS_ONLN)));
+  const Cores machine_cores = UsableCores();
+  const int cores = machine_cores.usable;
   const std::string backend = Split(backends).empty() ? "egl" : Split(backends).front();
   const int w = 480, h = 480;
 
@@ -520,11 +521,14 @@ nlohmann::json BenchNode(const AssetSource& assets, const std::string& backends,
     encoder_reason = e.what();
   }
   result["cores"] = cores;
+  result["cores_online"] = machine_cores.online;
+  result["cores_source"] = machine_cores.source;
   result["gpus"] = gpus;
   result["encoder"] = {{"codec", encoder}, {"reason", encoder_reason}};
   std::string gpu_list;
   for (const auto& g : gpus) gpu_list += (gpu_list.empty() ? "" : "; ") + g.get<std::string>();
-  std::printf("node: %d cores; EGL devices: %s; encoder: %s (%s)\n", cores, gpu_list.empty() ? "none" : gpu_list.c_str(),
+  std::printf("node: %d usable cores (%s; %d online); EGL devices: %s; encoder: %s (%s)\n", cores,
+              machine_cores.source.c_str(), machine_cores.online, gpu_list.empty() ? "none" : gpu_list.c_str(),
               encoder.c_str(), encoder_reason.c_str());
 
   // one context, rendering only, synchronous against asynchronous readback
@@ -577,6 +581,7 @@ nlohmann::json BenchNode(const AssetSource& assets, const std::string& backends,
   std::printf("%-44s %-9s %12s %9s %s\n", "record FetchPush random, 50 steps", "size", "frames/s", "wall s",
               "encoder");
   for (const Case& c : cases) {
+    if (c.msaa == "0" && auto_msaa == 0) continue;  // auto already rendered without multisampling
     const int episodes = std::max(8, 4 * c.jobs);
     const RecordRun run = RunRecordChild(
         self, "--env-id FetchPush-v4 --policy random --episodes " + std::to_string(episodes) + " --width " +
@@ -585,7 +590,6 @@ nlohmann::json BenchNode(const AssetSource& assets, const std::string& backends,
         dir);
     const std::string label = "--jobs " + std::to_string(c.jobs) + " " + (c.mode == "process" ? "processes" : "threads") +
                               ", msaa " + c.msaa;
-    if (c.msaa == "0" && auto_msaa == 0) continue;  // auto already rendered without multisampling
     if (run.child.exit_code != 0) {
       record_rows.push_back({{"jobs", c.jobs}, {"worker_mode", c.mode}, {"msaa_requested", c.msaa},
                              {"skipped", "record failed (exit " + std::to_string(run.child.exit_code) + ")"}});

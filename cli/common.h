@@ -4,7 +4,9 @@
 #include <CLI/CLI.hpp>
 
 #include <cstdint>
+#include <optional>
 #include <string>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -31,6 +33,31 @@ void WriteJson(const std::string& path, const nlohmann::json& json);
 
 /// Versions of fetchscope and MuJoCo, for every output.
 nlohmann::json VersionsJson();
+
+/// The cores this process may use, and why that many.
+struct Cores {
+  int usable = 1;      ///< what --jobs 0 and the encoder budget count
+  int online = 1;      ///< the machine's online CPUs
+  std::string source;  ///< "online", "affinity" (taskset, Slurm, cpusets) or "cgroup quota"
+};
+
+/// The cores this process may use: the CPUs in its affinity mask (Slurm's and Kubernetes'
+/// cpusets, taskset), capped by a cgroup CPU quota (cgroup v2 cpu.max, v1 cfs_quota_us) rounded
+/// up, as containers with CPU limits have. Never below 1.
+Cores UsableCores();
+
+/// The cgroup CPU quota in cores (quota / period; the smallest along the cgroup's ancestors), or
+/// 0 when there is none: `proc_self_cgroup` is /proc/self/cgroup, `cgroup_root` /sys/fs/cgroup.
+double CgroupCpuQuota(const std::string& proc_self_cgroup, const std::string& cgroup_root);
+
+/// For `--policy replay:FILE.json` holding fetchscope's trajectory JSON: the file's episode
+/// indices, ascending, which a run replaying it plays (each under its own index, so with its own
+/// reset); nullopt for any other policy. `episodes` is --episodes when the user gave it
+/// (0: not given): a different count is a UsageError. Warns on stderr (unless `quiet`) when the
+/// file was recorded on another env or seed than `env_id` / `seed`.
+std::optional<std::vector<int>> ReplayedEpisodes(const std::string& policy, int episodes,
+                                                 const std::string& env_id, uint64_t seed,
+                                                 bool quiet);
 
 /// Exit status a subcommand asks for (0 unless it set one).
 int& ExitStatus();

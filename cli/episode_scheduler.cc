@@ -426,14 +426,15 @@ EpisodeRecord EpisodeSequence::Play(int k, const StepCallback& on_step) {
 }
 
 int ResolveJobs(int jobs, int episodes) {
-  const int cores = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  const int cores = UsableCores().usable;
   return std::max(1, std::min(jobs == 0 ? cores : jobs, std::max(1, episodes)));
 }
 
 void AddJobsOptions(CLI::App* sub, int* jobs, std::string* mode) {
   sub->add_option("-j,--jobs", *jobs,
                   "Worker processes, each with its own environment, policy, GL context and "
-                  "encoders (0: one per core); outputs are byte-identical to --jobs 1")
+                  "encoders (0: one per usable core, affinity mask and cgroup quota counted); "
+                  "outputs are byte-identical to --jobs 1")
       ->capture_default_str()
       ->check(CLI::Range(0, 1024));
   sub->add_option("--worker-mode", *mode,

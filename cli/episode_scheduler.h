@@ -125,10 +125,11 @@ class EpisodeSequence {
   int next_ = 0;  // the episode the generators stand at
 };
 
-/// The number of workers for --jobs `jobs` (0: one per core) and `episodes` episodes.
+/// The number of workers for --jobs `jobs` (0: one per usable core, UsableCores) and
+/// `episodes` episodes.
 int ResolveJobs(int jobs, int episodes);
 
-/// Adds --jobs (and the hidden --worker-mode) to `sub`.
+/// Adds --jobs and --worker-mode to `sub`.
 void AddJobsOptions(CLI::App* sub, int* jobs, std::string* mode);
 
 /// Parses --worker-mode: process or thread. Throws UsageError.

@@ -527,11 +527,13 @@ void LimitLlvmpipeThreads(int jobs) {
   if (jobs > 1) setenv("LP_NUM_THREADS", "0", /*overwrite=*/0);
 }
 
-// Episodes one worker encodes at once: the cores shared out over the workers (each encoder is
-// one thread), at least 1 and at most 4 (beyond that the frames held in memory outweigh it).
+// Episodes one worker encodes at once: the usable cores shared out over the workers, C/N
+// (each encoder is one thread, so that the bytes never depend on the thread count), at least 1.
+// An encoder only holds frames while it is behind the render thread, so memory grows with
+// encoders only where the encoders, not the renderer, are the bottleneck.
 int EncodersPerWorker(int jobs) {
-  const int cores = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  return std::max(1, std::min(4, cores / std::max(1, jobs)));
+  const int cores = UsableCores().usable;
+  return std::max(1, cores / std::max(1, jobs));
 }
 
 // record --from: the recorded episodes' indices, ascending.
@@ -612,21 +614,9 @@ nlohmann::json WithKeptEpisodes(nlohmann::json entries, const std::vector<nlohma
 // trajectory JSON, the file's episodes, each under its own index (and so with its own reset);
 // --episodes then becomes one past the last index.
 std::vector<int> RecordEpisodeList(RecordOptions* o, const Shard& shard, const RecordPlan& plan) {
-  std::string env_id, seed;
-  const std::optional<std::vector<int>> indices = ReplayTrajectoryEpisodes(o->policy, &env_id, &seed);
+  const std::optional<std::vector<int>> indices = ReplayedEpisodes(
+      o->policy, o->episodes_given ? o->episodes : 0, plan.spec->id, plan.seed, o->quiet);
   if (!indices) return ShardEpisodes(shard, o->episodes);
-  if (o->episodes_given && o->episodes != static_cast<int>(indices->size())) {
-    throw UsageError("--episodes " + std::to_string(o->episodes) + " disagrees with " + o->policy +
-                     ", which holds " + std::to_string(indices->size()) +
-                     " episode(s): a trajectory JSON replays all its episodes; drop --episodes");
-  }
-  if (!o->quiet && (env_id != plan.spec->id || seed != std::to_string(plan.seed))) {
-    std::fprintf(stderr,
-                 "fetchscope: warning: %s was recorded on %s with --seed %s, this run is %s with "
-                 "--seed %llu: the resets differ, so the recorded trajectory is not reproduced\n",
-                 o->policy.c_str() + 7, env_id.c_str(), seed.c_str(), plan.spec->id.c_str(),
-                 static_cast<unsigned long long>(plan.seed));
-  }
   o->episodes = indices->back() + 1;
   std::vector<int> mine;
   for (int k : *indices) {
