@@ -4,6 +4,7 @@
 #include <filesystem>
 
 #include "cli/common.h"
+#include "cli/episode_scheduler.h"
 #include "cli/render_common.h"
 #include "render/png_io.h"
 #include "render/renderer.h"
@@ -85,13 +86,21 @@ void RegisterRender(CLI::App& app) {
     const EnvSpec& spec = FindEnvSpec(env->env_id);
     const uint64_t seed = ParseSeed(env->seed);
     ParseOverlays(view->overlay);  // reject a bad --overlay before any work
+    // a trajectory JSON (replay:episode_003.json) renders its first episode, under its own
+    // index and so from its own reset; any other policy plays episode 0
+    const std::vector<int> replayed =
+        ReplayedEpisodes(*policy_spec, 0, spec.id, seed, /*quiet=*/false).value_or(std::vector<int>{0});
+    const int k = replayed.front();
     PolicyContext context;
     context.seed = seed;
     context.steps_per_episode = *steps;
-    auto policy = MakePolicy(*policy_spec, spec, context);
-    FetchEnv fetch(spec, ResolveAssets(env->assets));
+    context.episodes = k + 1;
+    context.episode_indices = {k};
+    EpisodeSequence sequence(std::make_unique<FetchEnv>(spec, ResolveAssets(env->assets)),
+                             MakePolicy(*policy_spec, spec, context), seed, *steps);
+    FetchEnv& fetch = sequence.env();
     const RenderOptions options = MakeRenderOptions(*view, fetch.model());
-    const EpisodeRecord episode = RunEpisode(fetch, *policy, 0, seed, *steps);
+    const EpisodeRecord episode = sequence.Play(k);
     auto gl = CreateViewContext(*view, ResolveGpuChoice(*view));
     Renderer renderer(*gl, fetch.model(), options);
     if (*verbose) {

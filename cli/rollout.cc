@@ -17,6 +17,7 @@ namespace {
 struct RolloutOptions {
   EnvOptions env;
   int episodes = 1;
+  bool episodes_given = false;  // --episodes was on the command line
   int steps = 50;
   std::string policy = "random";
   std::string json_out;
@@ -50,17 +51,27 @@ void RunRollout(const RolloutOptions& o) {
   const uint64_t seed = ParseSeed(o.env.seed);
   const WorkerMode mode = ParseWorkerMode(o.worker_mode);
   const AssetSource assets = ResolveAssets(o.env.assets);
+  // a trajectory JSON replays its own episodes, each under its own index (as record does)
+  std::vector<int> indices;
+  if (auto replayed = ReplayedEpisodes(o.policy, o.episodes_given ? o.episodes : 0, spec.id, seed,
+                                       /*quiet=*/false)) {
+    indices = *replayed;
+  } else {
+    for (int k = 0; k < o.episodes; ++k) indices.push_back(k);
+  }
   PolicyContext context;
   context.seed = seed;
   context.steps_per_episode = o.steps;
-  context.episodes = o.episodes;
+  context.episodes = indices.back() + 1;
+  context.episode_indices = indices;
   context.exec_timeout_s = o.exec_timeout;
   context.stop_requested = [] { return StopSignal() != 0; };
   context.replay_dtype = o.replay_dtype;
   { FetchEnv check(spec, assets); }  // bad assets fail here, before any worker starts
   ScheduleOptions schedule;
-  for (int k = 0; k < o.episodes; ++k) schedule.episodes.push_back(k);
-  schedule.jobs = ResolveJobs(o.jobs, o.episodes);
+  schedule.episodes = indices;
+  const int count = static_cast<int>(indices.size());
+  schedule.jobs = ResolveJobs(o.jobs, count);
   schedule.mode = mode;
   const ScheduleResult result = RunEpisodes(schedule, [&](int) {
     return std::make_unique<RolloutRunner>(spec, assets, o.policy, context, o.steps);
@@ -89,8 +100,8 @@ void RunRollout(const RolloutOptions& o) {
   const std::string path = JsonOutPath(o.json_out, "rollout");
   WriteJson(path, j);
   std::printf("%s: %d episode(s) of %d steps, policy %s, seed %s: success %d/%d (%.0f%%)\nwrote %s\n",
-              spec.id.c_str(), o.episodes, o.steps, o.policy.c_str(), o.env.seed.c_str(), successes,
-              o.episodes, 100.0 * successes / o.episodes, path.c_str());
+              spec.id.c_str(), count, o.steps, o.policy.c_str(), o.env.seed.c_str(), successes,
+              count, 100.0 * successes / count, path.c_str());
 }
 
 }  // namespace
@@ -100,7 +111,9 @@ void RegisterRollout(CLI::App& app) {
   CLI::App* sub = app.add_subcommand(
       "rollout", "Run episodes without rendering and write the trajectory JSON");
   AddEnvOptions(sub, &o->env);
-  sub->add_option("--episodes", o->episodes, "Number of episodes")->capture_default_str()->check(CLI::Range(1, 1000000));
+  sub->add_option("--episodes", o->episodes,
+                  "Number of episodes (a replay:FILE.json trajectory plays its own episodes)")
+      ->capture_default_str()->check(CLI::Range(1, 1000000));
   sub->add_option("--steps", o->steps, "Steps per episode (TimeLimit is 50)")->capture_default_str()->check(CLI::Range(1, 50));
   sub->add_option("--policy", o->policy, kPolicyHelp)->capture_default_str();
   sub->add_option("--exec-timeout", o->exec_timeout, "Seconds an exec: policy may take per answer")
@@ -108,7 +121,10 @@ void RegisterRollout(CLI::App& app) {
   sub->add_option("--replay-dtype", o->replay_dtype, kReplayDtypeHelp);
   sub->add_option("--json-out", o->json_out, "Write F (.json) or F_rollout.json; without it JSON goes to stdout");
   AddJobsOptions(sub, &o->jobs, &o->worker_mode);
-  sub->callback([o]() { RunRollout(*o); });
+  sub->callback([o, sub]() {
+    o->episodes_given = sub->count("--episodes") > 0;
+    RunRollout(*o);
+  });
 }
 
 }  // namespace fetchscope::cli

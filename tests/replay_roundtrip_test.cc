@@ -81,6 +81,45 @@ TEST_F(ReplayRoundTrip, RolloutTrajectoryReplaysAllItsEpisodes) {
   EXPECT_EQ(ReadJson(tmp.path() / "b.json")["episodes"], ReadJson(tmp.path() / "a.json")["episodes"]);
 }
 
+// record's per-episode trajectory (episode_002.json holds episode 2 alone) replays through
+// rollout and render as that episode, from its own reset: rollout gives its trajectory back,
+// render the frame record drew at that step. A --episodes that disagrees with the file is a
+// usage error that says what to do.
+TEST_F(ReplayRoundTrip, RolloutAndRenderReplayOneEpisodeOfARecordRun) {
+  TempDir tmp;
+  const fs::path run = tmp.path() / "run";
+  auto r = RunFetchscope("record --quiet --no-report --env-id FetchPush-v4 --policy random "
+                         "--seed 9 --episodes 3 --steps 6 --width 48 --height 48 --sheet-every 1 "
+                         "--overlay none --out " + run.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const std::string file = (run / "episode_002.json").string();
+  const std::string common = "--env-id FetchPush-v4 --seed 9 --policy replay:" + file;
+  r = RunFetchscope("rollout --steps 6 " + common + " --json-out " +
+                    (tmp.path() / "b.json").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const nlohmann::json replayed = ReadJson(tmp.path() / "b.json")["episodes"];
+  ASSERT_EQ(replayed.size(), 1u);
+  EXPECT_EQ(replayed[0]["index"], 2);
+  EXPECT_EQ(replayed[0]["steps"], ReadJson(file)["episodes"][0]["steps"]);
+
+  r = RunFetchscope("rollout --steps 6 --episodes 2 " + common + " --json-out " +
+                    (tmp.path() / "c.json").string());
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("--episodes 2 disagrees with"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("drop --episodes"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(tmp.path() / "c.json"));
+
+  // render after the episode's 4 steps sees the state record drew for step 4 of episode 2
+  r = RunFetchscope("render --steps 4 --width 48 --height 48 --overlay none " + common + " -o " +
+                    (tmp.path() / "frame.png").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  r = RunFetchscope("render --steps 4 --width 48 --height 48 --overlay none --env-id FetchPush-v4 "
+                    "--seed 9 --policy random -o " + (tmp.path() / "episode0.png").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(ReadFile(tmp.path() / "frame.png"), ReadFile(tmp.path() / "episode0.png"))
+      << "render played episode 0, not the file's episode 2";
+}
+
 // A CSV export of float32 actions: --replay-dtype float32 reproduces the run; read as float64
 // (the default) it takes Gymnasium's double path and drifts.
 TEST_F(ReplayRoundTrip, CsvWithReplayDtypeFloat32ReproducesARandomRun) {
