@@ -133,7 +133,14 @@ Run ./fetchscope (the launcher; it puts lib/ on the library path). Needs glibc >
 on the node, and for rendering an NVIDIA driver (EGL) or the node's Mesa (libegl-mesa0 or
 libosmesa6): GL vendor libraries are never bundled. First on a new node:
   ./fetchscope list-gpus
-See https://github.com/ (the project's README) for Slurm and Kubernetes examples.
+Record on a node (all its usable cores, CUDA's GPU numbering when CUDA_VISIBLE_DEVICES is set):
+  ./fetchscope record --env-id FetchPush-v4 --episodes 64 --jobs 0 --out runs/push
+Under Slurm, one array task per GPU (Slurm sets CUDA_VISIBLE_DEVICES and the cpuset):
+  #SBATCH --gpus=1 --cpus-per-task=16 --array=0-7
+  srun ./fetchscope record --env-id FetchPush-v4 --episodes 512 --jobs 0 --out runs/push
+  (each task records the episodes of its shard, from SLURM_ARRAY_TASK_ID/COUNT; afterwards
+   ./fetchscope merge-manifests runs/push)
+./fetchscope record --help and the project's README (section "GPU nodes") say more.
 Bundled libraries keep their own licences (Debian packages: see the copyright files of
 libavcodec59, libavfilter8, libmujoco2.2.2, libpng16-16, libssl3, libfreetype6,
 libfontconfig1, libglvnd0 and their dependencies). bin/fonts/DejaVuSans.ttf is from
