@@ -197,7 +197,7 @@ RunFolder::RunFolder(const RunFolderRequest& request) : request_(request) {
     for (const auto& entry : fs::directory_iterator(out, ec)) {
       const std::string name = entry.path().filename().string();
       const std::optional<RunFileName> parsed = ParseRunFileName(name);
-      if (!parsed) continue;
+      if (!parsed || entry.is_directory(ec)) continue;  // record writes files only
       if (parsed->manifest && !parsed->hidden && name != request.manifest_name) {
         manifests.push_back(name);
       } else if (Ours(name)) {
