@@ -1220,12 +1220,15 @@ void RegisterRecord(CLI::App& app) {
   sub->add_option("--out", o->out, "Output folder")->capture_default_str();
   sub->add_flag("-q,--quiet", o->quiet, "No progress or summary on stderr");
   sub->add_flag("--overwrite", o->overwrite,
-                "Replace the record run already in --out (its manifest and episode files; other "
-                "files stay). Without --overwrite or --resume such a folder is refused");
+                "Replace the record run already in --out (its manifest, report and episode "
+                "files; other files stay). The earlier run is kept aside until the new one has "
+                "its manifest, and put back if it fails or is interrupted before an episode is "
+                "complete. Without --overwrite or --resume such a folder is refused");
   sub->add_flag("--resume", o->resume,
                 "Continue the interrupted record run in --out: keep its complete episodes and "
                 "record the others, byte-identical to an uninterrupted run; the options must "
-                "be those of that run");
+                "be those of that run. With nothing to resume (no such folder, or no manifest "
+                "in it) the whole run is recorded, with a note saying so");
   AddJobsOptions(sub, &o->jobs, &o->worker_mode);
   sub->add_option("--shard", o->shard,
                   "Record only shard I of N (0 <= I < N): episodes k with k mod N = I. Without it: "
