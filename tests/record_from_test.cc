@@ -182,7 +182,9 @@ std::string Frames(const fs::path& mp4) {
 }
 
 // record --from with --layers: a segmentation (and a depth) video per episode with the right
-// frame count, the legend naming the colours it shows, and the same bytes with --jobs 2.
+// frame count, the legend naming the colours it shows, and the same bytes with --jobs 2 (which
+// also reads frames back asynchronously, as on hardware GL: the layers are drawn between an rgb
+// frame's queued readback and its collection).
 TEST_F(RecordFromTest, ReRenderWithLayersIsProbedAndTheSameWithJobs) {
   TempDir tmp;
   const fs::path run = tmp.path() / "run";
@@ -197,7 +199,8 @@ TEST_F(RecordFromTest, ReRenderWithLayersIsProbedAndTheSameWithJobs) {
     r = RunFetchscope(
         "record --quiet --width 64 --height 48 --layers rgb,segmentation,depth "
         "--crf 0 --format mp4,gif --jobs " +
-        std::to_string(jobs) + " --from " + run.string() + " --out " + out.string());
+        std::to_string(jobs) + (jobs == 2 ? " --readback async" : " --readback sync") +
+        " --from " + run.string() + " --out " + out.string());
     ASSERT_EQ(r.exit_code, 0) << r.output;
     files[jobs] = EpisodeFiles(out);
   }
