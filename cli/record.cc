@@ -162,7 +162,7 @@ std::string EpisodeName(int k) {
   return name;
 }
 
-// --layers: the names and what they are, as the help, errors and manifest use them.
+// A layer's name as --layers, the file names and the manifest write it.
 const char* LayerName(Layer layer) {
   switch (layer) {
     case Layer::kRgb:
@@ -239,7 +239,10 @@ std::vector<DepthScale> ScalesFromFrame(const std::vector<uint8_t>& depth, int f
         hi = std::max(hi, v);
       }
     }
-    if (hi == 0) lo = 0, hi = 10000;  // nothing in view at reset: 0..10 m
+    if (hi == 0) {  // nothing in view at reset: 0..10 m
+      lo = 0;
+      hi = 10000;
+    }
     scale.near_mm = lo / 100 * 100;
     scale.far_mm = std::max((hi + 99) / 100 * 100, scale.near_mm + 100);
     scales.push_back(scale);
