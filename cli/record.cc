@@ -30,8 +30,8 @@
 #include "cli/progress.h"
 #include "cli/record_from.h"
 #include "cli/render_common.h"
-#include "cli/run_folder.h"
 #include "cli/report.h"
+#include "cli/run_folder.h"
 #include "cli/shard.h"
 #include "render/contact_sheet.h"
 #include "render/png_io.h"
@@ -40,6 +40,7 @@
 #include "src/errors.h"
 #include "src/hindsight.h"
 #include "src/json_util.h"
+#include "src/suggest.h"
 
 namespace fetchscope::cli {
 namespace {
@@ -76,6 +77,7 @@ struct RecordOptions {
   bool episodes_given = false;      // --episodes was on the command line
   bool no_report = false;           // no index.html (cli/report.h)
   std::string from;                 // record --from: a run folder or trajectory JSON
+  std::string layers = "rgb";       // --layers: rgb plus depth, segmentation
 };
 
 // Everything the parent decided before the workers start; workers only read it.
@@ -91,11 +93,13 @@ struct RecordPlan {
   int encoders = 1;        // episodes a worker encodes at once
   const TrajectorySource* from = nullptr;  // record --from: the episodes to replay
   bool hindsight = false;  // the hindsight overlay: run the episode first, then render it
+  std::vector<Layer> layers;  // --layers beyond rgb (depth, segmentation), in the order given
 };
 
 // One rendered frame travelling from the render thread to an episode's encoder thread.
 struct Frame {
   std::vector<uint8_t> rgb;
+  std::vector<std::vector<uint8_t>> layers;  // RecordPlan::layers as rgb, in that order
   int t = 0;
   std::string label;
 };
@@ -104,14 +108,17 @@ struct Frame {
 // no per-frame allocation, and a render thread that runs ahead waits for a free one.
 class FramePool {
  public:
-  /// At most `count` frames of `bytes` each, made when first needed: a run whose render thread
-  /// never gets ahead of its encoders never holds more than the few it cycles through.
-  FramePool(size_t count, size_t bytes) : count_(count), bytes_(bytes) {}
+  /// At most `count` frames of `bytes` each (and `layers` layer images of as many), made when
+  /// first needed: a run whose render thread never gets ahead of its encoders never holds more
+  /// than the few it cycles through.
+  FramePool(size_t count, size_t bytes, size_t layers)
+      : count_(count), bytes_(bytes), layers_(layers) {}
   Frame* Acquire() {
     std::unique_lock<std::mutex> lock(mutex_);
     if (free_.empty() && pool_.size() < count_) {
       pool_.push_back(std::make_unique<Frame>());
       pool_.back()->rgb.resize(bytes_);
+      pool_.back()->layers.assign(layers_, std::vector<uint8_t>(bytes_));
       return pool_.back().get();
     }
     cv_.wait(lock, [&] { return !free_.empty(); });
@@ -131,6 +138,7 @@ class FramePool {
  private:
   const size_t count_;
   const size_t bytes_;
+  const size_t layers_;
   std::vector<std::unique_ptr<Frame>> pool_;
   std::deque<Frame*> free_;
   std::mutex mutex_;
@@ -152,6 +160,179 @@ std::string EpisodeName(int k) {
   char name[32];
   std::snprintf(name, sizeof(name), "episode_%03d", k);
   return name;
+}
+
+// A layer's name as --layers, the file names and the manifest write it.
+const char* LayerName(Layer layer) {
+  switch (layer) {
+    case Layer::kRgb:
+      return "rgb";
+    case Layer::kDepth:
+      return "depth";
+    case Layer::kSegmentation:
+      return "segmentation";
+  }
+  return "?";
+}
+
+// Parses --layers: a comma list of rgb, depth, segmentation, each once. rgb is always recorded
+// (the episode video, sheet and report need it), so the result is the layers beyond it, in the
+// order given. UsageError names a bad or repeated entry and what is accepted.
+std::vector<Layer> ParseRecordLayers(const std::string& list) {
+  const std::vector<std::string> names = {"rgb", "depth", "segmentation"};
+  std::vector<Layer> extra;
+  std::set<std::string> seen;
+  for (const std::string& token : SplitCommaList(list)) {
+    if (token.empty()) {
+      throw UsageError("--layers '" + list +
+                       "' has an empty entry; use a comma list of rgb, "
+                       "depth, segmentation");
+    }
+    if (std::find(names.begin(), names.end(), token) == names.end()) {
+      throw UsageError("--layers: unknown layer '" + token + "'" + DidYouMean(token, names) +
+                       "; use a comma list of rgb, depth, segmentation");
+    }
+    if (!seen.insert(token).second) {
+      throw UsageError("--layers names '" + token + "' twice; each layer once");
+    }
+    if (token == "depth") extra.push_back(Layer::kDepth);
+    if (token == "segmentation") extra.push_back(Layer::kSegmentation);
+  }
+  return extra;
+}
+
+// The --layers list the manifest and --resume compare: "rgb" and the extra layers in order.
+std::string LayersLabel(const std::vector<Layer>& layers) {
+  std::string label = "rgb";
+  for (Layer layer : layers) label += std::string(",") + LayerName(layer);
+  return label;
+}
+
+// The depth video's grey scale for one camera's view in one episode, fixed from the episode's
+// reset frame so that a shade means the same distance all episode long: `near_mm` (the nearest
+// depth in the view, rounded down to 10 cm) is white, `far_mm` (the farthest, rounded up) dark
+// grey 32; nearer is clamped to white, farther to 32, and no depth (sky, nothing hit) is black.
+struct DepthScale {
+  int x = 0, y = 0, width = 0, height = 0;  // the view in the frame, pixels, row 0 at the top
+  int near_mm = 0;
+  int far_mm = 0;
+};
+
+// One scale per view of the frame (`tiles`: the renderer's, bottom-left origin), from `depth`
+// (RenderLayer's millimetres of a `frame_width` x `frame_height` frame).
+std::vector<DepthScale> ScalesFromFrame(const std::vector<uint8_t>& depth, int frame_width,
+                                        int frame_height, const std::vector<mjrRect>& tiles) {
+  const uint16_t* mm = reinterpret_cast<const uint16_t*>(depth.data());
+  std::vector<DepthScale> scales;
+  for (const mjrRect& tile : tiles) {
+    DepthScale scale;
+    scale.x = tile.left;
+    scale.y = frame_height - tile.bottom - tile.height;
+    scale.width = tile.width;
+    scale.height = tile.height;
+    int lo = 65535, hi = 0;
+    for (int r = scale.y; r < scale.y + scale.height; ++r) {
+      for (int c = scale.x; c < scale.x + scale.width; ++c) {
+        const int v = mm[static_cast<size_t>(r) * frame_width + c];
+        if (v == 0) continue;
+        lo = std::min(lo, v);
+        hi = std::max(hi, v);
+      }
+    }
+    if (hi == 0) {  // nothing in view at reset: 0..10 m
+      lo = 0;
+      hi = 10000;
+    }
+    scale.near_mm = lo / 100 * 100;
+    scale.far_mm = std::max((hi + 99) / 100 * 100, scale.near_mm + 100);
+    scales.push_back(scale);
+  }
+  return scales;
+}
+
+// Depth in millimetres (RenderLayer's uint16) -> grey rgb, each view with its scale; pixels in
+// no view (the empty cells of a grid) stay black.
+void DepthToGrey(const std::vector<uint8_t>& depth, int frame_width,
+                 const std::vector<DepthScale>& scales, uint8_t* rgb) {
+  const uint16_t* mm = reinterpret_cast<const uint16_t*>(depth.data());
+  std::fill(rgb, rgb + depth.size() / 2 * 3, 0);
+  for (const DepthScale& s : scales) {
+    const double span = s.far_mm - s.near_mm;
+    for (int r = s.y; r < s.y + s.height; ++r) {
+      for (int c = s.x; c < s.x + s.width; ++c) {
+        const size_t i = static_cast<size_t>(r) * frame_width + c;
+        if (mm[i] == 0) continue;
+        const double f = std::clamp((mm[i] - s.near_mm) / span, 0.0, 1.0);
+        const auto grey = static_cast<uint8_t>(std::lround(255.0 - 223.0 * f));
+        rgb[3 * i] = rgb[3 * i + 1] = rgb[3 * i + 2] = grey;
+      }
+    }
+  }
+}
+
+// One episode's segmentation legend: every object seen in any of its frames, with the pixels
+// of all frames summed, the frames it appears in, and the geoms seen.
+class EpisodeLegend {
+ public:
+  void Add(const std::vector<SegmentObject>& frame) {
+    ++frames_;
+    for (const SegmentObject& o : frame) {
+      Entry& e = objects_[o.index];
+      e.object.index = o.index;
+      e.object.color = o.color;
+      e.object.body = o.body;
+      e.object.site = o.site;
+      e.object.pixels += o.pixels;
+      e.geoms.insert(o.geoms.begin(), o.geoms.end());
+      ++e.frames;
+    }
+  }
+  /// The legend JSON; the colour of each object is the same in every episode, camera and run.
+  nlohmann::json Json(int episode) const {
+    nlohmann::json list = nlohmann::json::array();
+    for (const auto& [index, e] : objects_) {
+      char hex[8];
+      std::snprintf(hex, sizeof(hex), "#%02x%02x%02x", e.object.color[0], e.object.color[1],
+                    e.object.color[2]);
+      list.push_back({{"color", hex},
+                      {"rgb", {e.object.color[0], e.object.color[1], e.object.color[2]}},
+                      {"body", e.object.body},
+                      {"geoms", std::vector<std::string>(e.geoms.begin(), e.geoms.end())},
+                      {"site", e.object.site.empty() ? nlohmann::json(nullptr)
+                                                     : nlohmann::json(e.object.site)},
+                      {"pixels", e.object.pixels},
+                      {"frames", e.frames}});
+    }
+    return {{"episode", episode},
+            {"frames", frames_},
+            {"background", "#000000"},
+            {"note",
+             "one colour per body (all its geoms) or site, the same in every frame; "
+             "pixels and frames summed over the episode's video. Lossy video shifts "
+             "colours slightly: match a pixel to the nearest colour here"},
+            {"objects", list}};
+  }
+
+ private:
+  struct Entry {
+    SegmentObject object;
+    std::set<std::string> geoms;
+    int frames = 0;
+  };
+  std::map<int, Entry> objects_;  // by palette index
+  int frames_ = 0;
+};
+
+// The file of episode k's `layer` video in `format`: episode_000_depth.mp4.
+std::string LayerVideoName(int k, Layer layer, const std::string& format) {
+  return EpisodeName(k) + "_" + LayerName(layer) + "." + VideoFormatExtension(format);
+}
+
+// The codec each format's file is encoded with: mp4 with the run's H.264 decision.
+std::string FormatCodec(const std::string& format, const std::string& h264) {
+  if (format == "mp4") return h264;
+  if (format == "webm") return "libvpx-vp9";
+  return format;  // gif
 }
 
 // The options of episode k's video in `format`: the plan's encoder settings plus the tags that
@@ -184,6 +365,14 @@ class EpisodeEncoder {
           (fs::path(plan.o->out) / (name_ + "." + VideoFormatExtension(format))).string(),
           EpisodeVideoOptions(plan, k, format));
     }
+    for (Layer layer : plan.layers) {
+      for (const std::string& format : plan.formats) {
+        VideoOptions options = EpisodeVideoOptions(plan, k, format);
+        options.metadata.emplace_back("layer", LayerName(layer));
+        layer_writers_.emplace_back(
+            (fs::path(plan.o->out) / LayerVideoName(k, layer, format)).string(), options);
+      }
+    }
     thread_ = std::thread([this] { Body(); });
   }
   ~EpisodeEncoder() {
@@ -205,6 +394,12 @@ class EpisodeEncoder {
   }
   /// Members added to the manifest entry (e.g. "hindsight"); call before Close.
   void SetExtra(nlohmann::json extra) { extra_ = std::move(extra); }
+  /// The layers' extras: the segmentation legend JSON (written beside the videos) and the depth
+  /// scale (in the manifest entry); call before Close.
+  void SetLayerInfo(nlohmann::json legend, std::vector<DepthScale> depth) {
+    legend_ = std::move(legend);
+    depth_scales_ = std::move(depth);
+  }
   /// No more frames and no files: the partial video is removed.
   void Abort() { Enqueue(nullptr, Command::kAbort); }
   /// Waits for the thread; rethrows its failure.
@@ -241,6 +436,10 @@ class EpisodeEncoder {
           try {
             const auto t0 = Clock::now();
             for (VideoWriter& writer : writers_) writer.AddFrame(f->rgb.data());
+            const size_t formats = plan_.formats.size();
+            for (size_t i = 0; i < layer_writers_.size(); ++i) {
+              layer_writers_[i].AddFrame(f->layers[i / formats].data());
+            }
             encode_s_ += Since(t0);
             if (on_sheet_.count(f->t)) AddTile(*f);
           } catch (...) {
@@ -262,7 +461,10 @@ class EpisodeEncoder {
         }
       }
       pool_.Release(held);
-      if (error_ || item.second == Command::kAbort) writers_.clear();  // removes partial videos
+      if (error_ || item.second == Command::kAbort) {  // removes the partial videos
+        writers_.clear();
+        layer_writers_.clear();
+      }
       finished_.store(true);
       return;
     }
@@ -276,6 +478,7 @@ class EpisodeEncoder {
     const RecordOptions& o = *plan_.o;
     const auto t0 = Clock::now();
     for (VideoWriter& writer : writers_) writer.Finish();
+    for (VideoWriter& writer : layer_writers_) writer.Finish();
     const int steps = static_cast<int>(episode_.steps.size()) - 1;
     const bool complete = episode_.complete;  // false: ended early by SIGINT/SIGTERM
     char title[256];
@@ -292,6 +495,7 @@ class EpisodeEncoder {
                                  {"assets", AssetsJson(plan_.assets)},
                                  {"episodes", nlohmann::json::array({EpisodeJson(episode_)})}};
     WriteJson((fs::path(o.out) / (name_ + ".json")).string(), trajectory);
+    const nlohmann::json layers = FinishLayers();
     const double write_s = Since(t0);
     const bool success = episode_.steps.back().is_success;
     nlohmann::json videos = nlohmann::json::object();  // format -> file and frames in it
@@ -317,8 +521,47 @@ class EpisodeEncoder {
                        {"encoded_height", first.encoded_height()},
                        {"timings_s", {{"sim", sim_s_}, {"render", render_s_},
                                       {"encode", encode_s_}, {"write", write_s}}}};
+    if (!layers.empty()) entry["layers"] = layers;
     if (extra_.is_object()) entry.update(extra_);
     channel_.Done(k_, entry);
+  }
+
+  // The manifest entry's "layers" (empty without --layers): per layer its videos as "videos"
+  // lists them, the first format's file as "video", the depth scale or the segmentation legend
+  // (written here).
+  nlohmann::json FinishLayers() {
+    nlohmann::json layers = nlohmann::json::object();
+    const size_t formats = plan_.formats.size();
+    for (size_t l = 0; l < plan_.layers.size(); ++l) {
+      const Layer layer = plan_.layers[l];
+      nlohmann::json videos = nlohmann::json::object();
+      for (size_t f = 0; f < formats; ++f) {
+        const VideoWriter& writer = layer_writers_[l * formats + f];
+        videos[plan_.formats[f]] = {{"file", fs::path(writer.path()).filename().string()},
+                                    {"frames", writer.frames_encoded()}};
+      }
+      nlohmann::json entry = {{"video", videos[plan_.formats.front()]["file"]}, {"videos", videos}};
+      if (layer == Layer::kDepth) {
+        nlohmann::json scales = nlohmann::json::array();
+        const std::vector<std::string> cameras = SplitCommaList(plan_.o->view.camera);
+        for (size_t i = 0; i < depth_scales_.size(); ++i) {
+          scales.push_back({{"camera", i < cameras.size() ? cameras[i] : std::string()},
+                            {"near_m", depth_scales_[i].near_mm / 1000.0},
+                            {"far_m", depth_scales_[i].far_mm / 1000.0}});
+        }
+        entry["scales"] = std::move(scales);
+        entry["mapping"] =
+            "per camera view: grey 255 (white) at near_m and nearer .. 32 at far_m and farther, "
+            "0 (black) = no depth";
+      }
+      if (layer == Layer::kSegmentation) {
+        const std::string legend = name_ + "_segmentation_legend.json";
+        WriteJson((fs::path(plan_.o->out) / legend).string(), legend_);
+        entry["legend"] = legend;
+      }
+      layers[LayerName(layer)] = std::move(entry);
+    }
+    return layers;
   }
 
   const RecordPlan& plan_;
@@ -329,9 +572,12 @@ class EpisodeEncoder {
   const std::string name_;
   std::set<int> on_sheet_;
   std::vector<VideoWriter> writers_;  // one per plan.formats entry, in that order
+  std::vector<VideoWriter> layer_writers_;  // per plan.layers entry, one per format
   std::vector<SheetTile> tiles_;
   EpisodeRecord episode_;
   nlohmann::json extra_;
+  nlohmann::json legend_;                 // the segmentation layer's
+  std::vector<DepthScale> depth_scales_;  // the depth layer's, one per camera view
   double sim_s_ = 0, render_s_ = 0, encode_s_ = 0;
   std::exception_ptr error_;
   std::atomic<bool> finished_{false};
@@ -368,7 +614,7 @@ class RecordRunner : public EpisodeRunner {
     // an episode ahead
     const size_t frames = 4 + kReadbackDepth + plan_.encoders +
                           (plan_.encoders - 1) * (plan_.o->steps + 1);
-    pool_.emplace(frames, frame_bytes);
+    pool_.emplace(frames, frame_bytes, plan_.layers.size());
     const GlInfo& gi = gl_->info();
     return {{"worker", worker_},
             {"pid", static_cast<long>(getpid())},
@@ -392,6 +638,8 @@ class RecordRunner : public EpisodeRunner {
     }
     auto encoder = std::make_unique<EpisodeEncoder>(plan_, k, worker_, &*pool_, &channel);
     renderer_->ResetTrail();
+    EpisodeLegend legend;
+    std::vector<DepthScale> depth_scales;
     double sim_s = 0, render_s = 0;
     // frames submitted to the renderer and not yet back, oldest first: with asynchronous
     // readback the GPU draws frame t+1 while frame t comes back
@@ -414,6 +662,21 @@ class RecordRunner : public EpisodeRunner {
       f->label = TileLabel(info);
       in_flight.push_back(f);
       renderer_->Submit(env.data(), info, f->rgb.data());
+      // the layers are drawn after the rgb frame's readback has been queued, and read at once
+      for (size_t i = 0; i < plan_.layers.size(); ++i) {
+        const Layer layer = plan_.layers[i];
+        if (layer == Layer::kSegmentation) {
+          renderer_->RenderLayer(env.data(), info, layer, &f->layers[i]);
+          legend.Add(renderer_->segmentation_legend());
+        } else {
+          renderer_->RenderLayer(env.data(), info, layer, &depth_);
+          if (depth_scales.empty()) {
+            depth_scales = ScalesFromFrame(depth_, renderer_->width(), renderer_->height(),
+                                           renderer_->tiles());
+          }
+          DepthToGrey(depth_, renderer_->width(), depth_scales, f->layers[i].data());
+        }
+      }
       while (renderer_->pending() >= renderer_->pipeline_depth()) collect_oldest();
       sim_start = Clock::now();
       render_s += std::chrono::duration<double>(sim_start - render_start).count();
@@ -431,6 +694,7 @@ class RecordRunner : public EpisodeRunner {
       throw;  // aborts `encoder`
     }
     encoder->SetExtra({{"hindsight", HindsightCounts(episode)}});
+    encoder->SetLayerInfo(legend.Json(k), std::move(depth_scales));
     encoder->Close(std::move(episode), sim_s, render_s);
     encoders_.push_back(std::move(encoder));
   }
@@ -452,13 +716,16 @@ class RecordRunner : public EpisodeRunner {
     if (!plan_.from && !plan_.hindsight) return sequence_.Play(k, on_step);
     EpisodeRecord first_pass;
     const std::vector<StepRecord>* script = nullptr;
+    bool script_complete = true;
     if (plan_.from) {
       script = &plan_.from->episodes.at(k).steps;
+      script_complete = plan_.from->episodes.at(k).complete;
     } else {
       first_pass = sequence_.Play(k, [&](const StepRecord&, const StepResult*) {
         return !channel.StopRequested();
       });
       script = &first_pass.steps;
+      script_complete = first_pass.complete;
     }
     if (plan_.hindsight) hindsight_ = SampleEpisodeHindsight(k, *script);
     if (!replayer_) {
@@ -468,7 +735,7 @@ class RecordRunner : public EpisodeRunner {
     // the replay renders from the env of sequence_ (--from) or replay_env_ (hindsight)
     render_env_ = plan_.from ? &sequence_.env() : replay_env_.get();
     const std::string check = plan_.from ? plan_.from->episodes.at(k).file : std::string();
-    EpisodeRecord episode = replayer_->Replay(k, *script, check, on_step);
+    EpisodeRecord episode = replayer_->Replay(k, *script, script_complete, check, on_step);
     render_env_ = nullptr;
     return episode;
   }
@@ -513,6 +780,7 @@ class RecordRunner : public EpisodeRunner {
   std::optional<EpisodeReplayer> replayer_;
   FetchEnv* render_env_ = nullptr;             // the env being replayed, while it is
   std::optional<HindsightEpisode> hindsight_;  // this episode's relabelling (hindsight overlay)
+  std::vector<uint8_t> depth_;                 // the depth layer's millimetres, reused
   // Lifetime order: the GL context outlives the renderer; encoders go first (they hold frames).
   std::unique_ptr<GlContext> gl_;
   std::optional<Renderer> renderer_;
@@ -534,6 +802,13 @@ void LimitLlvmpipeThreads(int jobs) {
 int EncodersPerWorker(int jobs) {
   const int cores = UsableCores().usable;
   return std::max(1, cores / std::max(1, jobs));
+}
+
+// ", 1 incomplete (as recorded)" for the summary line when episodes are incomplete.
+std::string IncompleteNote(const std::vector<int>& incomplete, bool interrupted) {
+  if (incomplete.empty()) return "";
+  return ", " + std::to_string(incomplete.size()) + " incomplete" +
+         (interrupted ? "" : " (as recorded)");
 }
 
 // record --from: the recorded episodes' indices, ascending.
@@ -566,24 +841,35 @@ void ValidatePolicy(const std::string& policy, const EnvSpec& spec, const Policy
 // episodes to come out byte for byte as the run it continues (--jobs, --gpu and --backend
 // are free: outputs do not depend on them on one machine).
 nlohmann::json RecordParameters(const RecordOptions& o, const RecordPlan& plan, const Shard& shard) {
-  return {{"--env-id", plan.spec->id},
-          {"--seed", plan.seed},
-          {"--policy", o.policy},
-          {"--replay-dtype", o.replay_dtype},
-          {"--episodes", o.episodes},
-          {"--steps", o.steps},
-          {"--sheet-every", o.sheet_every},
-          {"--assets", plan.assets.sha256},
-          {"--camera", o.view.camera},
-          {"--overlay", o.view.overlay},
-          {"--width", o.view.width},
-          {"--height", o.view.height},
-          {"--msaa", o.view.msaa},
-          {"--codec", plan.video.codec},
-          {"--crf", o.crf},
-          {"--preset", o.preset.empty() ? kDefaultVideoPreset : o.preset},
-          {"--fps", o.fps},
-          {"--shard", ShardLabel(shard)}};
+  nlohmann::json parameters = {{"--env-id", plan.spec->id},
+                               {"--seed", plan.seed},
+                               {"--policy", o.policy},
+                               {"--replay-dtype", o.replay_dtype},
+                               {"--episodes", o.episodes},
+                               {"--steps", o.steps},
+                               {"--sheet-every", o.sheet_every},
+                               {"--assets", plan.assets.sha256},
+                               {"--camera", o.view.camera},
+                               {"--overlay", o.view.overlay},
+                               {"--width", o.view.width},
+                               {"--height", o.view.height},
+                               {"--msaa", o.view.msaa},
+                               {"--codec", plan.video.codec},
+                               {"--crf", o.crf},
+                               {"--preset", o.preset.empty() ? kDefaultVideoPreset : o.preset},
+                               {"--fps", o.fps},
+                               {"--shard", ShardLabel(shard)}};
+  // newer options join only when they change the files, so that runs recorded before they
+  // existed stay resumable
+  if (plan.formats != std::vector<std::string>{"mp4"}) {
+    parameters["--format"] = plan.formats;
+    if (std::find(plan.formats.begin(), plan.formats.end(), "gif") != plan.formats.end()) {
+      parameters["--gif-fps"] = o.gif_fps;
+      parameters["--gif-width"] = o.gif_width;
+    }
+  }
+  if (!plan.layers.empty()) parameters["--layers"] = LayersLabel(plan.layers);
+  return parameters;
 }
 
 RunFolderRequest MakeRunFolderRequest(const RecordOptions& o, const Shard& shard,
@@ -644,6 +930,7 @@ void RunRecord(const RecordOptions& options, const std::string& command_line,
   plan.video.gif_fps = o.gif_fps;
   plan.video.gif_width = o.gif_width;
   plan.formats = ParseVideoFormats(o.formats);
+  plan.layers = ParseRecordLayers(o.layers);
   ValidateVideoOptions(plan.video);
   const std::vector<int> episodes = from ? FromEpisodes(*from) : RecordEpisodeList(&o, shard, plan);
   const int jobs = ResolveJobs(o.jobs, static_cast<int>(episodes.size()));
@@ -666,20 +953,30 @@ void RunRecord(const RecordOptions& options, const std::string& command_line,
     plan.video.width = frame.width;  // --width/--height size each camera's tile
     plan.video.height = frame.height;
     model_path = env.model_path();
+    if (from) VerifyRecording(env, *from);  // an edited recording stops here, before any file
   }
   ValidateVideoOptions(plan.video);
 
-  // The GPUs and the encoder, decided once (driver work in a child process).
-  const NodeProbe node = ProbeNode(o.view, &plan.video);
+  // The GPUs and the encoder, decided once (driver work in a child process); without mp4 no
+  // H.264 is encoded, and nothing is probed for it.
+  const bool h264 =
+      std::find(plan.formats.begin(), plan.formats.end(), "mp4") != plan.formats.end();
+  const NodeProbe node = ProbeNode(o.view, h264 ? &plan.video : nullptr);
   plan.gpu = node.gpu;
-  plan.video.codec = node.codec.codec;
+  if (h264) plan.video.codec = node.codec.codec;
   if (!node.warnings.empty() && !o.quiet) {
     std::fprintf(stderr, "fetchscope: warning: %s\n", node.warnings.c_str());
   }
 
-  // never two runs in one folder; a failure below leaves nothing this run made
+  // never two runs in one folder; a failure below leaves nothing this run made. From here a
+  // SIGINT/SIGTERM is an interruption (the scheduler takes over the handlers when it starts).
+  InstallStopSignals();
   const nlohmann::json parameters = RecordParameters(o, plan, shard);
   RunFolder folder(MakeRunFolderRequest(o, shard, episodes, parameters));
+  if (!folder.notice().empty() && !o.quiet) {
+    std::fprintf(stderr, "fetchscope: note: %s\n", folder.notice().c_str());
+  }
+  const int early_signal = StopSignal();  // before the scheduler: record nothing
 
   ProgressReporter progress("record", static_cast<int>(folder.todo().size()), o.steps + 1, o.quiet);
   int successes = 0;
@@ -693,9 +990,29 @@ void RunRecord(const RecordOptions& options, const std::string& command_line,
     successes += entry.at("is_success").get<bool>();
   };
   LimitLlvmpipeThreads(jobs);
-  const ScheduleResult result = RunEpisodes(schedule, [&plan](int worker) {
-    return std::make_unique<RecordRunner>(plan, worker);
-  });
+  ScheduleResult result;
+  if (early_signal) {
+    result.signal = early_signal;
+    result.jobs = jobs;
+    result.missing = folder.todo();
+  } else {
+    result = RunEpisodes(
+        schedule, [&plan](int worker) { return std::make_unique<RecordRunner>(plan, worker); });
+  }
+  const bool any_complete =
+      std::any_of(result.results.begin(), result.results.end(),
+                  [](const auto& r) { return r.second.value("complete", false); });
+  if (result.signal && !any_complete && folder.replacing()) {
+    // interrupted before --overwrite recorded a whole episode: the earlier run stays as it was
+    if (!o.quiet) {
+      std::fprintf(stderr,
+                   "record: interrupted before any episode was complete; the earlier "
+                   "run in %s is kept as it was\n",
+                   o.out.c_str());
+    }
+    ExitStatus() = 128 + result.signal;
+    return;  // `folder` removes this run's files and puts the earlier run back
+  }
 
   const double wall = Since(wall_start);
   nlohmann::json episodes_json = nlohmann::json::array();
@@ -745,7 +1062,21 @@ void RunRecord(const RecordOptions& options, const std::string& command_line,
       {"source", shard.source.empty() ? nlohmann::json(nullptr) : nlohmann::json(shard.source)},
       {"episodes", episodes}};
   const int sig = result.signal;
-  const std::string codec_used = plan.video.codec;
+  // the encoder of each format's files, and all of them in --format order as one line
+  nlohmann::json codecs = nlohmann::json::object();
+  std::string codec_used;
+  for (const std::string& format : plan.formats) {
+    codecs[format] = FormatCodec(format, plan.video.codec);
+    codec_used += (codec_used.empty() ? "" : ", ") + codecs[format].get<std::string>();
+  }
+  const std::string codec_reason =
+      h264 ? node.codec.reason
+           : "--format " + o.formats + ": no H.264 encoded, so --codec does not apply";
+  // episodes cut short: by this run's signal, or already in the recording --from replays
+  std::vector<int> incomplete;
+  for (const nlohmann::json& e : episodes_json) {
+    if (!e.value("complete", true)) incomplete.push_back(e.at("index").get<int>());
+  }
   nlohmann::json manifest = {
       {"env_id", plan.spec->id},
       {"seed", plan.seed},
@@ -761,32 +1092,50 @@ void RunRecord(const RecordOptions& options, const std::string& command_line,
       {"jobs", result.jobs},
       {"worker_mode", o.worker_mode},
       {"workers", workers_json},
-      {"gpu", {{"request", o.view.gpu}, {"choice", plan.gpu.reason}, {"devices", plan.gpu.devices}}},
+      {"gpu",
+       {{"request", o.view.gpu}, {"choice", plan.gpu.reason}, {"devices", plan.gpu.devices}}},
       {"assets", AssetsJson(plan.assets)},
       {"model_file", model_path},
       {"camera", o.view.camera},
       {"overlay", o.view.overlay},
       {"msaa", first_worker.value("msaa", 0)},
       {"msaa_reason", first_worker.value("msaa_reason", "")},
-      {"backend", {{"name", first_worker.value("backend", "")},
-                   {"device", first_worker.value("device", "")},
-                   {"gl_vendor", first_worker.value("gl_vendor", "")},
-                   {"gl_renderer", first_worker.value("gl_renderer", "")},
-                   {"gl_version", first_worker.value("gl_version", "")}}},
-      {"video", {{"codec", codec_used}, {"codec_reason", node.codec.reason},
-                 {"crf", o.crf}, {"preset", o.preset.empty() ? kDefaultVideoPreset : o.preset},
-                 {"fps", o.fps}, {"width", plan.video.width}, {"height", plan.video.height},
-                 {"encoded_width", (plan.video.width + 1) & ~1}, {"encoded_height", (plan.video.height + 1) & ~1},
-                 {"encoder_threads", plan.video.threads}, {"encoders_per_worker", plan.encoders},
-                 {"container", plan.formats.front()}, {"formats", plan.formats},
-                 {"gif", {{"fps", std::min(o.gif_fps, o.fps)}, {"width", o.gif_width}}},
-                 {"pix_fmt", "yuv420p"}}},
+      {"backend",
+       {{"name", first_worker.value("backend", "")},
+        {"device", first_worker.value("device", "")},
+        {"gl_vendor", first_worker.value("gl_vendor", "")},
+        {"gl_renderer", first_worker.value("gl_renderer", "")},
+        {"gl_version", first_worker.value("gl_version", "")}}},
+      {"layers", SplitCommaList(LayersLabel(plan.layers))},
+      {"video",
+       {{"codec", codec_used},
+        {"codecs", codecs},
+        {"codec_reason", codec_reason},
+        {"crf", o.crf},
+        {"preset", o.preset.empty() ? kDefaultVideoPreset : o.preset},
+        {"fps", o.fps},
+        {"width", plan.video.width},
+        {"height", plan.video.height},
+        {"encoded_width", (plan.video.width + 1) & ~1},
+        {"encoded_height", (plan.video.height + 1) & ~1},
+        {"encoder_threads", plan.video.threads},
+        {"encoders_per_worker", plan.encoders},
+        {"container", plan.formats.front()},
+        {"formats", plan.formats},
+        {"gif", {{"fps", std::min(o.gif_fps, o.fps)}, {"width", o.gif_width}}},
+        {"pix_fmt", "yuv420p"}}},
       {"versions", VersionsJson()},
-      {"timings_s", {{"wall", wall}, {"sim", timings["sim"]}, {"render", timings["render"]},
-                     {"encode", timings["encode"]}, {"write", timings["write"]}}},
+      {"timings_s",
+       {{"wall", wall},
+        {"sim", timings["sim"]},
+        {"render", timings["render"]},
+        {"encode", timings["encode"]},
+        {"write", timings["write"]}}},
       {"frames", progress.frames()},
       {"interrupted", sig != 0},
-      {"signal", sig == 0 ? nlohmann::json(nullptr) : nlohmann::json(sig == SIGINT ? "SIGINT" : "SIGTERM")},
+      {"incomplete_episodes", incomplete},
+      {"signal",
+       sig == 0 ? nlohmann::json(nullptr) : nlohmann::json(sig == SIGINT ? "SIGINT" : "SIGTERM")},
       {"command_line", command_line},
       {"parameters", parameters},
       {"resumed", o.resume && !folder.kept().empty()}};
@@ -795,15 +1144,15 @@ void RunRecord(const RecordOptions& options, const std::string& command_line,
   folder.Commit();
   const size_t recorded = result.results.size();
   char summary[768];
-  std::snprintf(summary, sizeof(summary),
-                "record: %zu episode(s), %ld frames in %.1f s (%.1f frames/s, %.2f episodes/s, %d "
-                "job(s)%s%s), success %d/%zu, %s via %s, %s -> %s%s",
-                recorded, progress.frames(), wall, progress.frames() / wall, recorded / wall,
-                result.jobs, shard.sharded() ? ", shard " : "",
-                shard.sharded() ? ShardLabel(shard).c_str() : "", successes, recorded,
-                first_worker.value("gl_renderer", "?").c_str(),
-                first_worker.value("backend", "?").c_str(), codec_used.c_str(), o.out.c_str(),
-                sig ? " (interrupted)" : "");
+  std::snprintf(
+      summary, sizeof(summary),
+      "record: %zu episode(s), %ld frames in %.1f s (%.1f frames/s, %.2f episodes/s, %d "
+      "job(s)%s%s), success %d/%zu%s, %s via %s, %s -> %s%s",
+      recorded, progress.frames(), wall, progress.frames() / wall, recorded / wall, result.jobs,
+      shard.sharded() ? ", shard " : "", shard.sharded() ? ShardLabel(shard).c_str() : "",
+      successes, recorded, IncompleteNote(incomplete, sig != 0).c_str(),
+      first_worker.value("gl_renderer", "?").c_str(), first_worker.value("backend", "?").c_str(),
+      codec_used.c_str(), o.out.c_str(), sig ? " (interrupted)" : "");
   progress.Done(summary);
   // a shard's episodes are only part of the run: merge-manifests writes the run's report
   if (!o.no_report && !shard.sharded()) WriteRunReportOrWarn(manifest_path, o.quiet);
@@ -850,17 +1199,29 @@ void RegisterRecord(CLI::App& app) {
   sub->add_option("--gif-width", o->gif_width,
                   "GIF width in pixels, 16..4096 (never wider than the frames; height keeps the aspect)")
       ->capture_default_str();
+  sub->add_option("--layers", o->layers,
+                  "Comma list of rgb (always recorded), depth, segmentation: each extra layer is "
+                  "one more video per episode and --format, episode_NNN_depth.mp4 (grey: white "
+                  "near .. dark far, black = no depth; the scale is fixed per episode from its "
+                  "reset frame and given in the manifest), episode_NNN_segmentation.mp4 (a fixed "
+                  "colour per body or site, as render --layers) with "
+                  "episode_NNN_segmentation_legend.json naming each colour's body and geoms. "
+                  "Layers show no overlays; contact sheets stay rgb")
+      ->capture_default_str();
   sub->add_option("--sheet-every", o->sheet_every, "Contact sheet: every K-th frame (0: about 12 tiles); the last frame is always included")
       ->capture_default_str()->check(CLI::Range(0, 1000));
   sub->add_option("--out", o->out, "Output folder")->capture_default_str();
   sub->add_flag("-q,--quiet", o->quiet, "No progress or summary on stderr");
   sub->add_flag("--overwrite", o->overwrite,
-                "Replace the record run already in --out (its manifest and episode files; other "
-                "files stay). Without --overwrite or --resume such a folder is refused");
+                "Replace the record run already in --out (its manifest, report and episode "
+                "files; other files stay). The earlier run is kept aside until the new one has "
+                "its manifest, and put back if it fails or is interrupted before an episode is "
+                "complete. Without --overwrite or --resume such a folder is refused");
   sub->add_flag("--resume", o->resume,
                 "Continue the interrupted record run in --out: keep its complete episodes and "
                 "record the others, byte-identical to an uninterrupted run; the options must "
-                "be those of that run");
+                "be those of that run. With nothing to resume (no such folder, or no manifest "
+                "in it) the whole run is recorded, with a note saying so");
   AddJobsOptions(sub, &o->jobs, &o->worker_mode);
   sub->add_option("--shard", o->shard,
                   "Record only shard I of N (0 <= I < N): episodes k with k mod N = I. Without it: "

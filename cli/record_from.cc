@@ -58,6 +58,13 @@ RecordedEpisode ParseEpisode(const nlohmann::json& e, const std::string& file) {
   }
   out.index = e["index"].get<int>();
   if (out.index < 0) throw RunError("--from: " + file + ": episode index " + std::to_string(out.index) + " is negative");
+  if (e.contains("complete")) {  // absent in trajectories from before the flag: complete
+    if (!e["complete"].is_boolean()) {
+      throw RunError("--from: " + file + ": episode " + std::to_string(out.index) +
+                     ": 'complete' is not true or false");
+    }
+    out.complete = e["complete"].get<bool>();
+  }
   const bool f32 = e.value("action_dtype", std::string("float64")) == "float32";
   const auto& steps = e["steps"];
   for (size_t t = 0; t < steps.size(); ++t) {
@@ -162,7 +169,8 @@ std::string SourceAssets(const TrajectorySource& source) {
 std::string FirstDifference(const StepRecord& replayed, const StepRecord& recorded) {
   auto diff = [](const std::string& what, double a, double b) {
     if (a == b || (std::isnan(a) && std::isnan(b))) return std::string();
-    return what + ": replayed " + Num(a) + ", recorded " + Num(b) + " (difference " + Num(a - b) + ")";
+    return what + " recorded " + Num(b) + ", replayed " + Num(a) +
+           " (difference replayed - recorded " + Num(a - b) + ")";
   };
   const auto& ro = replayed.obs.observation;
   const auto& co = recorded.obs.observation;
@@ -187,19 +195,21 @@ std::string FirstDifference(const StepRecord& replayed, const StepRecord& record
     if (!d.empty()) return d;
   }
   if (replayed.is_success != recorded.is_success) {
-    return std::string("is_success: replayed ") + (replayed.is_success ? "true" : "false") +
-           ", recorded " + (recorded.is_success ? "true" : "false");
+    return std::string("is_success recorded ") + (recorded.is_success ? "true" : "false") +
+           ", replayed " + (replayed.is_success ? "true" : "false");
   }
   return "";
 }
 
 EpisodeRecord EpisodeReplayer::Replay(int k, const std::vector<StepRecord>& recorded,
-                                      const std::string& check, const StepCallback& on_step) {
+                                      bool recorded_complete, const std::string& check,
+                                      const StepCallback& on_step) {
   if (k < next_) next_ = 0;  // start over from the seeded reset
   for (; next_ < k; ++next_) env_.Reset(next_ == 0 ? std::optional<uint64_t>(seed_) : std::nullopt);
   next_ = k + 1;
   EpisodeRecord episode;
   episode.index = k;
+  episode.complete = false;  // until the last recorded step is replayed
   StepRecord row;
   row.obs = env_.Reset(k == 0 ? std::optional<uint64_t>(seed_) : std::nullopt);
   row.is_success = env_.IsSuccess(row.obs.achieved_goal, row.obs.desired_goal);
@@ -207,15 +217,17 @@ EpisodeRecord EpisodeReplayer::Replay(int k, const std::vector<StepRecord>& reco
     if (check.empty()) return;
     const std::string d = FirstDifference(replayed, recorded[t]);
     if (!d.empty()) {
-      throw RunError("record --from: " + check + ": episode " + std::to_string(k) + " step " +
-                     std::to_string(t) + ": the replay differs from the recording: " + d +
-                     (t == 0 ? " (a different env, seed, assets or fetchscope version?)"
-                             : " (the recorded action or observation was changed, or the "
-                               "physics differs)"));
+      throw ReplayMismatch("record --from: " + check + ": episode " + std::to_string(k) + " step " +
+                           std::to_string(t) + ": " + d + "; " +
+                           (t == 0 ? "the reset differs: another env, seed, assets or "
+                                     "fetchscope version?"
+                                   : "the recording was edited, or the physics differs"));
     }
   };
   verify(row, 0);
   episode.steps.push_back(row);
+  const bool whole = recorded_complete;
+  if (recorded.size() == 1) episode.complete = whole;
   if (on_step && !on_step(episode.steps.back(), nullptr)) return episode;
   for (size_t t = 1; t < recorded.size(); ++t) {
     const Action& action = *recorded[t].action;
@@ -229,18 +241,27 @@ EpisodeRecord EpisodeReplayer::Replay(int k, const std::vector<StepRecord>& reco
     verify(r, t);
     episode.episode_return += result.reward;
     episode.steps.push_back(std::move(r));
+    if (t + 1 == recorded.size()) episode.complete = whole;
     if (on_step && !on_step(episode.steps.back(), &result)) break;
   }
   return episode;
+}
+
+void VerifyRecording(FetchEnv& env, const TrajectorySource& source) {
+  EpisodeReplayer replayer(env, source.seed);
+  for (const auto& [k, episode] : source.episodes) {
+    replayer.Replay(k, episode.steps, episode.complete, episode.file, nullptr);
+  }
 }
 
 void AddFromOption(CLI::App* sub, std::string* from) {
   sub->add_option("--from", *from,
                   "Re-render recorded episodes: a run folder (its episode_NNN.json) or one "
                   "trajectory JSON. Env, seed, policy, steps and episodes come from it; camera, "
-                  "overlay, size and the rest are free. Each replayed step is checked against "
-                  "the recorded observation; the first difference stops the run with its "
-                  "episode, step and value");
+                  "overlay, size, --layers and the rest are free. Each replayed step is checked "
+                  "against the recorded observation; the first difference stops the run, before "
+                  "any file, with its episode, step and value. An episode recorded incomplete "
+                  "(cut short by SIGINT) stays incomplete");
 }
 
 void CheckFromFlags(const CLI::App& sub, const std::string& from) {

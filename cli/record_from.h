@@ -5,15 +5,14 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
-
 #include <cstdint>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
-#include <nlohmann/json.hpp>
-
 #include "src/episode.h"
+#include "src/errors.h"
 #include "src/fetch_env.h"
 
 namespace fetchscope::cli {
@@ -23,6 +22,8 @@ struct RecordedEpisode {
   int index = 0;                  ///< episode number within its run
   std::string file;               ///< the JSON file it came from (for messages)
   std::vector<StepRecord> steps;  ///< steps[0] is the reset; actions with their dtype
+  /// false when the recording was cut short (SIGINT/SIGTERM): a re-render stays incomplete
+  bool complete = true;
 };
 
 /// What --from names: the run's env, seed, policy and assets, and its episodes by index.
@@ -53,10 +54,12 @@ class EpisodeReplayer {
   EpisodeReplayer(FetchEnv& env, uint64_t seed) : env_(env), seed_(seed) {}
   /// Replays episode `k` with the actions of `recorded` (steps 1..), calling `on_step` as
   /// RunEpisode does. With `check` set, each replayed observation, reward and success flag must
-  /// equal the recorded ones exactly; the first that does not throws RunError naming `check`
-  /// (the file), the episode, the step, the value and the difference.
-  EpisodeRecord Replay(int k, const std::vector<StepRecord>& recorded, const std::string& check,
-                       const StepCallback& on_step);
+  /// equal the recorded ones exactly; the first that does not throws ReplayMismatch naming
+  /// `check` (the file), the episode, the step, the value and the difference. The result is
+  /// complete only when `recorded_complete` and every recorded step was replayed (`on_step`
+  /// may stop it early).
+  EpisodeRecord Replay(int k, const std::vector<StepRecord>& recorded, bool recorded_complete,
+                       const std::string& check, const StepCallback& on_step);
 
  private:
   FetchEnv& env_;
@@ -64,9 +67,20 @@ class EpisodeReplayer {
   int next_ = 0;  // the episode whose reset the generator stands before
 };
 
+/// The message of a replayed step that differs from the recording (see EpisodeReplayer); one
+/// line, which record prints alone.
+struct ReplayMismatch : RunError {
+  using RunError::RunError;
+};
+
 /// Where replay and recording differ first in one step, or "" when they agree: e.g.
-/// "observation[3]: replayed 1.2, recorded 1.3 (difference -0.1)".
+/// "observation[3] recorded 1.3, replayed 1.2 (difference replayed - recorded -0.1)".
 std::string FirstDifference(const StepRecord& replayed, const StepRecord& recorded);
+
+/// Replays every episode of `source` on `env` (no rendering) and checks each step as
+/// EpisodeReplayer does: an edited recording stops the run before anything is written. Throws
+/// ReplayMismatch.
+void VerifyRecording(FetchEnv& env, const TrajectorySource& source);
 
 /// Adds --from to record's `sub`.
 void AddFromOption(CLI::App* sub, std::string* from);

@@ -1,7 +1,10 @@
 #include "cli/run_folder.h"
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <cctype>
+#include <cstdio>
 #include <fstream>
 #include <sstream>
 
@@ -20,7 +23,22 @@ bool EndsWith(const std::string& s, const std::string& tail) {
   return s.size() >= tail.size() && s.compare(s.size() - tail.size(), tail.size(), tail) == 0;
 }
 
-// A visible name as record writes it; `stem` is the name without a temporary's decorations.
+// What may follow episode_NNN in an episode's file names: the videos (one per --format), the
+// contact sheet, the trajectory, and the --layers videos and legend.
+bool EpisodeFileTail(const std::string& tail) {
+  static const std::set<std::string> tails = [] {
+    std::set<std::string> t = {"_sheet.png", ".json", "_segmentation_legend.json"};
+    for (const char* ext : {"mp4", "webm", "gif"}) {
+      for (const char* layer : {"", "_depth", "_segmentation"}) {
+        t.insert(std::string(layer) + "." + ext);
+      }
+    }
+    return t;
+  }();
+  return tails.count(tail) > 0;
+}
+
+// A visible name as record writes it.
 std::optional<RunFileName> ParseVisible(const std::string& name) {
   RunFileName parsed;
   if (name == "manifest.json") {
@@ -31,15 +49,19 @@ std::optional<RunFileName> ParseVisible(const std::string& name) {
     parsed.manifest = true;
     return parsed;
   }
-  if (name.rfind("episode_", 0) != 0) return std::nullopt;
-  for (const char* tail : {"_sheet.png", ".mp4", ".json"}) {
-    if (!EndsWith(name, tail)) continue;
-    const std::string digits = name.substr(8, name.size() - 8 - std::string(tail).size());
-    if (!AllDigits(digits) || digits.size() > 9) return std::nullopt;
-    parsed.episode = std::stoi(digits);
+  if (name == "index.html") {
+    parsed.report = true;
     return parsed;
   }
-  return std::nullopt;
+  if (name.rfind("episode_", 0) != 0) return std::nullopt;
+  size_t end = 8;
+  while (end < name.size() && std::isdigit(static_cast<unsigned char>(name[end]))) ++end;
+  const std::string digits = name.substr(8, end - 8);
+  if (!AllDigits(digits) || digits.size() > 9 || !EpisodeFileTail(name.substr(end))) {
+    return std::nullopt;
+  }
+  parsed.episode = std::stoi(digits);
+  return parsed;
 }
 
 std::string ReadText(const fs::path& path) {
@@ -76,6 +98,39 @@ std::string FirstDifference(const nlohmann::json& theirs, const nlohmann::json& 
   return "";
 }
 
+// The start of the hidden folder's name inside --out where --overwrite keeps the earlier run
+// until the new one has its manifest (the process id follows): ".manifest.replaced-",
+// ".manifest_shard_0001_of_0004.replaced-".
+std::string AsideFolderPrefix(const std::string& manifest_name) {
+  return "." + fs::path(manifest_name).stem().string() + ".replaced-";
+}
+
+// Every file a manifest entry names: video, sheet, trajectory, the videos of each format and
+// the layers' videos and legend.
+std::vector<std::string> EntryFiles(const nlohmann::json& e) {
+  std::vector<std::string> files;
+  for (const char* kind : {"video", "sheet", "trajectory"}) {
+    files.push_back(e.value(kind, std::string("?")));
+  }
+  auto add_videos = [&files](const nlohmann::json& holder) {
+    const auto videos = holder.find("videos");
+    if (videos == holder.end() || !videos->is_object()) return;
+    for (const auto& [format, v] : videos->items()) {
+      if (v.is_object()) files.push_back(v.value("file", std::string("?")));
+    }
+  };
+  add_videos(e);
+  const auto layers = e.find("layers");
+  if (layers != e.end() && layers->is_object()) {
+    for (const auto& [name, layer] : layers->items()) {
+      if (!layer.is_object()) continue;
+      add_videos(layer);
+      if (layer.contains("legend")) files.push_back(layer.value("legend", std::string("?")));
+    }
+  }
+  return files;
+}
+
 std::string Listed(const std::vector<std::string>& names) {
   std::string s;
   for (size_t i = 0; i < names.size() && i < 3; ++i) s += (i ? ", " : "") + names[i];
@@ -88,13 +143,14 @@ std::string Listed(const std::vector<std::string>& names) {
 std::optional<RunFileName> ParseRunFileName(const std::string& name) {
   if (name.empty()) return std::nullopt;
   if (name[0] != '.') return ParseVisible(name);
-  // .episode_NNN.partial.mp4 (VideoWriter) and .NAME.tmp-XXXX (WriteFileAtomically)
+  // .STEM.partial.EXT (VideoWriter) and .NAME.tmp-XXXX (WriteFileAtomically)
   std::string inner = name.substr(1);
   const size_t tmp = inner.find(".tmp-");
+  const size_t partial = inner.rfind(".partial.");
   if (tmp != std::string::npos) {
     inner = inner.substr(0, tmp);
-  } else if (EndsWith(inner, ".partial.mp4")) {
-    inner = inner.substr(0, inner.size() - 12) + ".mp4";
+  } else if (partial != std::string::npos) {
+    inner = inner.substr(0, partial) + inner.substr(partial + 8);
   } else {
     return std::nullopt;
   }
@@ -119,6 +175,7 @@ bool RunFolder::Ours(const std::string& name) const {
     if (parsed->hidden) visible = name.substr(1, name.find(".tmp-") - 1);
     return visible == request_.manifest_name;
   }
+  if (parsed->report) return !request_.sharded;  // a sharded run's report: merge-manifests'
   return !request_.sharded || request_.owns(parsed->episode);
 }
 
@@ -140,7 +197,7 @@ RunFolder::RunFolder(const RunFolderRequest& request) : request_(request) {
     for (const auto& entry : fs::directory_iterator(out, ec)) {
       const std::string name = entry.path().filename().string();
       const std::optional<RunFileName> parsed = ParseRunFileName(name);
-      if (!parsed) continue;
+      if (!parsed || entry.is_directory(ec)) continue;  // record writes files only
       if (parsed->manifest && !parsed->hidden && name != request.manifest_name) {
         manifests.push_back(name);
       } else if (Ours(name)) {
@@ -150,6 +207,29 @@ RunFolder::RunFolder(const RunFolderRequest& request) : request_(request) {
     if (ec) throw RunError("cannot list " + quoted + ": " + ec.message());
     std::sort(run_files.begin(), run_files.end());
     std::sort(manifests.begin(), manifests.end());
+  }
+  // --overwrite sets the earlier run aside in a hidden folder; one still there is from an
+  // --overwrite that was killed outright (SIGKILL): never lost silently
+  const std::string aside_prefix = AsideFolderPrefix(request.manifest_name);
+  aside_ = out / (aside_prefix + std::to_string(::getpid()));
+  if (created_dirs_.empty()) {
+    for (const auto& entry : fs::directory_iterator(out, ec)) {
+      if (entry.path().filename().string().rfind(aside_prefix, 0) == 0) {
+        stale_aside_.push_back(entry.path());
+      }
+    }
+    std::sort(stale_aside_.begin(), stale_aside_.end());
+  }
+  for (int n = 1; fs::exists(aside_, ec); ++n) {  // a killed run had this process id
+    aside_ = out / (aside_prefix + std::to_string(::getpid()) + "-" + std::to_string(n));
+  }
+  if (!stale_aside_.empty() && request.mode != ReuseMode::kOverwrite) {
+    throw UsageError(quoted + " holds " + stale_aside_.front().filename().string() +
+                     ", an earlier run that --overwrite set aside before it was killed: move its "
+                     "files back into " +
+                     quoted +
+                     " to keep that run, or pass --overwrite to "
+                     "replace both");
   }
 
   // Other manifests: a sharded run shares the folder with the other shards of the same run;
@@ -203,7 +283,10 @@ RunFolder::RunFolder(const RunFolderRequest& request) : request_(request) {
                            Listed(run_files) + ") but no " + request.manifest_name +
                            " (the run was killed before writing it): pass --overwrite instead");
         }
-        break;  // nothing to resume: a fresh run
+        // nothing to resume (a requeued job that never started, say): a fresh run
+        notice_ = "--resume: " + quoted + " holds no " + request.manifest_name +
+                  ": nothing to resume, recording the whole run";
+        break;
       }
       const nlohmann::json m = ReadManifest(out / request.manifest_name);
       if (!m.is_object() || !m.contains("parameters") || !m.contains("episodes")) {
@@ -221,8 +304,8 @@ RunFolder::RunFolder(const RunFolderRequest& request) : request_(request) {
         const int k = e.value("index", -1);
         if (!e.value("complete", false) || !std::binary_search(request.episodes.begin(), request.episodes.end(), k)) continue;
         bool files = true;
-        for (const char* kind : {"video", "sheet", "trajectory"}) {
-          files = files && fs::is_regular_file(out / e.value(kind, std::string("?")), ec);
+        for (const std::string& file : EntryFiles(e)) {
+          files = files && fs::is_regular_file(out / file, ec);
         }
         if (!files) continue;
         kept_.push_back(e);
@@ -234,17 +317,24 @@ RunFolder::RunFolder(const RunFolderRequest& request) : request_(request) {
       }
       // the files of the episodes to redo go first (an incomplete one's); the manifest stays
       // until the new one replaces it, so that a failed --resume leaves the run resumable
+      // (the report stays too: the new manifest's report replaces it)
       for (const std::string& name : run_files) {
         const std::optional<RunFileName> parsed = ParseRunFileName(name);
-        if (!parsed->manifest && !done.count(parsed->episode)) remove.push_back(name);
+        if (!parsed->manifest && !parsed->report && !done.count(parsed->episode)) {
+          remove.push_back(name);
+        }
       }
       remove.insert(remove.end(), hidden.begin(), hidden.end());
       break;
     }
   }
-  for (const std::string& name : remove) {
-    fs::remove(out / name, ec);
-    if (ec) throw RunError("cannot remove '" + (out / name).string() + "': " + ec.message());
+  if (request.mode == ReuseMode::kOverwrite) {
+    SetAside(out, remove);
+  } else {
+    for (const std::string& name : remove) {
+      fs::remove(out / name, ec);
+      if (ec) throw RunError("cannot remove '" + (out / name).string() + "': " + ec.message());
+    }
   }
 
   fs::create_directories(out, ec);
@@ -257,8 +347,63 @@ RunFolder::RunFolder(const RunFolderRequest& request) : request_(request) {
   }
 }
 
+void RunFolder::SetAside(const fs::path& out, const std::vector<std::string>& names) {
+  if (names.empty()) return;
+  std::error_code ec;
+  fs::create_directory(aside_, ec);
+  if (ec) {
+    throw RunError("cannot make '" + aside_.string() +
+                   "' to set the earlier run aside: " + ec.message());
+  }
+  for (const std::string& name : names) {
+    fs::rename(out / name, aside_ / name, ec);
+    if (ec) {
+      const std::string why = ec.message();
+      Restore();
+      throw RunError(
+          "cannot move '" + (out / name).string() +
+          "' aside (--overwrite keeps the earlier run until the new one is written): " + why);
+    }
+    set_aside_.push_back(name);
+  }
+}
+
+void RunFolder::Commit() {
+  committed_ = true;
+  std::error_code ec;
+  if (!set_aside_.empty()) fs::remove_all(aside_, ec);  // the earlier run, replaced
+  set_aside_.clear();
+  for (const fs::path& stale : stale_aside_) fs::remove_all(stale, ec);
+}
+
+void RunFolder::Restore() noexcept {
+  std::error_code ec;
+  if (set_aside_.empty()) {
+    fs::remove(aside_, ec);  // made, nothing in it yet (only when empty)
+    return;
+  }
+  const fs::path out = aside_.parent_path();
+  bool all_back = true;
+  for (const std::string& name : set_aside_) {
+    fs::rename(aside_ / name, out / name, ec);
+    all_back = all_back && !ec;
+  }
+  set_aside_.clear();
+  if (all_back) {
+    fs::remove(aside_, ec);
+  } else {
+    std::fprintf(stderr,
+                 "fetchscope: warning: could not put every file of the earlier run back "
+                 "from '%s'; the rest is still there\n",
+                 aside_.string().c_str());
+  }
+}
+
 RunFolder::~RunFolder() {
-  if (!committed_) Cleanup();
+  if (!committed_) {
+    Cleanup();
+    Restore();
+  }
 }
 
 void RunFolder::Cleanup() noexcept {

@@ -2,11 +2,20 @@
 // whole with --overwrite, or continued with --resume), and leaving nothing behind when the run
 // fails.
 //
-// A run's files are the ones record writes: manifest.json / manifest_shard_IIII_of_NNNN.json,
-// episode_NNN.mp4, episode_NNN_sheet.png, episode_NNN.json and their hidden temporaries
-// (.episode_NNN.partial.mp4, .NAME.tmp-...). Anything else in the folder is the user's and is
-// never touched. The shards of one sharded run share a folder by design: a shard looks only at
-// its own manifest and episodes, and at the other manifests to see that they are of the same run.
+// A run's files are the ones record and its report write: manifest.json /
+// manifest_shard_IIII_of_NNNN.json, index.html, and per episode episode_NNN.{mp4,webm,gif},
+// episode_NNN_sheet.png, episode_NNN.json, the layer videos episode_NNN_{depth,segmentation}.EXT
+// and episode_NNN_segmentation_legend.json, and their hidden temporaries
+// (.episode_NNN.partial.EXT, .NAME.tmp-...). Anything else in the folder is the user's and is
+// never touched.
+//
+// --overwrite moves the earlier run's files aside into a hidden folder inside --out
+// (.manifest.replaced-PID, or .manifest_shard_IIII_of_NNNN.replaced-PID for a shard) and deletes
+// them only when the new run has its manifest (Commit); a run that fails puts them back. A
+// record killed outright (SIGKILL) leaves that folder behind: the next run refuses the folder
+// naming it, and the next --overwrite deletes it with the rest once it succeeds. The shards of one
+// sharded run share a folder by design: a shard looks only at its own manifest and episodes, and at
+// the other manifests to see that they are of the same run.
 #pragma once
 
 #include <filesystem>
@@ -27,10 +36,12 @@ enum class ReuseMode {
   kResume,     ///< --resume: keep its complete episodes, record the rest
 };
 
-/// A record run file name, parsed. `episode` is -1 for a manifest; `hidden` for a temporary.
+/// A record run file name, parsed. `episode` is -1 for a manifest and the report; `hidden` for
+/// a temporary.
 struct RunFileName {
   int episode = -1;
-  bool manifest = false;
+  bool manifest = false;  ///< manifest.json or a shard's manifest
+  bool report = false;    ///< index.html, the run's report
   bool hidden = false;
 };
 
@@ -67,18 +78,30 @@ class RunFolder {
   const std::vector<int>& todo() const { return todo_; }
   /// --resume: the earlier manifest's entries of the complete episodes kept, by index.
   const std::vector<nlohmann::json>& kept() const { return kept_; }
-  /// The run ended as it should (done or interrupted, with its manifest): keep everything.
-  void Commit() { committed_ = true; }
+  /// The run ended as it should (done or interrupted, with its manifest): keep everything, and
+  /// delete the earlier run that --overwrite set aside.
+  void Commit();
+  /// --overwrite set an earlier run's files aside (they come back unless Commit is called).
+  bool replacing() const { return !set_aside_.empty(); }
+  /// A line for the user about the folder, or "": --resume found nothing to resume.
+  const std::string& notice() const { return notice_; }
 
  private:
   bool Ours(const std::string& name) const;
   void Cleanup() noexcept;
+  void Restore() noexcept;  // puts the files set aside back
+  // --overwrite: moves `names` from `out` into aside_
+  void SetAside(const std::filesystem::path& out, const std::vector<std::string>& names);
 
   RunFolderRequest request_;
   std::vector<std::filesystem::path> created_dirs_;  // deepest first
   std::set<std::string> before_;                     // names present before the run
   std::vector<int> todo_;
   std::vector<nlohmann::json> kept_;
+  std::filesystem::path aside_;  // --overwrite: where the earlier run's files wait
+  std::vector<std::filesystem::path> stale_aside_;  // left by a killed --overwrite
+  std::vector<std::string> set_aside_;              // their names (in --out and in aside_)
+  std::string notice_;
   bool committed_ = false;
 };
 

@@ -62,6 +62,11 @@ TEST_F(FormatsTest, EveryFormatPerEpisodeProbedTaggedAndTheSameWithJobs) {
   const fs::path out = tmp.path() / "j1";
   const nlohmann::json manifest = nlohmann::json::parse(ReadFile(out / "manifest.json"));
   EXPECT_EQ(manifest["video"]["formats"], nlohmann::json({"webm", "gif", "mp4"}));
+  EXPECT_EQ(manifest["video"]["codecs"]["webm"], "libvpx-vp9");
+  EXPECT_EQ(manifest["video"]["codecs"]["gif"], "gif");
+  const std::string h264 = manifest["video"]["codecs"]["mp4"];
+  EXPECT_TRUE(h264 == "libx264" || h264 == "h264_nvenc") << h264;
+  EXPECT_EQ(manifest["video"]["codec"], "libvpx-vp9, gif, " + h264);
   const int gif_frames = GifFrameCount(frames, 25, 10);
   EXPECT_EQ(gif_frames, 5);  // ticks 0, 0.1, 0.2, 0.3, 0.4 s of a 0.44 s clip
   for (int k = 0; k < 3; ++k) {
@@ -108,6 +113,32 @@ TEST_F(FormatsTest, EveryFormatPerEpisodeProbedTaggedAndTheSameWithJobs) {
   }
   for (const auto& e : fs::directory_iterator(out)) {
     EXPECT_NE(e.path().filename().string()[0], '.') << "leftover temporary " << e.path();
+  }
+}
+
+// A run without mp4 encodes no H.264: the manifest and the summary line name the encoders that
+// made its files, format by format.
+TEST_F(FormatsTest, ManifestAndSummaryNameTheEncodersActuallyUsed) {
+  TempDir tmp;
+  const std::map<std::string, std::string> runs = {{"webm", "libvpx-vp9"}, {"gif", "gif"}};
+  for (const auto& [format, codec] : runs) {
+    SCOPED_TRACE(format);
+    const fs::path out = tmp.path() / format;
+    const auto r = RunFetchscope(
+        "record --no-report --env-id FetchReach-v4 --episodes 1 --steps 3 --width 48 --height 48 "
+        "--format " +
+        format + " --out " + out.string());
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    const nlohmann::json video = nlohmann::json::parse(ReadFile(out / "manifest.json"))["video"];
+    EXPECT_EQ(video["codec"], codec);
+    EXPECT_EQ(video["codecs"], nlohmann::json({{format, codec}}));
+    EXPECT_EQ(video["codec_reason"].get<std::string>().find("h264"), std::string::npos)
+        << video["codec_reason"];
+    EXPECT_NE(r.output.find(", " + codec + " -> " + out.string()), std::string::npos) << r.output;
+    EXPECT_EQ(r.output.find("libx264"), std::string::npos) << r.output;
+    EXPECT_EQ(r.output.find("nvenc"), std::string::npos) << r.output;
+    const nlohmann::json probe = Probe(out / ("episode_000." + format));
+    EXPECT_EQ(probe["streams"][0]["codec_name"], format == "webm" ? "vp9" : "gif");
   }
 }
 

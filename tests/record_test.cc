@@ -205,13 +205,18 @@ INSTANTIATE_TEST_SUITE_P(
                       BadRender{"render --width 0 -o OUT/f.png", 2, "width"},
                       BadRender{"render --height -5 -o OUT/f.png", 2, "height"},
                       BadRender{"render --width 100000 -o OUT/f.png", 2, "100000"},
-        BadRender{"render --width 9000 --height 9000 -o OUT/f.png", 2, "9000"},
+                      BadRender{"render --width 9000 --height 9000 -o OUT/f.png", 2, "9000"},
                       BadRender{"render --overlay goal,sparkles -o OUT/f.png", 2, "sparkles"},
                       BadRender{"render --layers rgb,normals -o OUT/f.png", 2, "normals"},
                       BadRender{"render -o /proc/nope/f.png", 1, "/proc/nope"},
                       BadRender{"record --codec mpeg2 --out OUT/r", 2, "mpeg2"},
                       BadRender{"record --crf 99 --out OUT/r", 2, "99"},
-                      BadRender{"record --out /proc/nope/run", 1, "/proc/nope/run"}));
+                      BadRender{"record --out /proc/nope/run", 1, "/proc/nope/run"},
+                      BadRender{"record --layers rgb,segmentaton --out OUT/r", 2,
+                                "unknown layer 'segmentaton' (did you mean 'segmentation'?)"},
+                      BadRender{"record --layers depth,depth --out OUT/r", 2,
+                                "--layers names 'depth' twice"},
+                      BadRender{"record --layers rgb,,depth --out OUT/r", 2, "empty entry"}));
 
 }  // namespace
 }  // namespace fetchscope

@@ -44,6 +44,24 @@ std::set<std::string> Names(const fs::path& dir) {
   return names;
 }
 
+// Starts `fetchscope ARGS` in the background; returns its pid.
+pid_t Spawn(const std::string& args, const fs::path& log) {
+  const std::string command =
+      "exec " + std::string(FETCHSCOPE_BIN) + " " + args + " </dev/null >" + log.string() + " 2>&1";
+  const pid_t pid = fork();
+  if (pid == 0) {
+    execl("/bin/sh", "sh", "-c", command.c_str(), static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  return pid;
+}
+
+int WaitExit(pid_t pid) {
+  int status = 0;
+  waitpid(pid, &status, 0);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+}
+
 class RunFolderTest : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -61,17 +79,35 @@ TEST(RunFileName, NamesRecordWritesAndNothingElse) {
   }
   for (const auto& [name, k, hidden] : std::vector<std::tuple<std::string, int, bool>>{
            {"episode_000.mp4", 0, false},
+           {"episode_007.webm", 7, false},
+           {"episode_008.gif", 8, false},
            {"episode_012_sheet.png", 12, false},
            {"episode_1234.json", 1234, false},
+           {"episode_002_depth.mp4", 2, false},
+           {"episode_002_segmentation.webm", 2, false},
+           {"episode_002_segmentation.gif", 2, false},
+           {"episode_002_segmentation_legend.json", 2, false},
            {".episode_003.partial.mp4", 3, true},
-           {".episode_004.json.tmp-ab12", 4, true}}) {
+           {".episode_003.partial.webm", 3, true},
+           {".episode_005_depth.partial.gif", 5, true},
+           {".episode_004.json.tmp-ab12", 4, true},
+           {".episode_004_segmentation_legend.json.tmp-1-2", 4, true}}) {
     const auto parsed = ParseRunFileName(name);
     ASSERT_TRUE(parsed) << name;
     EXPECT_EQ(parsed->episode, k) << name;
     EXPECT_EQ(parsed->hidden, hidden) << name;
+    EXPECT_FALSE(parsed->manifest || parsed->report) << name;
   }
-  for (const char* name : {"notes.txt", "episode_x.mp4", "episode_001.txt", "my_manifest.json",
-                           "episode_.json", ".hidden", "results.json"}) {
+  // the run's report, written by record and `fetchscope report`
+  for (const char* name : {"index.html", ".index.html.tmp-123-4"}) {
+    ASSERT_TRUE(ParseRunFileName(name)) << name;
+    EXPECT_TRUE(ParseRunFileName(name)->report) << name;
+    EXPECT_EQ(ParseRunFileName(name)->episode, -1) << name;
+  }
+  for (const char* name :
+       {"notes.txt", "episode_x.mp4", "episode_001.txt", "my_manifest.json", "episode_.json",
+        ".hidden", "results.json", "episode_001_depth.png", "episode_001_normals.mp4",
+        "episode_001.mkv", "index.htm", "episode_001_legend.json", ".manifest.replaced-12"}) {
     EXPECT_FALSE(ParseRunFileName(name)) << name;
   }
 }
@@ -125,22 +161,104 @@ TEST_F(RunFolderTest, OverwriteReplacesTheRunWholly) {
   EXPECT_EQ(r.exit_code, 2) << r.output;
 }
 
-// Starts `fetchscope ARGS` in the background; returns its pid.
-pid_t Spawn(const std::string& args, const fs::path& log) {
-  const std::string command =
-      "exec " + std::string(FETCHSCOPE_BIN) + " " + args + " </dev/null >" + log.string() + " 2>&1";
-  const pid_t pid = fork();
-  if (pid == 0) {
-    execl("/bin/sh", "sh", "-c", command.c_str(), static_cast<char*>(nullptr));
-    _exit(127);
-  }
-  return pid;
+// Every file record and its report write belongs to the run: --overwrite leaves none of the
+// earlier run's behind (its report, its layer videos and legends), and the user's stay.
+TEST_F(RunFolderTest, OverwriteLeavesNoFileOfTheEarlierRun) {
+  TempDir tmp;
+  const fs::path out = tmp.path() / "a" / "run1";
+  auto r = RunFetchscope(kSmall +
+                         "--episodes 2 --seed 1 --layers rgb,segmentation,depth "
+                         "--format mp4,gif --out " +
+                         out.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  ASSERT_TRUE(fs::exists(out / "index.html"));
+  ASSERT_TRUE(fs::exists(out / "episode_001_segmentation_legend.json"));
+  WriteText(out / "notes.txt", "mine");
+  r = RunFetchscope(kSmall + "--episodes 1 --seed 2 --overwrite --no-report --out " + out.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(Names(out),
+            (std::set<std::string>{"episode_000.json", "episode_000.mp4", "episode_000_sheet.png",
+                                   "manifest.json", "notes.txt"}));
+  EXPECT_EQ(nlohmann::json::parse(ReadFile(out / "manifest.json"))["seed"], 2);
 }
 
-int WaitExit(pid_t pid) {
-  int status = 0;
-  waitpid(pid, &status, 0);
-  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+// --overwrite keeps the earlier run until the new one has its manifest: a new run that fails,
+// or is interrupted before it has a whole episode, leaves the earlier run as it was.
+TEST_F(RunFolderTest, OverwriteThatFailsKeepsTheEarlierRun) {
+  TempDir tmp;
+  const fs::path out = tmp.path() / "run";
+  auto r = RunFetchscope(kSmall + "--episodes 2 --seed 1 --out " + out.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  WriteText(out / "notes.txt", "mine");
+  std::map<std::string, std::string> before;
+  for (const std::string& name : Names(out)) before[name] = ReadFile(out / name);
+  auto unchanged = [&](const std::string& what) {
+    EXPECT_EQ(Names(out).size(), before.size()) << what;
+    for (const auto& [name, bytes] : before) {
+      EXPECT_TRUE(ReadFile(out / name) == bytes) << what << ": " << name;
+    }
+  };
+
+  const std::string base =
+      "record --quiet --env-id FetchPush-v4 --width 32 --height 32 --steps 5 --overwrite ";
+  r = RunFetchscope(base +
+                    "--episodes 1 --seed 2 --policy \"exec:read l; exit 3\" "
+                    "--out " +
+                    out.string());
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  unchanged("a failing policy");
+
+  // SIGINT once the earlier run is set aside, while the slow policy's first episode runs
+  const pid_t pid = Spawn(base +
+                              "--episodes 1 --seed 3 --policy "
+                              "'exec:while read l; do sleep 0.5; echo 0 0 0 0; done' --out " +
+                              out.string(),
+                          tmp.path() / "log");
+  auto aside = [&] {
+    for (const auto& e : fs::directory_iterator(out)) {
+      if (e.path().filename().string().rfind(".manifest.replaced-", 0) == 0) return true;
+    }
+    return false;
+  };
+  for (int i = 0; i < 1200 && !aside(); ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  ASSERT_TRUE(aside()) << ReadFile(tmp.path() / "log");
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  kill(pid, SIGINT);
+  EXPECT_EQ(WaitExit(pid), 130) << ReadFile(tmp.path() / "log");
+  unchanged("SIGINT before an episode was complete");
+
+  // a run killed outright leaves the set-aside folder: named by the next run, not lost
+  fs::create_directories(out / ".manifest.replaced-99999");
+  WriteText(out / ".manifest.replaced-99999" / "manifest.json", "{}");
+  r = RunFetchscope(kSmall + "--episodes 2 --seed 1 --resume --out " + out.string());
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find(".manifest.replaced-99999"), std::string::npos) << r.output;
+  r = RunFetchscope(kSmall + "--episodes 1 --seed 4 --overwrite --out " + out.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_FALSE(fs::exists(out / ".manifest.replaced-99999"));
+  EXPECT_EQ(Names(out),
+            (std::set<std::string>{"episode_000.json", "episode_000.mp4", "episode_000_sheet.png",
+                                   "index.html", "manifest.json", "notes.txt"}));
+}
+
+// --resume of a folder that does not exist (a requeued job that never started) records the
+// whole run, and says so in one line.
+TEST_F(RunFolderTest, ResumeWithNothingToResumeSaysSo) {
+  TempDir tmp;
+  const fs::path out = tmp.path() / "never";
+  auto r = RunFetchscope(
+      "record --env-id FetchPush-v4 --width 32 --height 32 --steps 5 --episodes 1 --no-report "
+      "--resume --out " +
+      out.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("fetchscope: note: --resume: --out '" + out.string() +
+                          "' holds no manifest.json: nothing to resume, recording the whole run\n"),
+            std::string::npos)
+      << r.output;
+  EXPECT_EQ(nlohmann::json::parse(ReadFile(out / "manifest.json"))["resumed"], false);
+  EXPECT_TRUE(fs::exists(out / "episode_000.mp4"));
 }
 
 // Interrupt a run with SIGINT, --resume it (with other --jobs): the episode files are those of
