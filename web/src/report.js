@@ -26,7 +26,7 @@
   FS.plots(page, [{
     id: 'plot-distance', wide: true, title: 'Distance to goal over steps',
     caption: [FS.swatch(colors.success), 'success', FS.swatch(colors.failure), 'failure',
-              s.incomplete ? [FS.swatch(colors.interrupted), 'interrupted'] : null,
+              ...(s.incomplete ? [FS.swatch(colors.interrupted), 'interrupted'] : []),
               FS.swatch(colors.threshold, true), `threshold ${data.threshold} m`],
     build: (width) => {
       const series = [{label: 'step'}];
