@@ -179,7 +179,7 @@ void Merge(const std::vector<std::string>& dirs, std::string out, bool quiet, bo
       bool files = true;
       // its video in every format (EpisodeVideos: "video" alone in older manifests)
       std::vector<std::pair<std::string, std::string>> needed;  // what, file
-      for (const EpisodeVideo& v : EpisodeVideos(e)) needed.emplace_back(v.format + " video", v.file);
+      for (const EpisodeVideo& v : EpisodeVideos(e)) needed.emplace_back("video", v.file);
       if (needed.empty()) needed.emplace_back("video", "");
       for (const char* kind : {"sheet", "trajectory"}) {
         needed.emplace_back(kind, e.value(kind, std::string()));
