@@ -439,9 +439,36 @@ json ReportData(const RecordedRun& run) {
     e["video"] = shown ? json(shown->file) : json(nullptr);
     e["video_format"] = shown ? json(shown->format) : json(nullptr);
     e["videos"] = std::move(video_list);
-    // other videos the entry names (per-layer videos of record --layers...): linked
+    // record --layers: per layer ("depth", "segmentation") its videos and legend, linked
+    json layers = json::array();
+    std::set<std::string> layer_files;
+    const auto layer_entries = entry.find("layers");
+    if (layer_entries != entry.end() && layer_entries->is_object()) {
+      for (const auto& [name, layer] : layer_entries->items()) {
+        if (!layer.is_object()) continue;
+        json layer_videos = json::array();
+        for (const EpisodeVideo& v : EpisodeVideos(layer)) {
+          layer_files.insert(v.file);
+          if (fs::is_regular_file(run.dir / v.file)) {
+            layer_videos.push_back({{"format", v.format}, {"file", v.file}, {"frames", v.frames}});
+          } else {
+            notes.push_back("episode " + EpisodeLabel(k) + ": " + name + " video '" + v.file +
+                            "' is missing");
+          }
+        }
+        json legend = nullptr;
+        if (layer.contains("legend") && layer["legend"].is_string() &&
+            fs::is_regular_file(run.dir / layer["legend"].get<std::string>())) {
+          legend = layer["legend"];
+        }
+        layers.push_back({{"name", name}, {"videos", std::move(layer_videos)}, {"legend", legend}});
+      }
+    }
+    e["layers"] = std::move(layers);
+    // any other video the entry names: linked
     json others = json::array();
     for (const std::string& file : OtherEpisodeVideos(entry)) {
+      if (layer_files.count(file)) continue;
       if (fs::is_regular_file(run.dir / file)) {
         others.push_back(file);
       } else {

@@ -292,19 +292,41 @@ TEST_F(ReportTest, EveryFormatIsLinkedAndTheBestPlayableShown) {
   EXPECT_NE(ProvenanceText(data).find("formats gif, webm, mp4"), std::string::npos)
       << ProvenanceText(data);
 
-  // extra videos an entry lists (record --layers' per-layer videos): linked; a missing one noted
+  // record --layers' per-layer videos and legend (as record lists them): linked, a missing
+  // one noted; any other video the entry names: linked too
   json edited = manifest;
   fs::copy_file(run / "episode_000.mp4", run / "episode_000_segmentation.mp4");
+  fs::copy_file(run / "episode_000.gif", run / "episode_000_segmentation.gif");
+  fs::copy_file(run / "episode_000.json", run / "episode_000_segmentation_legend.json");
+  fs::copy_file(run / "episode_000.mp4", run / "episode_000_top.mp4");
   edited["episodes"][0]["layers"] = {
-      {"segmentation", {{"video", "episode_000_segmentation.mp4"}, {"legend", "legend.json"}}},
-      {"depth", {{"videos", {{"mp4", {{"file", "episode_000_depth.mp4"}}}}}}}};
+      {"segmentation",
+       {{"video", "episode_000_segmentation.gif"},
+        {"videos",
+         {{"gif", {{"file", "episode_000_segmentation.gif"}, {"frames", 13}}},
+          {"mp4", {{"file", "episode_000_segmentation.mp4"}, {"frames", 13}}}}},
+        {"legend", "episode_000_segmentation_legend.json"}}},
+      {"depth", {{"video", "episode_000_depth.mp4"},
+                 {"videos", {{"mp4", {{"file", "episode_000_depth.mp4"}, {"frames", 13}}}}}}}};
+  edited["episodes"][0]["views"] = {{"top", "episode_000_top.mp4"}};
   WriteJsonFile(run / "manifest.json", edited);
   ASSERT_EQ(RunFetchscope("report -q " + run.string()).exit_code, 0);
   data = PageData(run / "index.html");
-  EXPECT_EQ(data["episodes"][0]["other_videos"], json({"episode_000_segmentation.mp4"}));
+  const json& layers = data["episodes"][0]["layers"];
+  ASSERT_EQ(layers.size(), 2u) << layers.dump();
+  EXPECT_EQ(layers[0]["name"], "depth");
+  EXPECT_TRUE(layers[0]["videos"].empty());  // its file is missing
+  EXPECT_EQ(layers[1]["name"], "segmentation");
+  ASSERT_EQ(layers[1]["videos"].size(), 2u) << layers.dump();
+  EXPECT_EQ(layers[1]["videos"][0]["file"], "episode_000_segmentation.mp4");  // mp4 first
+  EXPECT_EQ(layers[1]["videos"][1]["file"], "episode_000_segmentation.gif");
+  EXPECT_EQ(layers[1]["legend"], "episode_000_segmentation_legend.json");
+  EXPECT_EQ(data["episodes"][0]["other_videos"], json({"episode_000_top.mp4"}));
   EXPECT_EQ(data["episodes"][0]["videos"].size(), 3u);
+  EXPECT_TRUE(data["episodes"][1]["layers"].empty());
   EXPECT_TRUE(data["episodes"][1]["other_videos"].empty());
-  EXPECT_NE(data["notes"].dump().find("episode_000_depth.mp4' is missing"), std::string::npos)
+  EXPECT_NE(data["notes"].dump().find("depth video 'episode_000_depth.mp4' is missing"),
+            std::string::npos)
       << data["notes"].dump();
 
   // a gif-only run: the gif is what the page shows (as an image)

@@ -105,6 +105,9 @@
   const shortName = (e, file) => file.replace(/^.*\//, '').replace(`episode_${e.label}_`, '');
   columns.push({label: 'files', value: () => null, render: (e) => (e.status === 'missing' ? '' : [
     ...e.videos.flatMap((v) => [el('a', {href: v.file, class: 'video-link'}, v.format), ' ']),
+    ...e.layers.flatMap((l) => [
+      ...l.videos.flatMap((v) => [el('a', {href: v.file, class: 'video-link'}, `${l.name}.${v.format}`), ' ']),
+      ...(l.legend ? [el('a', {href: l.legend}, `${l.name} legend`), ' '] : [])]),
     ...e.other_videos.flatMap((file) => [el('a', {href: file, class: 'video-link'}, shortName(e, file)), ' ']),
     e.sheet ? el('a', {href: e.sheet}, 'sheet') : null, ' ',
     e.trajectory ? el('a', {href: e.trajectory}, 'json') : null])});
@@ -139,6 +142,9 @@
     if (e.sheet) card.append(el('a', {href: e.sheet}, el('img', {src: e.sheet, alt: `contact sheet of episode ${e.label}`, loading: 'lazy'})));
     card.append(el('div', {class: 'links'}, [
       ...e.videos.map((v) => el('a', {href: v.file, class: 'video-link'}, v.file)),
+      ...e.layers.flatMap((l) => [
+        ...l.videos.map((v) => el('a', {href: v.file, class: 'video-link'}, v.file)),
+        l.legend ? el('a', {href: l.legend}, `${l.name} legend`) : null]),
       ...e.other_videos.map((file) => el('a', {href: file, class: 'video-link'}, file)),
       e.sheet ? el('a', {href: e.sheet}, 'contact sheet') : null,
       e.trajectory ? el('a', {href: e.trajectory}, 'trajectory JSON') : null]));
