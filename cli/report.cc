@@ -166,8 +166,8 @@ std::vector<EpisodeVideo> EpisodeVideos(const json& entry) {
     std::string format = fs::path(video->get<std::string>()).extension().string();
     if (!format.empty()) format.erase(0, 1);
     const json& frames = entry.value("frames", json());
-    out.push_back({format, video->get<std::string>(),
-                   frames.is_number_integer() ? frames.get<int>() : -1});
+    out.push_back(
+        {format, video->get<std::string>(), frames.is_number_integer() ? frames.get<int>() : -1});
   }
   std::stable_sort(out.begin(), out.end(), [](const EpisodeVideo& a, const EpisodeVideo& b) {
     const int ra = FormatRank(a.format), rb = FormatRank(b.format);

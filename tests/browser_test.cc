@@ -64,8 +64,8 @@ std::string MissingTool() {
 fs::path ScreenshotPath() {
   const fs::path dir = fs::path(FETCHSCOPE_BIN).parent_path() / "test-screenshots";
   fs::create_directories(dir);
-  return dir / (std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) +
-                ".png");
+  return dir /
+         (std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) + ".png");
 }
 
 json ReadJsonFile(const fs::path& path) { return json::parse(ReadFile(path)); }
@@ -153,7 +153,9 @@ void ExpectReportPlots(const json& result, const fs::path& dir) {
     longest = std::max(longest, steps + 1);
     const bool ok = e.value("complete", true);
     complete += ok;
-    EXPECT_EQ(s["stroke"], !ok ? kInterrupted : e["is_success"].get<bool>() ? kSuccess : kFailure)
+    EXPECT_EQ(s["stroke"], !ok                           ? kInterrupted
+                           : e["is_success"].get<bool>() ? kSuccess
+                                                         : kFailure)
         << label;
     colours.insert(s["stroke"].get<std::string>());
     EXPECT_GE(s["colour_pixels"].get<int>(), kDrawnPixels) << s.dump();
@@ -382,8 +384,8 @@ TEST_F(BrowserTest, ReportWorksFromAStaticServer) {
   ASSERT_EQ(r.exit_code, 0) << r.output;
   StaticServer server(tmp.path() / "run");
   ASSERT_GT(server.port(), 0) << ReadFile(tmp.path() / "server.log");
-  const json result = CheckPage(
-      "http://127.0.0.1:" + std::to_string(server.port()) + "/index.html", /*final distance*/ 3);
+  const json result = CheckPage("http://127.0.0.1:" + std::to_string(server.port()) + "/index.html",
+                                /*final distance*/ 3);
   // a request the server answers 404 (e.g. /favicon.ico) shows up as a console error
   ExpectHealthyPage(result, 5, 21 / 25.0, 96, 3);
   ExpectReportPlots(result, tmp.path() / "run");

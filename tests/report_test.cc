@@ -210,7 +210,8 @@ TEST_F(ReportTest, InterruptedRunShowsMissingEpisodesAndHindsightCounts) {
     if (e["index"] == 2) {
       e["complete"] = false;
       e["steps"] = 7;
-      e.erase("hindsight");  // record writes counts for every episode; the page shows them only where present
+      e.erase("hindsight");  // record writes counts for every episode; the page shows them only
+                             // where present
     }
     if (e["index"] == 0) e["hindsight"] = {{"relabelled_successes", 9}, {"original_successes", 2}};
     kept.push_back(e);
@@ -306,8 +307,9 @@ TEST_F(ReportTest, EveryFormatIsLinkedAndTheBestPlayableShown) {
          {{"gif", {{"file", "episode_000_segmentation.gif"}, {"frames", 13}}},
           {"mp4", {{"file", "episode_000_segmentation.mp4"}, {"frames", 13}}}}},
         {"legend", "episode_000_segmentation_legend.json"}}},
-      {"depth", {{"video", "episode_000_depth.mp4"},
-                 {"videos", {{"mp4", {{"file", "episode_000_depth.mp4"}, {"frames", 13}}}}}}}};
+      {"depth",
+       {{"video", "episode_000_depth.mp4"},
+        {"videos", {{"mp4", {{"file", "episode_000_depth.mp4"}, {"frames", 13}}}}}}}};
   edited["episodes"][0]["views"] = {{"top", "episode_000_top.mp4"}};
   WriteJsonFile(run / "manifest.json", edited);
   ASSERT_EQ(RunFetchscope("report -q " + run.string()).exit_code, 0);
@@ -401,9 +403,9 @@ TEST_F(ReportTest, ShardedRunGetsItsReportFromMergeManifests) {
 TEST_F(ReportTest, ShardsInTwoFoldersMergeWithEveryFormatsFiles) {
   TempDir tmp;
   for (int shard : {0, 1}) {
-    const auto r = RunFetchscope(Record(tmp.path() / ("s" + std::to_string(shard)),
-                                        "--format mp4,gif --shard " + std::to_string(shard) + "/2",
-                                        3));
+    const auto r =
+        RunFetchscope(Record(tmp.path() / ("s" + std::to_string(shard)),
+                             "--format mp4,gif --shard " + std::to_string(shard) + "/2", 3));
     ASSERT_EQ(r.exit_code, 0) << r.output;
   }
   const fs::path merged = tmp.path() / "s0" / "manifest.json";
@@ -417,7 +419,8 @@ TEST_F(ReportTest, ShardsInTwoFoldersMergeWithEveryFormatsFiles) {
     ASSERT_EQ(e["videos"].size(), 2u) << e.dump();
     for (const json& v : e["videos"]) {
       // episode 1 lives in s1: its files, every format's, are found from s0
-      EXPECT_TRUE(fs::is_regular_file(tmp.path() / "s0" / v["file"].get<std::string>())) << e.dump();
+      EXPECT_TRUE(fs::is_regular_file(tmp.path() / "s0" / v["file"].get<std::string>()))
+          << e.dump();
       if (e["index"] == 1) {
         EXPECT_EQ(v["file"].get<std::string>().rfind("../s1/", 0), 0u) << e.dump();
       }
@@ -521,8 +524,8 @@ TEST_F(CompareTest, AChangedPolicyIsCaughtAtStepOne) {
     EXPECT_GT(e["max_state_difference"].get<double>(), 1e-3);
     EXPECT_GT(e["max_pixel_difference"].get<int>(), 32);
     int frames = 0;
-    EXPECT_GT(HeatMapMax(out.path() / e["video"].get<std::string>(),
-                         e["label_height"].get<int>(), &frames),
+    EXPECT_GT(HeatMapMax(out.path() / e["video"].get<std::string>(), e["label_height"].get<int>(),
+                         &frames),
               32);
   }
   // --states-only: the same verdict without videos
@@ -544,9 +547,9 @@ TEST_F(CompareTest, RunsWithoutAVideoFormatInCommonCompareStatesOnly) {
   EXPECT_NE(r.output.find("no video format in common (mp4 in A, gif in B)"), std::string::npos)
       << r.output;
   EXPECT_FALSE(fs::exists(tmp.path() / "c"));
-  const auto states = RunFetchscope("compare -q --states-only " + Dir("a") + " " +
-                                    (tmp.path() / "gif").string() + " --out " +
-                                    (tmp.path() / "c").string());
+  const auto states =
+      RunFetchscope("compare -q --states-only " + Dir("a") + " " + (tmp.path() / "gif").string() +
+                    " --out " + (tmp.path() / "c").string());
   EXPECT_EQ(states.exit_code, 0) << states.output;  // the same episodes, recorded as gif
 }
 
