@@ -12,6 +12,7 @@
 #include "cli/common.h"
 #include "cli/html_page.h"
 #include "cli/report.h"
+#include "render/text.h"
 #include "render/video_reader.h"
 #include "render/video_writer.h"
 #include "src/atomic_file.h"
@@ -63,6 +64,9 @@ std::vector<double> StateVector(const TrajectoryStep& step) {
   return v;
 }
 
+// The amplification of the heat map (HeatColour), as its panel label says.
+constexpr int kHeatGain = 4;
+
 // Colour of a difference of `d` (0..255) in the heat map: black for none, then through dark
 // purple, red and orange to pale yellow (matplotlib's "inferno" at 5 anchors), 4x amplified so
 // that a few levels of difference are visible.
@@ -73,7 +77,7 @@ void HeatColour(int d, uint8_t* rgb) {
     rgb[0] = rgb[1] = rgb[2] = 0;
     return;
   }
-  const double x = std::min(1.0, 4.0 * d / 255.0) * 4.0;
+  const double x = std::min(1.0, kHeatGain * d / 255.0) * 4.0;
   const int i = std::min(3, static_cast<int>(x));
   const double f = x - i;
   for (int c = 0; c < 3; ++c) {
@@ -88,16 +92,15 @@ struct PixelStats {
   double fraction = 0;  // pixels whose difference exceeds the pixel tolerance
 };
 
-// Writes A | B | heat map into `row` (3w x h) and measures the difference.
+// Writes A | B | heat map into `out` (3w x h RGB24 rows) and measures the difference.
 PixelStats SideBySide(const std::vector<uint8_t>& a, const std::vector<uint8_t>& b, int w, int h,
-                      int tolerance, std::vector<uint8_t>* row) {
+                      int tolerance, uint8_t* side) {
   PixelStats stats;
-  row->resize(static_cast<size_t>(w) * 3 * h * 3);
   long long sum = 0, over = 0;
   for (int y = 0; y < h; ++y) {
     const uint8_t* pa = &a[static_cast<size_t>(y) * w * 3];
     const uint8_t* pb = &b[static_cast<size_t>(y) * w * 3];
-    uint8_t* out = &(*row)[static_cast<size_t>(y) * w * 9];
+    uint8_t* out = side + static_cast<size_t>(y) * w * 9;
     std::copy(pa, pa + w * 3, out);
     std::copy(pb, pb + w * 3, out + w * 3);
     uint8_t* heat = out + w * 6;
@@ -114,6 +117,34 @@ PixelStats SideBySide(const std::vector<uint8_t>& a, const std::vector<uint8_t>&
   stats.mean = sum / pixels;
   stats.fraction = over / pixels;
   return stats;
+}
+
+// The strip above the side-by-side frames that names the three panels: `labels` (A, B, heat
+// map), each in its third of a 3w-wide strip, sized to the frame height `h`. Its height is even
+// (yuv420p) and its rows are RGB24.
+std::vector<uint8_t> LabelStrip(const std::string (&labels)[3], int w, int h, int* strip_height) {
+  const Font& font = Font::Default();
+  const int pixels = std::clamp(h / 16, 9, 24);
+  const int pad = std::max(2, pixels / 4);
+  const TextMetrics m = font.Measure("Ag", pixels);
+  *strip_height = (m.ascent + m.descent + 2 * pad + 1) & ~1;
+  const int width = 3 * w;
+  std::vector<uint8_t> strip(static_cast<size_t>(width) * *strip_height * 3, 40);
+  TextStyle style;
+  style.pixel_size = pixels;
+  style.color = {235, 235, 235};
+  for (int i = 0; i < 3; ++i) {
+    const std::string text = font.Fit(labels[i], pixels, w - 2 * pad);
+    const int x = i * w + std::max(pad, (w - font.Measure(text, pixels).width) / 2);
+    font.Draw(strip.data(), width, *strip_height, x, pad, text, style);
+    if (i > 0) {  // a dark line between the panels' labels
+      for (int y = 0; y < *strip_height; ++y) {
+        uint8_t* p = &strip[(static_cast<size_t>(y) * width + i * w) * 3];
+        p[0] = p[1] = p[2] = 0;
+      }
+    }
+  }
+  return strip;
 }
 
 struct EpisodeComparison {
@@ -177,10 +208,34 @@ EpisodeComparison CompareStates(const CompareOptions& o, const RecordedRun& a, c
   return result;
 }
 
+// The video format episode k is compared in: the first that A and B both hold (mp4, webm, gif:
+// see EpisodeVideos), with the two files. Throws UsageError when they have none in common.
+struct VideoPair {
+  std::string format;
+  fs::path a, b;
+};
+VideoPair ChooseVideos(const RecordedRun& a, const RecordedRun& b, int k) {
+  const std::vector<EpisodeVideo> va = EpisodeVideos(a.recorded.at(k));
+  const std::vector<EpisodeVideo> vb = EpisodeVideos(b.recorded.at(k));
+  std::string formats_a, formats_b;
+  for (const EpisodeVideo& x : va) {
+    formats_a += (formats_a.empty() ? "" : ",") + x.format;
+    for (const EpisodeVideo& y : vb) {
+      if (x.format == y.format) return {x.format, a.dir / x.file, b.dir / y.file};
+    }
+  }
+  for (const EpisodeVideo& y : vb) formats_b += (formats_b.empty() ? "" : ",") + y.format;
+  throw UsageError("episode " + EpisodeName(k) + ": the runs have no video format in common (" +
+                   (formats_a.empty() ? "none" : formats_a) + " in A, " +
+                   (formats_b.empty() ? "none" : formats_b) +
+                   " in B): record both with one --format, or use --states-only");
+}
+
 // Opens episode k's videos in A and B; throws UsageError when they differ in size.
 std::pair<VideoReader, VideoReader> OpenVideos(const RecordedRun& a, const RecordedRun& b, int k) {
-  VideoReader ra((a.dir / a.recorded.at(k).value("video", "")).string());
-  VideoReader rb((b.dir / b.recorded.at(k).value("video", "")).string());
+  const VideoPair files = ChooseVideos(a, b, k);
+  VideoReader ra(files.a.string());
+  VideoReader rb(files.b.string());
   if (ra.width() != rb.width() || ra.height() != rb.height()) {
     throw UsageError("episode " + EpisodeName(k) + ": the videos differ in size (" +
                      std::to_string(ra.width()) + "x" + std::to_string(ra.height()) + " in A, " +
@@ -190,22 +245,37 @@ std::pair<VideoReader, VideoReader> OpenVideos(const RecordedRun& a, const Recor
   return {std::move(ra), std::move(rb)};
 }
 
-// Episode k's frames: the side-by-side video A | B | heat map, and the pixel differences.
-void CompareFrames(const CompareOptions& o, const RecordedRun& a, const RecordedRun& b, int k, int fps,
-                   EpisodeComparison* result) {
+// Episode k's frames: the side-by-side video A | B | heat map under a strip naming the panels
+// (`labels`), and the pixel differences.
+void CompareFrames(const CompareOptions& o, const RecordedRun& a, const RecordedRun& b, int k,
+                   const std::string (&labels)[3], EpisodeComparison* result) {
   json& row = result->row;
   {
+    const std::string format = ChooseVideos(a, b, k).format;
+    // a gif holds every n-th frame: it plays at its own rate
+    const char* fps_key = format == "gif" ? "/video/gif/fps" : "/video/fps";
+    const json::json_pointer fps_at(fps_key);
+    const int fps = a.manifest.contains(fps_at) && a.manifest.at(fps_at).is_number_integer()
+                        ? a.manifest.at(fps_at).get<int>()
+                        : 25;
     auto [ra, rb] = OpenVideos(a, b, k);
     const int w = ra.width(), h = ra.height();
+    int strip_height = 0;
+    const std::vector<uint8_t> strip = LabelStrip(labels, w, h, &strip_height);
     VideoOptions video;
     video.width = 3 * w;
-    video.height = h;
+    video.height = strip_height + h;
     video.fps = fps;
     video.codec = "libx264";
     video.crf = 18;
     const std::string name = "compare_episode_" + EpisodeName(k) + ".mp4";
     VideoWriter writer((fs::path(o.out) / name).string(), video);
-    std::vector<uint8_t> fa, fb, side;
+    std::vector<uint8_t> fa, fb;
+    std::vector<uint8_t> side(static_cast<size_t>(video.width) * video.height * 3);
+    std::copy(strip.begin(), strip.end(), side.begin());  // the frames go below it
+    uint8_t* frames_at = side.data() + strip.size();
+    row["format"] = format;
+    row["label_height"] = strip_height;
     int frames_a = 0, frames_b = 0, max_pixel = 0;
     double mean_sum = 0;
     json per_frame = json::array();
@@ -218,7 +288,7 @@ void CompareFrames(const CompareOptions& o, const RecordedRun& a, const Recorded
         while (has_b && rb.Next(&fb)) ++frames_b;
         break;
       }
-      const PixelStats stats = SideBySide(fa, fb, w, h, o.pixel_tolerance, &side);
+      const PixelStats stats = SideBySide(fa, fb, w, h, o.pixel_tolerance, frames_at);
       writer.AddFrame(side.data());
       max_pixel = std::max(max_pixel, stats.max);
       mean_sum += stats.mean;
@@ -276,6 +346,7 @@ void RunCompare(const CompareOptions& o) {
   if (ka.empty()) throw UsageError("'" + o.run_a + "' holds no recorded episode to compare");
   // everything that can be wrong with the input is found before anything is written
   std::vector<EpisodeComparison> comparisons;
+  if (!o.states_only) Font::Default();  // the panel labels' font: missing, nothing is written
   for (int k : ka) {
     comparisons.push_back(CompareStates(o, a, b, k));
     if (!o.states_only) OpenVideos(a, b, k);
@@ -290,12 +361,14 @@ void RunCompare(const CompareOptions& o) {
   const int fps = a.manifest.contains("/video/fps"_json_pointer)
                       ? a.manifest.at("/video/fps"_json_pointer).get<int>()
                       : 25;
+  const std::string labels[3] = {"A: " + FolderName(o.run_a), "B: " + FolderName(o.run_b),
+                                 "|A − B| ×" + std::to_string(kHeatGain)};
   json rows = json::array();
   bool same = true;
   int differing = 0;
   for (size_t i = 0; i < ka.size(); ++i) {
     EpisodeComparison& c = comparisons[i];
-    if (!o.states_only) CompareFrames(o, a, b, ka[i], fps, &c);
+    if (!o.states_only) CompareFrames(o, a, b, ka[i], labels, &c);
     same = same && c.same;
     differing += !c.same;
     rows.push_back(std::move(c.row));

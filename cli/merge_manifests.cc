@@ -28,7 +28,8 @@ using nlohmann::json;
 constexpr const char* kRunIdentity[] = {
     "/env_id",       "/seed",      "/policy",      "/episodes_requested", "/steps_per_episode",
     "/sheet_every",  "/camera",    "/overlay",     "/assets/sha256",      "/video/crf",
-    "/video/preset", "/video/fps", "/video/width", "/video/height",       "/shard/count"};
+    "/video/preset", "/video/fps", "/video/width", "/video/height",       "/shard/count",
+    "/video/formats"};
 
 struct ShardManifest {
   fs::path path;  // the manifest file
@@ -111,6 +112,21 @@ std::string RelativeTo(const fs::path& file, const fs::path& folder) {
       .string();
 }
 
+// The file names in a shard's episode entry (video, the videos of the other formats, sheet,
+// trajectory, per-layer files...) made relative to the merged manifest's folder: every string
+// with an extension that names a file in the shard's folder.
+void RebaseFiles(json* j, const fs::path& folder, const fs::path& out_dir) {
+  if (j->is_string()) {
+    const fs::path name = j->get<std::string>();
+    std::error_code ec;
+    if (name.has_extension() && fs::is_regular_file(folder / name, ec)) {
+      *j = RelativeTo(folder / name, out_dir);
+    }
+  } else if (j->is_structured()) {
+    for (json& child : *j) RebaseFiles(&child, folder, out_dir);
+  }
+}
+
 void Merge(const std::vector<std::string>& dirs, std::string out, bool quiet, bool report) {
   std::vector<ShardManifest> manifests;
   for (const std::string& dir : dirs) {
@@ -161,10 +177,17 @@ void Merge(const std::vector<std::string>& dirs, std::string out, bool quiet, bo
       // say it by their step count)
       if (!e.value("complete", e.value("steps", -1) == steps)) continue;
       bool files = true;
-      for (const char* kind : {"video", "sheet", "trajectory"}) {
-        const fs::path file = m.path.parent_path() / e.value(kind, std::string());
-        if (!fs::is_regular_file(file)) {
-          problems.push_back("episode " + std::to_string(k) + ": " + kind + " '" + file.string() +
+      // its video in every format (EpisodeVideos: "video" alone in older manifests)
+      std::vector<std::pair<std::string, std::string>> needed;  // what, file
+      for (const EpisodeVideo& v : EpisodeVideos(e)) needed.emplace_back("video", v.file);
+      if (needed.empty()) needed.emplace_back("video", "");
+      for (const char* kind : {"sheet", "trajectory"}) {
+        needed.emplace_back(kind, e.value(kind, std::string()));
+      }
+      for (const auto& [what, name] : needed) {
+        const fs::path file = m.path.parent_path() / name;
+        if (name.empty() || !fs::is_regular_file(file)) {
+          problems.push_back("episode " + std::to_string(k) + ": " + what + " '" + file.string() +
                              "' is missing");
           files = false;
         }
@@ -214,9 +237,7 @@ void Merge(const std::vector<std::string>& dirs, std::string out, bool quiet, bo
   for (int k = 0; k < episodes; ++k) {
     json e = *episode_at[k].second;
     const fs::path folder = episode_at[k].first->path.parent_path();
-    for (const char* kind : {"video", "sheet", "trajectory"}) {
-      e[kind] = RelativeTo(folder / e[kind].get<std::string>(), out_dir);
-    }
+    RebaseFiles(&e, folder, out_dir);
     successes += e.value("is_success", false);
     list.push_back(std::move(e));
   }

@@ -106,7 +106,90 @@ std::vector<std::string> GlDevices(const json& manifest) {
   return devices;
 }
 
+bool IsVideoFile(const std::string& name) {
+  const std::string ext = fs::path(name).extension().string();
+  for (const char* known : {".mp4", ".webm", ".gif", ".mkv", ".mov", ".avi"}) {
+    if (ext == known) return true;
+  }
+  return false;
+}
+
+// mp4 (H.264) and webm (VP9) play in every browser; a gif is an image
+int FormatRank(const std::string& format) {
+  return format == "mp4" ? 0 : format == "webm" ? 1 : format == "gif" ? 2 : 3;
+}
+
+void CollectVideoFiles(const json& j, std::set<std::string>* files) {
+  if (j.is_string()) {
+    if (IsVideoFile(j.get<std::string>())) files->insert(j.get<std::string>());
+  } else if (j.is_structured()) {
+    for (const json& child : j) CollectVideoFiles(child, files);
+  }
+}
+
+// ", formats mp4, gif (gif: 10 frames/s, 320 px wide)" when record --format chose more or other
+// than mp4; "" otherwise
+std::string FormatsText(const json& m) {
+  const auto formats = m.find("video");
+  if (formats == m.end() || !formats->contains("formats") || !(*formats)["formats"].is_array()) {
+    return "";
+  }
+  std::vector<std::string> names;
+  for (const json& f : (*formats)["formats"]) {
+    if (f.is_string()) names.push_back(f.get<std::string>());
+  }
+  if (names == std::vector<std::string>{"mp4"}) return "";
+  std::string text = ", formats " + Join(names, ", ");
+  if (std::find(names.begin(), names.end(), "gif") != names.end()) {
+    text += " (gif: " + Str(m, "/video/gif/fps") + " frames/s, " + Str(m, "/video/gif/width") +
+            " px wide at most)";
+  }
+  return text;
+}
+
 }  // namespace
+
+std::vector<EpisodeVideo> EpisodeVideos(const json& entry) {
+  std::vector<EpisodeVideo> out;
+  const auto videos = entry.find("videos");
+  if (videos != entry.end() && videos->is_object()) {
+    for (const auto& [format, v] : videos->items()) {
+      if (!v.is_object() || !v.contains("file") || !v["file"].is_string()) continue;
+      const json& frames = v.value("frames", json());
+      out.push_back({format, v["file"].get<std::string>(),
+                     frames.is_number_integer() ? frames.get<int>() : -1});
+    }
+  }
+  const auto video = entry.find("video");
+  if (out.empty() && video != entry.end() && video->is_string() &&
+      !video->get<std::string>().empty()) {  // manifests from before --format
+    std::string format = fs::path(video->get<std::string>()).extension().string();
+    if (!format.empty()) format.erase(0, 1);
+    const json& frames = entry.value("frames", json());
+    out.push_back(
+        {format, video->get<std::string>(), frames.is_number_integer() ? frames.get<int>() : -1});
+  }
+  std::stable_sort(out.begin(), out.end(), [](const EpisodeVideo& a, const EpisodeVideo& b) {
+    const int ra = FormatRank(a.format), rb = FormatRank(b.format);
+    return ra != rb ? ra < rb : a.format < b.format;
+  });
+  return out;
+}
+
+std::vector<std::string> OtherEpisodeVideos(const json& entry) {
+  std::set<std::string> files;
+  CollectVideoFiles(entry, &files);
+  for (const EpisodeVideo& v : EpisodeVideos(entry)) files.erase(v.file);
+  return {files.begin(), files.end()};
+}
+
+const EpisodeVideo* PlayableVideo(const std::vector<EpisodeVideo>& videos, const fs::path& dir) {
+  for (const EpisodeVideo& v : videos) {
+    std::error_code ec;
+    if (fs::is_regular_file(dir / v.file, ec)) return &v;
+  }
+  return nullptr;
+}
 
 json RunProvenance(const RecordedRun& run) {
   const json& m = run.manifest;
@@ -129,7 +212,7 @@ json RunProvenance(const RecordedRun& run) {
   row("encoder", encoder);
   row("video", Str(m, "/video/width") + "×" + Str(m, "/video/height") + " at " +
                    Str(m, "/video/fps") + " frames/s, crf " + Str(m, "/video/crf") + ", preset " +
-                   Str(m, "/video/preset"));
+                   Str(m, "/video/preset") + FormatsText(m));
   row("GL backend", Str(m, "/backend/name") + " " + Str(m, "/backend/gl_version"));
   row(GlDevices(m).size() > 1 ? "GL devices" : "GL device", Join(GlDevices(m), "; "));
   row("GPU choice", Str(m, "/gpu/choice"));
@@ -149,7 +232,23 @@ json RunProvenance(const RecordedRun& run) {
     row("jobs", Str(m, "/jobs") + " (" + Str(m, "/worker_mode") + ")");
   }
   if (m.value("interrupted", false)) row("interrupted", "by " + Str(m, "/signal"));
-  row("command", Str(m, "/command_line"));
+  // record --from: the run that was re-rendered (its trajectories replayed)
+  if (!Str(m, "/from").empty()) row("from", "re-rendered from " + Str(m, "/from"));
+  if (m.contains("shards")) {
+    // a merged run: the shards' record commands, and the merge that made this manifest
+    std::vector<std::string> records;
+    for (const json& shard : m["shards"]) AddUnique(&records, Str(shard, "/command_line"));
+    constexpr size_t kShown = 8;
+    const size_t all = records.size();
+    if (all > kShown) {
+      records.resize(kShown);
+      records.push_back("... (" + std::to_string(all) + " in all)");
+    }
+    row(all > 1 ? "record commands" : "record command", Join(records, "\n"));
+    row("merge command", Str(m, "/command_line"));
+  } else {
+    row("command", Str(m, "/command_line"));
+  }
   return rows;
 }
 
@@ -294,7 +393,8 @@ json ReportData(const RecordedRun& run) {
   const int steps_requested = m.value("steps_per_episode", 0);
   json episodes = json::array();
   json notes = json::array();
-  std::vector<double> returns;
+  std::vector<double> returns;  // of the complete episodes
+  int incomplete = 0;
   bool has_hindsight = false;
   std::set<int> all(run.expected.begin(), run.expected.end());
   for (const auto& [k, entry] : run.recorded) all.insert(k);
@@ -317,12 +417,66 @@ json ReportData(const RecordedRun& run) {
     e["complete"] = complete;
     e["success"] = entry.value("is_success", false);
     e["return"] = entry.contains("return") ? entry["return"] : json(nullptr);
-    if (entry.contains("return") && entry["return"].is_number()) {
+    // an interrupted episode's return covers only the steps it made: aggregates leave it out
+    if (complete && entry.contains("return") && entry["return"].is_number()) {
       returns.push_back(entry["return"].get<double>());
     }
+    incomplete += !complete;
     e["length"] = length;
     e["frames"] = entry.value("frames", length + 1);
-    for (const char* kind : {"video", "sheet", "trajectory"}) {
+    // every format record wrote, linked by its name; the page shows the one a browser plays best
+    const std::vector<EpisodeVideo> videos = EpisodeVideos(entry);
+    json video_list = json::array();
+    for (const EpisodeVideo& v : videos) {
+      if (fs::is_regular_file(run.dir / v.file)) {
+        video_list.push_back({{"format", v.format}, {"file", v.file}, {"frames", v.frames}});
+      } else {
+        notes.push_back("episode " + EpisodeLabel(k) + ": " + v.format + " video '" + v.file +
+                        "' is missing");
+      }
+    }
+    const EpisodeVideo* shown = PlayableVideo(videos, run.dir);
+    e["video"] = shown ? json(shown->file) : json(nullptr);
+    e["video_format"] = shown ? json(shown->format) : json(nullptr);
+    e["videos"] = std::move(video_list);
+    // record --layers: per layer ("depth", "segmentation") its videos and legend, linked
+    json layers = json::array();
+    std::set<std::string> layer_files;
+    const auto layer_entries = entry.find("layers");
+    if (layer_entries != entry.end() && layer_entries->is_object()) {
+      for (const auto& [name, layer] : layer_entries->items()) {
+        if (!layer.is_object()) continue;
+        json layer_videos = json::array();
+        for (const EpisodeVideo& v : EpisodeVideos(layer)) {
+          layer_files.insert(v.file);
+          if (fs::is_regular_file(run.dir / v.file)) {
+            layer_videos.push_back({{"format", v.format}, {"file", v.file}, {"frames", v.frames}});
+          } else {
+            notes.push_back("episode " + EpisodeLabel(k) + ": " + name + " video '" + v.file +
+                            "' is missing");
+          }
+        }
+        json legend = nullptr;
+        if (layer.contains("legend") && layer["legend"].is_string() &&
+            fs::is_regular_file(run.dir / layer["legend"].get<std::string>())) {
+          legend = layer["legend"];
+        }
+        layers.push_back({{"name", name}, {"videos", std::move(layer_videos)}, {"legend", legend}});
+      }
+    }
+    e["layers"] = std::move(layers);
+    // any other video the entry names: linked
+    json others = json::array();
+    for (const std::string& file : OtherEpisodeVideos(entry)) {
+      if (layer_files.count(file)) continue;
+      if (fs::is_regular_file(run.dir / file)) {
+        others.push_back(file);
+      } else {
+        notes.push_back("episode " + EpisodeLabel(k) + ": video '" + file + "' is missing");
+      }
+    }
+    e["other_videos"] = std::move(others);
+    for (const char* kind : {"sheet", "trajectory"}) {
       const std::string file = entry.value(kind, std::string());
       e[kind] = file;
       if (!file.empty() && !fs::is_regular_file(run.dir / file)) {
@@ -374,12 +528,26 @@ json ReportData(const RecordedRun& run) {
   } else if (missing > 0) {
     notes.insert(notes.begin(), std::to_string(missing) + " episode(s) missing (see the table)");
   }
+  json provenance = RunProvenance(run);
+  // the re-rendered run's own page, where the path record --from was given still finds one
+  for (json& row : provenance) {
+    if (row["label"] != "from") continue;
+    std::error_code ec;
+    fs::path source = Str(m, "/from");
+    if (fs::is_directory(source, ec)) source /= "index.html";
+    if (fs::is_regular_file(source, ec)) {
+      row["href"] = fs::absolute(source)
+                        .lexically_normal()
+                        .lexically_relative(fs::absolute(run.dir).lexically_normal())
+                        .string();
+    }
+  }
   return {
       {"kind", "report"},
       {"title", Str(m, "/env_id") + " · " + Str(m, "/policy") + " · seed " + Str(m, "/seed")},
       {"generator", std::string("fetchscope ") + FETCHSCOPE_VERSION},
       {"uplot", EmbeddedUplotVersion()},
-      {"provenance", RunProvenance(run)},
+      {"provenance", std::move(provenance)},
       {"notes", notes},
       {"threshold", threshold},
       {"steps_per_episode", steps_requested},
@@ -390,13 +558,14 @@ json ReportData(const RecordedRun& run) {
        {{"expected", all.size()},
         {"recorded", run.recorded.size()},
         {"complete", n},
+        {"incomplete", incomplete},
         {"successes", successes},
         {"rate", n ? JsonDouble(static_cast<double>(successes) / n) : json(nullptr)},
         {"wilson_low", low},
         {"wilson_high", high},
         {"confidence", 0.95}}},
       {"running_success", std::move(running)},
-      {"returns_histogram", Histogram(returns)}};
+      {"returns_histogram", Histogram(returns)}};  // complete episodes only
 }
 
 fs::path WriteRunReport(const RecordedRun& run) {

@@ -39,6 +39,27 @@ struct TrajectoryStep {
 /// the file when it is missing or malformed.
 std::vector<TrajectoryStep> ReadEpisodeTrajectory(const std::filesystem::path& path);
 
+/// One video file of an episode in one output format (record --format).
+struct EpisodeVideo {
+  std::string format;  ///< "mp4", "webm", "gif", or the file's extension for others
+  std::string file;    ///< relative to the run folder
+  int frames = -1;     ///< frames in the file, -1 when the manifest does not say
+};
+
+/// The episode's videos in the formats record wrote (the manifest entry's "videos", format ->
+/// {file, frames}; older manifests: "video" alone), in the order a browser plays them best:
+/// mp4, webm, gif, then any other format by name.
+std::vector<EpisodeVideo> EpisodeVideos(const nlohmann::json& entry);
+
+/// Every other video file the entry names anywhere (such as per-layer videos of record
+/// --layers), by file name, in name order, without those of EpisodeVideos().
+std::vector<std::string> OtherEpisodeVideos(const nlohmann::json& entry);
+
+/// The video a page or a comparison shows of an episode: the first of EpisodeVideos() whose
+/// file exists in `dir`, or nullptr when none does.
+const EpisodeVideo* PlayableVideo(const std::vector<EpisodeVideo>& videos,
+                                  const std::filesystem::path& dir);
+
 /// Euclidean distance from achieved to desired goal.
 double GoalDistance(const TrajectoryStep& step);
 

@@ -1,7 +1,8 @@
 // `report` and `compare` against real record runs: the page's embedded data says what the
-// manifest and the trajectories say, interrupted and sharded runs, the record and
-// merge-manifests hooks, the Wilson interval, the video reader, and compare's verdicts and
-// heat maps (identical runs, a changed policy, bundled against genuine assets).
+// manifest and the trajectories say, every video format and extra per-episode videos, interrupted,
+// re-rendered and sharded runs, the record and merge-manifests hooks, the Wilson interval, the
+// video reader, and compare's verdicts, labelled side-by-side videos and heat maps (identical
+// runs, a changed policy, bundled against genuine assets, no video format in common).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -148,6 +149,12 @@ TEST_F(ReportTest, RecordWritesAPageWhoseDataIsTheManifestsAndTrajectories) {
     EXPECT_EQ(e["return"], m["return"]);
     EXPECT_EQ(e["length"], 12);
     EXPECT_EQ(e["video"], m["video"]);
+    EXPECT_EQ(e["video_format"], "mp4");
+    ASSERT_EQ(e["videos"].size(), 1u);
+    EXPECT_EQ(e["videos"][0]["format"], "mp4");
+    EXPECT_EQ(e["videos"][0]["file"], m["video"]);
+    EXPECT_EQ(e["videos"][0]["frames"], 13);
+    EXPECT_TRUE(e["other_videos"].empty());
     EXPECT_EQ(e["sheet"], m["sheet"]);
     const json trajectory = ReadJsonFile(Run() / m["trajectory"].get<std::string>());
     const json& steps = trajectory["episodes"][0]["steps"];
@@ -203,7 +210,8 @@ TEST_F(ReportTest, InterruptedRunShowsMissingEpisodesAndHindsightCounts) {
     if (e["index"] == 2) {
       e["complete"] = false;
       e["steps"] = 7;
-      e.erase("hindsight");  // record writes counts for every episode; the page shows them only where present
+      e.erase("hindsight");  // record writes counts for every episode; the page shows them only
+                             // where present
     }
     if (e["index"] == 0) e["hindsight"] = {{"relabelled_successes", 9}, {"original_successes", 2}};
     kept.push_back(e);
@@ -224,6 +232,14 @@ TEST_F(ReportTest, InterruptedRunShowsMissingEpisodesAndHindsightCounts) {
   EXPECT_EQ(data["episodes"][2]["status"], "incomplete");
   EXPECT_EQ(data["episodes"][2]["complete"], false);
   EXPECT_EQ(data["summary"]["complete"], 1);  // only episode 0 counts towards the rate
+  EXPECT_EQ(data["summary"]["incomplete"], 1);
+  // ... and towards the histogram: an interrupted episode's return covers a few steps only
+  int binned = 0;
+  for (const json& c : data["returns_histogram"]["counts"]) binned += c.get<int>();
+  EXPECT_EQ(binned, 1);
+  EXPECT_EQ(data["returns_histogram"]["centres"].size(), 1u);
+  EXPECT_NEAR(data["returns_histogram"]["centres"][0].get<double>(),
+              manifest["episodes"][0]["return"].get<double>(), 1e-9);
   EXPECT_EQ(data["summary"]["recorded"], 2);
   EXPECT_EQ(data["summary"]["expected"], 3);
   EXPECT_NE(data["notes"][0].get<std::string>().find("SIGINT"), std::string::npos);
@@ -235,6 +251,111 @@ TEST_F(ReportTest, InterruptedRunShowsMissingEpisodesAndHindsightCounts) {
   WriteJsonFile(tmp.path() / "run" / "manifest.json", manifest);
   ASSERT_EQ(RunFetchscope("report -q " + (tmp.path() / "run").string()).exit_code, 0);
   EXPECT_EQ(PageData(tmp.path() / "run" / "index.html")["episodes"][2]["complete"], true);
+}
+
+// The provenance rows as "label=value" lines.
+std::string ProvenanceText(const json& data) {
+  std::string text;
+  for (const json& row : data["provenance"]) {
+    text += row["label"].get<std::string>() + "=" + row["value"].get<std::string>() + "\n";
+  }
+  return text;
+}
+
+const json* ProvenanceRow(const json& data, const std::string& label) {
+  for (const json& row : data["provenance"]) {
+    if (row["label"] == label) return &row;
+  }
+  return nullptr;
+}
+
+TEST_F(ReportTest, EveryFormatIsLinkedAndTheBestPlayableShown) {
+  TempDir tmp;
+  const fs::path run = tmp.path() / "run";
+  ASSERT_EQ(RunFetchscope(Record(run, "--format gif,webm,mp4", 2)).exit_code, 0);
+  json data = PageData(run / "index.html");
+  const json manifest = ReadJsonFile(run / "manifest.json");
+  for (size_t k = 0; k < 2; ++k) {
+    const json& e = data["episodes"][k];
+    const json& videos = manifest["episodes"][k]["videos"];
+    // mp4 (H.264) plays in every browser: shown; all three linked, mp4, webm, then gif
+    EXPECT_EQ(e["video"], videos["mp4"]["file"]);
+    EXPECT_EQ(e["video_format"], "mp4");
+    ASSERT_EQ(e["videos"].size(), 3u) << e.dump();
+    const char* order[] = {"mp4", "webm", "gif"};
+    for (int i = 0; i < 3; ++i) {
+      EXPECT_EQ(e["videos"][i]["format"], order[i]);
+      EXPECT_EQ(e["videos"][i]["file"], videos[order[i]]["file"]);
+      EXPECT_EQ(e["videos"][i]["frames"], videos[order[i]]["frames"]);
+      EXPECT_TRUE(fs::is_regular_file(run / e["videos"][i]["file"].get<std::string>()));
+    }
+  }
+  EXPECT_NE(ProvenanceText(data).find("formats gif, webm, mp4"), std::string::npos)
+      << ProvenanceText(data);
+
+  // record --layers' per-layer videos and legend (as record lists them): linked, a missing
+  // one noted; any other video the entry names: linked too
+  json edited = manifest;
+  fs::copy_file(run / "episode_000.mp4", run / "episode_000_segmentation.mp4");
+  fs::copy_file(run / "episode_000.gif", run / "episode_000_segmentation.gif");
+  fs::copy_file(run / "episode_000.json", run / "episode_000_segmentation_legend.json");
+  fs::copy_file(run / "episode_000.mp4", run / "episode_000_top.mp4");
+  edited["episodes"][0]["layers"] = {
+      {"segmentation",
+       {{"video", "episode_000_segmentation.gif"},
+        {"videos",
+         {{"gif", {{"file", "episode_000_segmentation.gif"}, {"frames", 13}}},
+          {"mp4", {{"file", "episode_000_segmentation.mp4"}, {"frames", 13}}}}},
+        {"legend", "episode_000_segmentation_legend.json"}}},
+      {"depth",
+       {{"video", "episode_000_depth.mp4"},
+        {"videos", {{"mp4", {{"file", "episode_000_depth.mp4"}, {"frames", 13}}}}}}}};
+  edited["episodes"][0]["views"] = {{"top", "episode_000_top.mp4"}};
+  WriteJsonFile(run / "manifest.json", edited);
+  ASSERT_EQ(RunFetchscope("report -q " + run.string()).exit_code, 0);
+  data = PageData(run / "index.html");
+  const json& layers = data["episodes"][0]["layers"];
+  ASSERT_EQ(layers.size(), 2u) << layers.dump();
+  EXPECT_EQ(layers[0]["name"], "depth");
+  EXPECT_TRUE(layers[0]["videos"].empty());  // its file is missing
+  EXPECT_EQ(layers[1]["name"], "segmentation");
+  ASSERT_EQ(layers[1]["videos"].size(), 2u) << layers.dump();
+  EXPECT_EQ(layers[1]["videos"][0]["file"], "episode_000_segmentation.mp4");  // mp4 first
+  EXPECT_EQ(layers[1]["videos"][1]["file"], "episode_000_segmentation.gif");
+  EXPECT_EQ(layers[1]["legend"], "episode_000_segmentation_legend.json");
+  EXPECT_EQ(data["episodes"][0]["other_videos"], json({"episode_000_top.mp4"}));
+  EXPECT_EQ(data["episodes"][0]["videos"].size(), 3u);
+  EXPECT_TRUE(data["episodes"][1]["layers"].empty());
+  EXPECT_TRUE(data["episodes"][1]["other_videos"].empty());
+  EXPECT_NE(data["notes"].dump().find("depth video 'episode_000_depth.mp4' is missing"),
+            std::string::npos)
+      << data["notes"].dump();
+
+  // a gif-only run: the gif is what the page shows (as an image)
+  const fs::path gif = tmp.path() / "gif";
+  ASSERT_EQ(RunFetchscope(Record(gif, "--format gif", 1)).exit_code, 0);
+  data = PageData(gif / "index.html");
+  EXPECT_EQ(data["episodes"][0]["video_format"], "gif");
+  EXPECT_EQ(data["episodes"][0]["video"], "episode_000.gif");
+  EXPECT_EQ(data["episodes"][0]["videos"].size(), 1u);
+}
+
+TEST_F(ReportTest, ARerenderedRunNamesItsSource) {
+  TempDir tmp;
+  const fs::path again = tmp.path() / "again";
+  const auto r = RunFetchscope("record --quiet --from " + Run().string() +
+                               " --width 64 --height 64 --out " + again.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const json data = PageData(again / "index.html");
+  const json* from = ProvenanceRow(data, "from");
+  ASSERT_NE(from, nullptr) << ProvenanceText(data);
+  EXPECT_NE((*from)["value"].get<std::string>().find(Run().string()), std::string::npos)
+      << from->dump();
+  // the source run's report, relative to this one
+  ASSERT_TRUE((*from)["href"].is_string()) << from->dump();
+  EXPECT_TRUE(fs::equivalent(again / (*from)["href"].get<std::string>(), Run() / "index.html"));
+  // a run recorded afresh has no such row
+  EXPECT_EQ(ProvenanceRow(PageData(Run() / "index.html"), "from"), nullptr);
 }
 
 TEST_F(ReportTest, AFailedReportIsAWarningNotAFailedRun) {
@@ -262,9 +383,56 @@ TEST_F(ReportTest, ShardedRunGetsItsReportFromMergeManifests) {
   const json data = PageData(run / "index.html");
   ASSERT_EQ(data["episodes"].size(), 3u);
   for (const json& e : data["episodes"]) EXPECT_EQ(e["status"], "ok");
-  std::string provenance;
-  for (const json& row : data["provenance"]) provenance += row["label"].get<std::string>() + "\n";
-  EXPECT_NE(provenance.find("shards"), std::string::npos);
+  EXPECT_NE(ProvenanceRow(data, "shards"), nullptr);
+  // the commands: both shards' record commands, and the merge apart from them
+  EXPECT_EQ(ProvenanceRow(data, "command"), nullptr) << ProvenanceText(data);
+  const json* records = ProvenanceRow(data, "record commands");
+  ASSERT_NE(records, nullptr) << ProvenanceText(data);
+  const std::string text = (*records)["value"].get<std::string>();
+  EXPECT_NE(text.find("record --env-id FetchPush-v4"), std::string::npos) << text;
+  EXPECT_NE(text.find("--shard 0/2"), std::string::npos) << text;
+  EXPECT_NE(text.find("--shard 1/2"), std::string::npos) << text;
+  EXPECT_EQ(text.find("merge-manifests"), std::string::npos) << text;
+  const json* merge = ProvenanceRow(data, "merge command");
+  ASSERT_NE(merge, nullptr) << ProvenanceText(data);
+  EXPECT_NE((*merge)["value"].get<std::string>().find("merge-manifests -q " + run.string()),
+            std::string::npos)
+      << merge->dump();
+}
+
+TEST_F(ReportTest, ShardsInTwoFoldersMergeWithEveryFormatsFiles) {
+  TempDir tmp;
+  for (int shard : {0, 1}) {
+    const auto r =
+        RunFetchscope(Record(tmp.path() / ("s" + std::to_string(shard)),
+                             "--format mp4,gif --shard " + std::to_string(shard) + "/2", 3));
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+  }
+  const fs::path merged = tmp.path() / "s0" / "manifest.json";
+  const auto m = RunFetchscope("merge-manifests -q " + (tmp.path() / "s0").string() + " " +
+                               (tmp.path() / "s1").string() + " --out " + merged.string());
+  ASSERT_EQ(m.exit_code, 0) << m.output;
+  const json data = PageData(tmp.path() / "s0" / "index.html");
+  ASSERT_EQ(data["episodes"].size(), 3u);
+  EXPECT_TRUE(data["notes"].empty()) << data["notes"].dump();
+  for (const json& e : data["episodes"]) {
+    ASSERT_EQ(e["videos"].size(), 2u) << e.dump();
+    for (const json& v : e["videos"]) {
+      // episode 1 lives in s1: its files, every format's, are found from s0
+      EXPECT_TRUE(fs::is_regular_file(tmp.path() / "s0" / v["file"].get<std::string>()))
+          << e.dump();
+      if (e["index"] == 1) {
+        EXPECT_EQ(v["file"].get<std::string>().rfind("../s1/", 0), 0u) << e.dump();
+      }
+    }
+  }
+  // a shard whose gif is gone: the merge names it
+  fs::remove(tmp.path() / "s1" / "episode_001.gif");
+  const auto broken = RunFetchscope("merge-manifests -q " + (tmp.path() / "s0").string() + " " +
+                                    (tmp.path() / "s1").string() + " --out " + merged.string());
+  EXPECT_EQ(broken.exit_code, 1) << broken.output;
+  EXPECT_NE(broken.output.find("episode 1: video '"), std::string::npos) << broken.output;
+  EXPECT_NE(broken.output.find("episode_001.gif' is missing"), std::string::npos) << broken.output;
 }
 
 // ---- compare
@@ -286,16 +454,17 @@ class CompareTest : public ::testing::Test {
 };
 TempDir* CompareTest::runs_ = nullptr;
 
-// The largest channel value in the right third (the heat map) of every frame, away from the
-// column where B's pixels meet it (chroma is shared by pixel pairs).
-int HeatMapMax(const fs::path& video, int* frames) {
+// The largest channel value in the right third (the heat map) of every frame, below the label
+// strip (`top` rows) and away from the column where B's pixels meet it (chroma is shared by
+// pixel pairs).
+int HeatMapMax(const fs::path& video, int top, int* frames) {
   int w = 0, h = 0;
   const auto all = ReadAllFrames(video.string(), &w, &h);
   *frames = static_cast<int>(all.size());
   int largest = 0;
   const int third = w / 3;
   for (const auto& rgb : all) {
-    for (int y = 0; y < h; ++y) {
+    for (int y = top + 2; y < h; ++y) {
       for (int x = 2 * third + 2; x < w; ++x) {
         for (int c = 0; c < 3; ++c) largest = std::max<int>(largest, rgb[(y * w + x) * 3 + c]);
       }
@@ -318,11 +487,22 @@ TEST_F(CompareTest, IdenticalRunsAreTheSameWithABlackHeatMap) {
     EXPECT_EQ(e["max_state_difference"].get<double>(), 0.0);
     EXPECT_EQ(e["max_pixel_difference"], 0);
     int frames = 0, w = 0, h = 0;
-    EXPECT_EQ(HeatMapMax(out.path() / e["video"].get<std::string>(), &frames), 0);
+    const int top = e["label_height"].get<int>();
+    EXPECT_EQ(HeatMapMax(out.path() / e["video"].get<std::string>(), top, &frames), 0);
     EXPECT_EQ(frames, 13);
-    const auto first = ReadAllFrames((out.path() / e["video"].get<std::string>()).string(), &w, &h);
+    const auto all = ReadAllFrames((out.path() / e["video"].get<std::string>()).string(), &w, &h);
     EXPECT_EQ(w, 3 * 64);
-    EXPECT_EQ(h, 64);
+    // a strip above the frames names the panels: A's and B's run and the heat map
+    EXPECT_GE(top, 10);
+    EXPECT_EQ(top % 2, 0);
+    EXPECT_EQ(h, top + 64);
+    ASSERT_FALSE(all.empty());
+    int bright[3] = {0, 0, 0};  // text pixels per panel's label
+    for (int y = 0; y < top; ++y) {
+      for (int x = 0; x < w; ++x) bright[x / 64] += all[0][(y * w + x) * 3] > 160;
+    }
+    for (int i = 0; i < 3; ++i) EXPECT_GT(bright[i], 15) << "panel " << i;
+    EXPECT_NE(bright[0], bright[1]);  // "A: a" and "B: a_again" differ
   }
   const json page = PageData(out.path() / "index.html");
   EXPECT_EQ(page["kind"], "compare");
@@ -344,7 +524,9 @@ TEST_F(CompareTest, AChangedPolicyIsCaughtAtStepOne) {
     EXPECT_GT(e["max_state_difference"].get<double>(), 1e-3);
     EXPECT_GT(e["max_pixel_difference"].get<int>(), 32);
     int frames = 0;
-    EXPECT_GT(HeatMapMax(out.path() / e["video"].get<std::string>(), &frames), 32);
+    EXPECT_GT(HeatMapMax(out.path() / e["video"].get<std::string>(), e["label_height"].get<int>(),
+                         &frames),
+              32);
   }
   // --states-only: the same verdict without videos
   TempDir states;
@@ -353,6 +535,22 @@ TEST_F(CompareTest, AChangedPolicyIsCaughtAtStepOne) {
   EXPECT_EQ(s.exit_code, 1) << s.output;
   EXPECT_FALSE(fs::exists(states.path() / "compare_episode_000.mp4"));
   EXPECT_TRUE(fs::exists(states.path() / "index.html"));
+}
+
+TEST_F(CompareTest, RunsWithoutAVideoFormatInCommonCompareStatesOnly) {
+  TempDir tmp;
+  const auto gif = RunFetchscope(Record(tmp.path() / "gif", "--format gif --no-report", 2));
+  ASSERT_EQ(gif.exit_code, 0) << gif.output;
+  const auto r = RunFetchscope("compare -q " + Dir("a") + " " + (tmp.path() / "gif").string() +
+                               " --out " + (tmp.path() / "c").string());
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("no video format in common (mp4 in A, gif in B)"), std::string::npos)
+      << r.output;
+  EXPECT_FALSE(fs::exists(tmp.path() / "c"));
+  const auto states =
+      RunFetchscope("compare -q --states-only " + Dir("a") + " " + (tmp.path() / "gif").string() +
+                    " --out " + (tmp.path() / "c").string());
+  EXPECT_EQ(states.exit_code, 0) << states.output;  // the same episodes, recorded as gif
 }
 
 TEST_F(CompareTest, ToleranceDecidesWhatCountsAsTheSame) {

@@ -1,22 +1,33 @@
 #!/usr/bin/env bash
 # Remakes README's docs/report.png and docs/compare.png with the tool itself: two record runs of
-# FetchPush-v4 (scripted and zero policy, 30 steps: some scripted episodes are not done yet), their report and their comparison, photographed by
-# headless Chromium. Needs a build (build/fetchscope) and Debian's chromium.
-#   tools/docs-screenshots.sh [BUILD_DIR]
+# FetchPush-v4, 5 episodes of 20 steps each (the scripted policy reaches the goal in time in
+# some episodes and not in others, so the report shows successes and failures; the zero policy
+# never moves), the scripted run's report and the comparison of the two. Headless Chromium
+# (through playwright-core, as in the browser tests: web/test/check_page.mjs) photographs each
+# whole page once its videos are loaded and shown at 70 % of their length.
+# Needs a build (build/fetchscope), Debian's chromium and web/node_modules (tools/install-deps.sh).
+#   tools/docs-screenshots.sh [BUILD_DIR] [OUT_DIR (default docs)]
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bin="${1:-build}/fetchscope"
+out="${2:-docs}"
+chromium="${FETCHSCOPE_CHROMIUM:-/usr/bin/chromium}"
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
-common=(--env-id FetchPush-v4 --episodes 10 --steps 30 --width 240 --height 240 --quiet)
+mkdir -p "$out"
+common=(--env-id FetchPush-v4 --episodes 5 --steps 20 --width 240 --height 240 --quiet)
 "$bin" record "${common[@]}" --policy scripted --out "$work/scripted"
 "$bin" record "${common[@]}" --policy zero --out "$work/zero"
 "$bin" compare -q "$work/scripted" "$work/zero" --out "$work/compare" || [[ $? -eq 1 ]]
-shoot() {  # PAGE PNG HEIGHT
-  chromium --headless --no-sandbox --disable-gpu --disable-background-networking \
-    --disable-component-update --no-first-run --user-data-dir="$work/profile" --hide-scrollbars \
-    --window-size=1280,"$3" --virtual-time-budget=10000 --screenshot="$2" "file://$1" 2>/dev/null
+shoot() {  # PAGE PNG: the whole page; a failed check (console error, no page) fails the script
+  node web/test/check_page.mjs --page "$1" --screenshot "$2" --seek 0.7 --chromium "$chromium" \
+    >"$work/check.json" || { cat "$work/check.json" >&2; exit 1; }
+  if ! grep -q '"console_errors":\[\],"page_errors":\[\]' "$work/check.json"; then
+    cat "$work/check.json" >&2
+    echo "docs-screenshots: $1 has errors" >&2
+    exit 1
+  fi
 }
-shoot "$work/scripted/index.html" docs/report.png 2000
-shoot "$work/compare/index.html" docs/compare.png 1900
-echo "docs-screenshots: docs/report.png docs/compare.png"
+shoot "$work/scripted/index.html" "$out/report.png"
+shoot "$work/compare/index.html" "$out/compare.png"
+echo "docs-screenshots: $out/report.png $out/compare.png"

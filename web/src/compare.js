@@ -99,13 +99,12 @@
 
   // --- side-by-side videos
   if (!s.states_only) {
-    page.append(el('h2', {}, 'Side by side: A | B | per-pixel difference (black: equal; 4× amplified)'));
+    page.append(el('h2', {}, 'Side by side: A | B | per-pixel difference heat map (black: equal; 4× amplified)'));
     const list = el('div', {class: 'pairs'});
     for (const r of rows) {
       const box = el('section', {class: 'pair', id: `pair-${r.label}`});
       box.append(el('h3', {class: r.same ? 'ok' : 'fail'}, `episode ${r.label} — ` + (r.first_divergence_step === null
           ? 'states equal within the tolerance' : `states diverge at step ${r.first_divergence_step}`)));
-      box.append(el('div', {class: 'columns'}, el('span', {}, 'A'), el('span', {}, 'B'), el('span', {}, '|A − B| heat map')));
       box.append(el('video', {src: r.video, controls: true, muted: true, playsinline: true, preload: rows.length <= 50 ? 'auto' : 'metadata'}));
       list.append(box);
     }

@@ -5,7 +5,7 @@
 
 const FS = (() => {
   const data = JSON.parse(document.getElementById('fetchscope-data').textContent);
-  const colors = {success: '#1a9850', failure: '#d73027', threshold: '#555', accent: '#2c6db2',
+  const colors = {success: '#1a9850', failure: '#d73027', interrupted: '#8a8f94', threshold: '#555', accent: '#2c6db2',
                   band: 'rgba(44,109,178,0.18)', diff: '#7b3294'};
 
   // el('td', {class: 'num'}, 'text', childNode, ...): attributes, then children (strings are text).
@@ -38,7 +38,10 @@ const FS = (() => {
     if (bRows) table.append(el('thead', {}, el('tr', {}, el('th', {}), el('th', {}, 'run A'), el('th', {}, 'run B'))));
     const body = el('tbody');
     if (!bRows) {
-      for (const row of rows) body.append(el('tr', {}, el('th', {}, row.label), el('td', {}, row.value)));
+      for (const row of rows) {
+        body.append(el('tr', {}, el('th', {}, row.label),
+            el('td', {}, row.href ? el('a', {href: row.href}, row.value) : row.value)));
+      }
     } else {
       const labels = [];
       for (const row of rows.concat(bRows)) if (!labels.includes(row.label)) labels.push(row.label);
@@ -111,9 +114,15 @@ const FS = (() => {
       const [options, values] = spec.build(width);
       options.width = width;
       options.height = options.height || 300;
-      return new uPlot(options, values, targets[i]);
+      const chart = new uPlot(options, values, targets[i]);
+      charts[spec.id] = chart;
+      return chart;
     });
   }
+
+  // the uPlot charts by plot id, for a look from the browser's console (and the browser tests)
+  const charts = {};
+  window.fetchscopeCharts = charts;
 
   // axis tick steps for counts: whole numbers only
   const integerSteps = [1, 2, 5, 10, 20, 50, 100, 200, 500, 1000, 2000, 5000, 10000];

@@ -26,12 +26,14 @@
   FS.plots(page, [{
     id: 'plot-distance', wide: true, title: 'Distance to goal over steps',
     caption: [FS.swatch(colors.success), 'success', FS.swatch(colors.failure), 'failure',
+              ...(s.incomplete ? [FS.swatch(colors.interrupted), 'interrupted'] : []),
               FS.swatch(colors.threshold, true), `threshold ${data.threshold} m`],
     build: (width) => {
       const series = [{label: 'step'}];
       const values = [steps];
       for (const e of withCurves) {
-        series.push({label: `episode ${e.label}`, stroke: e.success ? colors.success : colors.failure,
+        const stroke = !e.complete ? colors.interrupted : e.success ? colors.success : colors.failure;
+        series.push({label: `episode ${e.label}`, stroke,
                      width: 1.25, points: {show: false}});
         values.push(steps.map((t) => (t < e.distances.length ? e.distances[t] : null)));
       }
@@ -46,7 +48,10 @@
     },
   }, {
     id: 'plot-returns', title: 'Histogram of returns',
-    caption: `${recorded.length} episode(s); bin width ${num(h.width, 3)}`,
+    // an interrupted episode's return covers only the steps it made: left out, as from the rate
+    caption: `${s.complete} complete episode(s)` +
+        (s.incomplete ? `; ${s.incomplete} interrupted episode(s) left out` : '') +
+        `; bin width ${num(h.width, 3)}`,
     build: (width) => {
       const lo = h.centres.length ? h.centres[0] - h.width / 2 : 0;
       const hi = h.centres.length ? h.centres[h.centres.length - 1] + h.width / 2 : 1;
@@ -96,8 +101,14 @@
     columns.push({label: 'original successes', value: (e) => (e.hindsight ? e.hindsight.original_successes : null),
                   render: (e) => (e.hindsight ? String(e.hindsight.original_successes) : '—'), numeric: true});
   }
+  // a per-layer video "episode_000_segmentation.mp4" is linked as "segmentation.mp4"
+  const shortName = (e, file) => file.replace(/^.*\//, '').replace(`episode_${e.label}_`, '');
   columns.push({label: 'files', value: () => null, render: (e) => (e.status === 'missing' ? '' : [
-    e.video ? el('a', {href: e.video}, 'mp4') : null, ' ',
+    ...e.videos.flatMap((v) => [el('a', {href: v.file, class: 'video-link'}, v.format), ' ']),
+    ...e.layers.flatMap((l) => [
+      ...l.videos.flatMap((v) => [el('a', {href: v.file, class: 'video-link'}, `${l.name}.${v.format}`), ' ']),
+      ...(l.legend ? [el('a', {href: l.legend}, `${l.name} legend`), ' '] : [])]),
+    ...e.other_videos.flatMap((file) => [el('a', {href: file, class: 'video-link'}, shortName(e, file)), ' ']),
     e.sheet ? el('a', {href: e.sheet}, 'sheet') : null, ' ',
     e.trajectory ? el('a', {href: e.trajectory}, 'json') : null])});
   const table = FS.sortableTable(columns, episodes, (e) => (e.status === 'missing' ? 'missing' : null));
@@ -122,10 +133,19 @@
       card.append(el('p', {}, `hindsight (HER future, k = 4): ${e.hindsight.relabelled_successes} relabelled ` +
           `successes against ${e.hindsight.original_successes} original`));
     }
-    if (e.video) card.append(el('video', {src: e.video, controls: true, muted: true, playsinline: true, preload}));
+    // the best format a browser plays (mp4, then webm) as a video; a gif-only run's gif as an image
+    if (e.video && e.video_format === 'gif') {
+      card.append(el('img', {class: 'clip', src: e.video, alt: `episode ${e.label} (gif)`}));
+    } else if (e.video) {
+      card.append(el('video', {src: e.video, controls: true, muted: true, playsinline: true, preload}));
+    }
     if (e.sheet) card.append(el('a', {href: e.sheet}, el('img', {src: e.sheet, alt: `contact sheet of episode ${e.label}`, loading: 'lazy'})));
     card.append(el('div', {class: 'links'}, [
-      e.video ? el('a', {href: e.video}, e.video) : null,
+      ...e.videos.map((v) => el('a', {href: v.file, class: 'video-link'}, v.file)),
+      ...e.layers.flatMap((l) => [
+        ...l.videos.map((v) => el('a', {href: v.file, class: 'video-link'}, v.file)),
+        l.legend ? el('a', {href: l.legend}, `${l.name} legend`) : null]),
+      ...e.other_videos.map((file) => el('a', {href: file, class: 'video-link'}, file)),
       e.sheet ? el('a', {href: e.sheet}, 'contact sheet') : null,
       e.trajectory ? el('a', {href: e.trajectory}, 'trajectory JSON') : null]));
     grid.append(card);
