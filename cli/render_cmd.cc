@@ -20,10 +20,11 @@ std::string LayerPath(const std::string& path, const std::string& layer) {
   return (p.parent_path() / (p.stem().string() + "_" + layer + p.extension().string())).string();
 }
 
-// frame_segmentation.png -> frame_segmentation_legend.json
-std::string LegendPath(const std::string& png) {
-  std::filesystem::path p(png);
-  return (p.parent_path() / (p.stem().string() + "_legend.json")).string();
+// -o frame.png -> frame_segmentation_legend.json, whether the segmentation layer went to
+// frame_segmentation.png (beside other layers) or to frame.png (alone)
+std::string LegendPath(const std::string& output) {
+  std::filesystem::path p(output);
+  return (p.parent_path() / (p.stem().string() + "_segmentation_legend.json")).string();
 }
 
 nlohmann::json SegmentationLegendJson(const std::vector<SegmentObject>& objects) {
@@ -63,8 +64,9 @@ void RegisterRender(CLI::App& app) {
   sub->add_option("--layers", *layers,
                   "Comma list of rgb, depth (16-bit PNG, millimetres), segmentation (a fixed, "
                   "distinct colour per body or site, black background, with a legend JSON "
-                  "NAME_legend.json beside it naming each colour's body and geoms); extra layers "
-                  "go to NAME_depth.png, NAME_segmentation.png")
+                  "NAME_segmentation_legend.json naming each colour's body and geoms). With -o "
+                  "NAME.png, NAME.png holds rgb if listed, else depth, else segmentation; the "
+                  "other layers go to NAME_depth.png and NAME_segmentation.png")
       ->capture_default_str();
   sub->add_option("-o,--output", *output, "Output PNG")->required();
   sub->add_flag("-v,--verbose", *verbose, "Print the GL vendor, renderer and version, and the MSAA samples used and why");
@@ -128,7 +130,7 @@ void RegisterRender(CLI::App& app) {
       renderer.RenderLayer(fetch.data(), info, Layer::kSegmentation, &layer);
       const std::string path = (want_rgb || want_depth) ? LayerPath(*output, "segmentation") : *output;
       WritePng(path, renderer.width(), renderer.height(), 3, 8, layer.data());
-      const std::string legend = LegendPath(path);
+      const std::string legend = LegendPath(*output);
       WriteJson(legend, SegmentationLegendJson(renderer.segmentation_legend()));
       std::printf("wrote %s (segmentation) and %s (its colours)\n", path.c_str(), legend.c_str());
     }

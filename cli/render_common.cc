@@ -28,8 +28,8 @@ void AddViewOptions(CLI::App* sub, ViewOptions* o) {
       ->capture_default_str()->check(CLI::Range(1, 8192));
   sub->add_option("--hud-position", o->hud_position,
                   "Corner of the HUD: top-left, top-right, bottom-left or bottom-right (within "
-                  "the tile at that corner). The HUD text grows with the view and is left out "
-                  "of views too small to read it")
+                  "the tile at that corner). The HUD text grows with the view; views smaller "
+                  "than 320x240 pixels get no HUD")
       ->capture_default_str();
   sub->add_option("--hud-opacity", o->hud_opacity,
                   "Opacity of the black box behind the HUD and tile labels: 0 (none) .. 1")

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <string>
+#include <vector>
 
 #include "render/text.h"
 #include "src/errors.h"
@@ -23,15 +24,12 @@ constexpr float kSuccessGreen[4] = {0.1f, 0.85f, 0.2f, 1.0f};
 constexpr float kMissOrange[4] = {1.0f, 0.55f, 0.0f, 1.0f};
 constexpr float kArrowYellow[4] = {1.0f, 0.85f, 0.0f, 1.0f};
 constexpr float kTrailCyan[4] = {0.0f, 0.75f, 1.0f, 1.0f};
-constexpr float kRelabelGreen[4] = {0.0f, 0.9f, 0.25f, 1.0f};
-constexpr float kRelabelRed[4] = {0.95f, 0.1f, 0.1f, 1.0f};
 
 constexpr double kTargetRadius = 0.02;     // target0's size in the Fetch XMLs
 constexpr double kAchievedRadius = 0.012;  // opaque core
 constexpr double kAchievedHalo = 0.032;    // translucent halo: shows even around the 5 cm block
 constexpr double kArrowWidth = 0.008;      // m
 constexpr double kLineWidth = 2.0;         // pixels for mjGEOM_LINE
-constexpr double kRelabelRadius = 0.014;   // hindsight goal markers: smaller than the goal (0.02)
 
 // Distance from the scene's camera (between the two eyes) to the geom, for the transparent sort.
 void SetCamdist(const mjvScene& scene, mjvGeom* g) {
@@ -81,25 +79,23 @@ void AddConnector(mjvScene* scene, int type, double width, const std::array<doub
 }
 
 // The one place frame text is drawn (HUD, tile labels): DejaVu Sans through FreeType
-// (render/text.h), its em size chosen so that a line is about `line_px` pixels high.
-int TextPixels(int line_px) { return std::max(4, line_px * 4 / 5); }
+// (render/text.h) at an em of `pixels`.
 void DrawFrameText(uint8_t* rgb, int width, int height, int x, int y, const std::string& text,
-                   int line_px, Rgb color) {
+                   int pixels, Rgb color) {
   TextStyle style;
-  style.pixel_size = TextPixels(line_px);
+  style.pixel_size = pixels;
   style.color = color;
   Font::Default().Draw(rgb, width, height, x, y, text, style);
 }
-int FrameTextWidth(const std::string& text, int line_px) {
-  return Font::Default().Measure(text, TextPixels(line_px)).width;
-}
-int FrameTextHeight(const std::string& text, int line_px) {
-  return Font::Default().Measure(text, TextPixels(line_px)).height;
+TextMetrics FrameText(const std::string& text, int pixels) {
+  return Font::Default().Measure(text, pixels);
 }
 
 constexpr Rgb kHudLabelColor = {200, 200, 200};
 constexpr Rgb kHudValueColor = {255, 255, 255};
-constexpr int kHudMinLine = 10;  // the smallest text that can be read: 8-pixel DejaVu Sans
+// The value column is as wide as the widest action line (DejaVu's '+' is wider than its '-',
+// so this is the widest the action can be): the box keeps its size from frame to frame.
+constexpr char kHudWidestValue[] = "+0.00 +0.00 +0.00 +0.00";
 
 // Darkens `r` (clipped to the image) to (1 - opacity) of its brightness.
 void BlendBox(uint8_t* rgb, int width, int height, const PixelRect& r, double opacity) {
@@ -183,6 +179,32 @@ bool PlaceSiteGeom(mjvScene* scene, int site_id, const std::array<double, 3>& go
   return false;
 }
 
+std::vector<HindsightPin> HindsightPins(const FrameInfo& info) {
+  std::vector<HindsightPin> pins;
+  const double clear = 2 * kHindsightBeadRadius + 0.001;  // beads nearer than this overlap
+  for (const FrameInfo::Relabel& r : info.relabelled) {
+    HindsightPin pin;
+    pin.base = r.goal;
+    pin.success = r.success;
+    // out along the stem until the bead clears every bead placed before: identical goals
+    // string their beads kHindsightBeadSpacing apart on one stem (the steps are exact
+    // multiples of half the spacing, so each length is computed afresh, never accumulated)
+    for (int half_steps = 0;; ++half_steps) {
+      const double length = kHindsightPinLength + half_steps * (kHindsightBeadSpacing / 2);
+      for (int k = 0; k < 3; ++k) pin.head[k] = r.goal[k] + length * kHindsightPinDirection[k];
+      bool overlaps = false;
+      for (const HindsightPin& other : pins) {
+        const double dx = pin.head[0] - other.head[0], dy = pin.head[1] - other.head[1],
+                     dz = pin.head[2] - other.head[2];
+        overlaps = overlaps || dx * dx + dy * dy + dz * dz < clear * clear;
+      }
+      if (!overlaps) break;
+    }
+    pins.push_back(pin);
+  }
+  return pins;
+}
+
 void AddOverlayGeoms(const OverlaySet& overlays, const FrameInfo& info,
                      const std::array<double, 3>& grip, const Trail& trail, bool add_goal_sphere,
                      mjvScene* scene) {
@@ -200,8 +222,11 @@ void AddOverlayGeoms(const OverlaySet& overlays, const FrameInfo& info,
     AddConnector(scene, mjGEOM_ARROW, kArrowWidth, grip, tip, kArrowYellow);
   }
   if (overlays.hindsight) {
-    for (const FrameInfo::Relabel& r : info.relabelled) {
-      AddSphere(scene, r.goal, kRelabelRadius, r.success ? kRelabelGreen : kRelabelRed);
+    for (const HindsightPin& pin : HindsightPins(info)) {
+      const float* rgba = pin.success ? kHindsightGreen : kHindsightRed;
+      AddSphere(scene, pin.head, kHindsightBeadRadius, rgba);
+      AddConnector(scene, mjGEOM_CAPSULE, kHindsightStemRadius, pin.base, pin.head, rgba);
+      AddSphere(scene, pin.base, kHindsightFootRadius, rgba);
     }
   }
   if (overlays.trail) {
@@ -219,12 +244,11 @@ void AddOverlayGeoms(const OverlaySet& overlays, const FrameInfo& info,
 
 HudText FormatHud(const FrameInfo& info, const OverlaySet& overlays) {
   HudText hud;
+  hud.title = info.title;
   auto line = [&](const std::string& label, const std::string& value) {
     hud.labels += label + "\n";
     hud.values += value + "\n";
   };
-  // the title goes in the values column: the labels column stays narrow
-  if (!info.title.empty()) line("env", info.title);
   line("step", std::to_string(info.step));
   line("reward", std::isnan(info.reward) ? "-" : Format("%.4f", info.reward));
   line("distance", Format("%.4f m", info.distance));
@@ -238,12 +262,14 @@ HudText FormatHud(const FrameInfo& info, const OverlaySet& overlays) {
     line("action", "-");
   }
   if (overlays.action) line("arrow", Format("x%.0f of 0.05 m/unit", kActionArrowScale));
-  if (overlays.hindsight && info.relabelled_successes >= 0) {
-    line("HER", std::to_string(info.relabelled_successes) + "/" +
-                    std::to_string(info.relabelled.size()) + " relabelled successes");
+  if (overlays.hindsight) {
+    // on every frame, so that the box keeps its height ("-": no transition ends here)
+    line("HER", info.relabelled_successes < 0
+                    ? std::string("-")
+                    : std::to_string(info.relabelled_successes) + "/" +
+                          std::to_string(info.relabelled.size()) + " successes");
   }
-  // mjr_overlay wants no trailing newline
-  hud.labels.pop_back();
+  hud.labels.pop_back();  // no trailing newline
   hud.values.pop_back();
   return hud;
 }
@@ -279,35 +305,56 @@ double CheckHudOpacity(double opacity) {
   return opacity;
 }
 
-int HudLineHeight(int tile_width, int tile_height) {
-  const int side = std::min(tile_width, tile_height);
-  // one step of the 10-pixel line per 480 pixels of the tile's shorter side, rounded
-  return kHudMinLine * std::max(1, (side * 10 / 480 + 5) / 10);
+int FrameTextPixels(int tile_width, int tile_height) {
+  const long side = std::max(0, std::min(tile_width, tile_height));
+  // 2.7 % of the shorter side, rounded, in integers (the same on every machine)
+  return std::max(kHudMinTextPixels, static_cast<int>((side * 27 + 500) / 1000));
+}
+
+int HudTextPixels(int tile_width, int tile_height) {
+  if (tile_width < kHudMinTileWidth || tile_height < kHudMinTileHeight) return 0;
+  return FrameTextPixels(tile_width, tile_height);
 }
 
 namespace {
 
+std::vector<std::string> Lines(const std::string& text) {
+  std::vector<std::string> out;
+  size_t start = 0;
+  while (true) {
+    const size_t end = text.find('\n', start);
+    out.push_back(text.substr(start, end == std::string::npos ? std::string::npos : end - start));
+    if (end == std::string::npos) return out;
+    start = end + 1;
+  }
+}
+
 struct HudGeometry {
-  int line = 0, pad = 0, label_w = 0, gap = 0, text_h = 0;
+  int pixels = 0;  // em
+  int pitch = 0;   // baseline to baseline
+  int pad = 0, label_w = 0, gap = 0, value_w = 0;
   PixelRect box;
 };
 
+// Rows one pitch apart: 1.25 em, so that the box's height is proportional to the text size
+// (FreeType's own line height is rounded per size: 17 px at 13 px, 32 at 26).
+int RowPitch(int pixels) { return (5 * pixels + 2) / 4; }
+
+// The box depends on the tile and on the rows (labels) only, never on the values.
 std::optional<HudGeometry> LayoutHud(const HudText& hud, const PixelRect& tile,
                                      HudPosition position) {
   HudGeometry g;
-  g.line = HudLineHeight(tile.width, tile.height);
-  g.pad = g.line * 4 / 10;
-  g.gap = g.line;
-  g.label_w = FrameTextWidth(hud.labels, g.line);
-  const int value_w = FrameTextWidth(hud.values, g.line);
-  g.text_h = std::max(FrameTextHeight(hud.labels, g.line), FrameTextHeight(hud.values, g.line));
-  g.box.width = g.pad + g.label_w + g.gap + value_w + g.pad;
-  g.box.height = g.pad + g.text_h + g.pad;
+  g.pixels = HudTextPixels(tile.width, tile.height);
+  if (g.pixels == 0) return std::nullopt;
+  g.pitch = RowPitch(g.pixels);
+  g.pad = std::max(3, g.pixels * 2 / 5);
+  g.gap = g.pixels;
+  g.label_w = FrameText(hud.labels, g.pixels).width;
+  g.value_w = FrameText(kHudWidestValue, g.pixels).width;
+  const int rows = static_cast<int>(Lines(hud.labels).size()) + (hud.title.empty() ? 0 : 1);
+  g.box.width = g.pad + g.label_w + g.gap + g.value_w + g.pad;
+  g.box.height = g.pad + rows * g.pitch + g.pad;
   const int margin = g.pad;
-  // too small to read: the box would not fit, or would cover more than half the tile's height
-  if (g.box.width + 2 * margin > tile.width || 2 * (g.box.height + margin) > tile.height) {
-    return std::nullopt;
-  }
   const bool right = position == HudPosition::kTopRight || position == HudPosition::kBottomRight;
   const bool bottom = position == HudPosition::kBottomLeft || position == HudPosition::kBottomRight;
   g.box.x = right ? tile.x + tile.width - margin - g.box.width : tile.x + margin;
@@ -328,26 +375,42 @@ bool DrawHud(uint8_t* rgb, int width, int height, const PixelRect& tile, const H
   const auto g = LayoutHud(hud, tile, position);
   if (!g) return false;
   BlendBox(rgb, width, height, g->box, opacity);
-  const int x = g->box.x + g->pad, y = g->box.y + g->pad;
-  DrawFrameText(rgb, width, height, x, y, hud.labels, g->line, kHudLabelColor);
-  DrawFrameText(rgb, width, height, x + g->label_w + g->gap, y, hud.values, g->line, kHudValueColor);
+  const Font& font = Font::Default();
+  const int x = g->box.x + g->pad, value_x = x + g->label_w + g->gap;
+  int y = g->box.y + g->pad;
+  if (!hud.title.empty()) {
+    const int title_w = g->box.width - 2 * g->pad;
+    DrawFrameText(rgb, width, height, x, y, font.Fit(hud.title, g->pixels, title_w), g->pixels,
+                  kHudValueColor);
+    y += g->pitch;
+  }
+  const std::vector<std::string> labels = Lines(hud.labels), values = Lines(hud.values);
+  for (size_t i = 0; i < labels.size(); ++i, y += g->pitch) {
+    DrawFrameText(rgb, width, height, x, y, labels[i], g->pixels, kHudLabelColor);
+    // each value cut to its column: the box never grows with the frame's text
+    if (i < values.size()) {
+      DrawFrameText(rgb, width, height, value_x, y, font.Fit(values[i], g->pixels, g->value_w),
+                    g->pixels, kHudValueColor);
+    }
+  }
   return true;
 }
 
 bool DrawTileLabel(uint8_t* rgb, int width, int height, const PixelRect& tile,
                    const std::string& label, double opacity, const std::optional<PixelRect>& avoid) {
-  const int line = HudLineHeight(tile.width, tile.height);
-  const int pad = line * 3 / 10;
+  const int pixels = FrameTextPixels(tile.width, tile.height);
+  const TextMetrics m = FrameText(label, pixels);
+  const int pad = std::max(2, pixels / 4);
   PixelRect box;
-  box.width = FrameTextWidth(label, line) + 2 * pad;
-  box.height = FrameTextHeight(label, line) + 2 * pad;
+  box.width = m.width + 2 * pad;
+  box.height = m.height + 2 * pad;
   if (box.width + 2 * pad > tile.width || 4 * box.height > tile.height) return false;
   box.x = tile.x + (tile.width - box.width) / 2;
   box.y = tile.y + pad;
   if (avoid && Overlaps(box, *avoid)) box.y = tile.y + tile.height - pad - box.height;
   if (avoid && Overlaps(box, *avoid)) return false;
   BlendBox(rgb, width, height, box, opacity);
-  DrawFrameText(rgb, width, height, box.x + pad, box.y + pad, label, line, kHudValueColor);
+  DrawFrameText(rgb, width, height, box.x + pad, box.y + pad, label, pixels, kHudValueColor);
   return true;
 }
 

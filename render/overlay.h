@@ -94,8 +94,35 @@ class Trail {
   int last_step_ = -1;
 };
 
-/// Geoms the overlays may add at most (so the scene can reserve room for them).
-inline constexpr int kMaxOverlayGeoms = 8 + 16 + static_cast<int>(Trail::kMaxPoints);
+/// The hindsight overlay draws each relabelled goal g' as a pin: a thin stem from g' out to a
+/// bead, so that it shows even where g' lies inside the block (a failed episode's block often
+/// never moves, and then every g' is where it stands) or inside the gripper that carries it.
+/// The stem leans 45 degrees from the vertical toward +x+y, away from the robot (which stands
+/// at -x) and across Gymnasium's default view, so that the gripper above the block does not
+/// hide it. A bead that would overlap one placed before (identical g' give identical pins)
+/// goes further out along its stem: k identical goals show k beads on one stem.
+struct HindsightPin {
+  std::array<double, 3> base{};  ///< g'
+  std::array<double, 3> head{};  ///< the bead's centre
+  bool success = false;          ///< relabelled reward counts as success: green, else red
+};
+inline constexpr double kHindsightPinDirection[3] = {0.5, 0.5, 0.70710678118654752};  ///< unit
+inline constexpr double kHindsightPinLength = 0.10;   ///< m from g' to the nearest bead
+inline constexpr double kHindsightBeadRadius = 0.014;   ///< m
+inline constexpr double kHindsightBeadSpacing = 0.032;  ///< m between beads on one stem
+inline constexpr double kHindsightStemRadius = 0.0025;  ///< m
+inline constexpr double kHindsightFootRadius = 0.007;   ///< m, the sphere at g' itself
+
+/// The pins of `info.relabelled`, in its order (deterministic).
+std::vector<HindsightPin> HindsightPins(const FrameInfo& info);
+
+/// Bead colours (rgba): relabelled success and failure.
+inline constexpr float kHindsightGreen[4] = {0.0f, 0.9f, 0.25f, 1.0f};
+inline constexpr float kHindsightRed[4] = {0.95f, 0.1f, 0.1f, 1.0f};
+
+/// Geoms the overlays may add at most (so the scene can reserve room for them): 3 per
+/// hindsight pin, up to 16 pins.
+inline constexpr int kMaxOverlayGeoms = 8 + 3 * 16 + static_cast<int>(Trail::kMaxPoints);
 
 /// Moves the scene geom of site `site_id` (the target0 marker) to `goal`, as Gymnasium's
 /// _render_callback does through site_pos + mj_forward, but without touching mjData.
@@ -109,13 +136,15 @@ void AddOverlayGeoms(const OverlaySet& overlays, const FrameInfo& info,
                      const std::array<double, 3>& grip, const Trail& trail, bool add_goal_sphere,
                      mjvScene* scene);
 
-/// The HUD as two columns for mjr_overlay: labels and values, one line each.
+/// The HUD's text: a title line (the env id) over two columns, labels and values, one line each.
 struct HudText {
-  std::string labels;
-  std::string values;
+  std::string title;   ///< across the box; empty for none
+  std::string labels;  ///< '\n'-separated, one per row
+  std::string values;  ///< '\n'-separated, as many as labels
 };
 
-/// Formats the HUD for `info`.
+/// Formats the HUD for `info`. The rows depend on `overlays` only (never on the frame): with
+/// `hindsight` the HER row is there on every frame ("-" where the frame has no transition).
 HudText FormatHud(const FrameInfo& info, const OverlaySet& overlays);
 
 /// A rectangle of an RGB image, row 0 at the top.
@@ -123,12 +152,29 @@ struct PixelRect {
   int x = 0, y = 0, width = 0, height = 0;
 };
 
-/// Line height in pixels of HUD text in a tile of `tile_width` x `tile_height`: it grows with
-/// the tile (10 px up to 599 px, 20 px from 600, ...), so the HUD keeps its share of the frame.
-int HudLineHeight(int tile_width, int tile_height);
+/// Views (tiles) narrower or lower than this get no HUD: text that fits them cannot be read.
+inline constexpr int kHudMinTileWidth = 320;
+inline constexpr int kHudMinTileHeight = 240;
+/// The smallest HUD and tile-label text: DejaVu Sans at a 10-pixel em (13-pixel lines).
+inline constexpr int kHudMinTextPixels = 10;
+/// The most of a view the HUD box covers, in any view it is drawn in: this share of the view's
+/// width and of its height (tests/camera_test.cc checks every row the HUD can have).
+inline constexpr double kHudMaxWidthShare = 0.6;
+inline constexpr double kHudMaxHeightShare = 0.5;
 
-/// Where the HUD box of `hud` goes in `tile` at `position`, or nullopt where it would not fit
-/// (the tile is too small for text that can still be read: the HUD is dropped).
+/// Em size in pixels of frame text (the HUD, tile labels) in a view of `tile_width` x
+/// `tile_height`: 2.7 % of the shorter side, rounded (13 at 480, 26 at 960, 29 at 1080), and at
+/// least kHudMinTextPixels.
+int FrameTextPixels(int tile_width, int tile_height);
+
+/// FrameTextPixels for the HUD, or 0 where the view is smaller than kHudMinTileWidth x
+/// kHudMinTileHeight and the HUD is left out. The view's size alone decides, never the text:
+/// the HUD is on every frame of a run or on none.
+int HudTextPixels(int tile_width, int tile_height);
+
+/// Where the HUD box of `hud` goes in `tile` at `position`, or nullopt where the tile is too
+/// small for it (HudTextPixels is 0). The box's size depends on the tile and on which rows
+/// `hud` has, not on the values in them: a value wider than its column is cut with "...".
 std::optional<PixelRect> PlaceHud(const HudText& hud, const PixelRect& tile, HudPosition position);
 
 /// Draws `hud` into `rgb` (`width` x `height` RGB24, row 0 on top) inside `tile` at `position`:

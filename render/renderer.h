@@ -29,10 +29,14 @@ enum class Layer {
                   ///< black = none; Renderer::segmentation_legend() names the colours
 };
 
-/// The colour of segmentation object `index` (see SegmentObject): Kelly's 20 colours of
-/// maximum contrast (white and black left out), then golden-angle hues at two brightnesses.
+/// The colour of segmentation object `index` (see SegmentObject): kSegmentationColors colours
+/// chosen to be far apart (CIEDE2000 at least 15.9 between any two of the first 36, 14.1 among
+/// all, and from the black background), then golden-angle hues at two brightnesses, which are
+/// not guaranteed to stay clear of each other.
 /// Deterministic: an object has the same colour in every frame, camera and run.
 std::array<uint8_t, 3> SegmentationColor(int index);
+/// How many colours SegmentationColor takes from its far-apart palette.
+inline constexpr int kSegmentationColors = 48;
 
 /// One object of the segmentation layer: a body (all its geoms share its colour) or a site.
 struct SegmentObject {

@@ -272,9 +272,9 @@ TEST(HudPlacement, GrowsWithTheTileAndStaysInside) {
   FrameInfo info;
   info.title = "FetchPickAndPlace-v4";
   const HudText hud = FormatHud(info, OverlaySet{});
-  EXPECT_EQ(HudLineHeight(480, 480), 10);
-  EXPECT_EQ(HudLineHeight(1920, 1080), 20);
-  EXPECT_EQ(HudLineHeight(2160, 3840), 50);
+  EXPECT_EQ(HudTextPixels(480, 480), 13);
+  EXPECT_EQ(HudTextPixels(1920, 1080), 29);
+  EXPECT_EQ(HudTextPixels(2160, 3840), 58);
   const PixelRect tile{100, 50, 960, 960};
   for (HudPosition p : {HudPosition::kTopLeft, HudPosition::kTopRight, HudPosition::kBottomLeft,
                         HudPosition::kBottomRight}) {
@@ -288,7 +288,7 @@ TEST(HudPlacement, GrowsWithTheTileAndStaysInside) {
   const auto small = PlaceHud(hud, PixelRect{0, 0, 480, 480}, HudPosition::kTopLeft);
   const auto large = PlaceHud(hud, PixelRect{0, 0, 960, 960}, HudPosition::kTopLeft);
   ASSERT_TRUE(small && large);
-  // twice the line height: about twice the box (FreeType's hinting rounds each size on its own)
+  // twice the text size: about twice the box (FreeType's hinting rounds each size on its own)
   EXPECT_NEAR(large->width, 2.0 * small->width, 0.1 * small->width);
   EXPECT_NEAR(large->height, 2.0 * small->height, 0.1 * small->height);
   EXPECT_FALSE(PlaceHud(hud, PixelRect{0, 0, 100, 100}, HudPosition::kTopLeft).has_value());

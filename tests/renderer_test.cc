@@ -19,7 +19,14 @@
 #include <vector>
 
 #include "render/gl_context.h"
+#include "cli/render_common.h"
 #include "render/png_io.h"
+#include "src/assets.h"
+#include "src/env_spec.h"
+#include "src/episode.h"
+#include "src/fetch_env.h"
+#include "src/hindsight.h"
+#include "src/policy.h"
 #include "src/errors.h"
 #include "src/mj_handles.h"
 #include "tests/test_util.h"
@@ -124,6 +131,70 @@ Difference Compare(const std::vector<uint8_t>& a, const std::vector<uint8_t>& b,
   d.fraction = static_cast<double>(differing) / pixels;
   return d;
 }
+
+// CIEDE2000 colour difference of two sRGB colours (D65): about 1 is barely noticeable; the
+// segmentation palette keeps its colours at least kApartInOneImage apart.
+double Ciede2000(const std::array<uint8_t, 3>& rgb1, const std::array<uint8_t, 3>& rgb2) {
+  auto lab = [](const std::array<uint8_t, 3>& rgb) {
+    double lin[3];
+    for (int k = 0; k < 3; ++k) {
+      const double c = rgb[k] / 255.0;
+      lin[k] = c <= 0.04045 ? c / 12.92 : std::pow((c + 0.055) / 1.055, 2.4);
+    }
+    const double x = (0.4124564 * lin[0] + 0.3575761 * lin[1] + 0.1804375 * lin[2]) / 0.95047;
+    const double y = 0.2126729 * lin[0] + 0.7151522 * lin[1] + 0.0721750 * lin[2];
+    const double z = (0.0193339 * lin[0] + 0.1191920 * lin[1] + 0.9503041 * lin[2]) / 1.08883;
+    auto f = [](double t) { return t > 216.0 / 24389 ? std::cbrt(t) : (24389.0 / 27 * t + 16) / 116; };
+    return std::array<double, 3>{116 * f(y) - 16, 500 * (f(x) - f(y)), 200 * (f(y) - f(z))};
+  };
+  const auto [l1, a1, b1] = lab(rgb1);
+  const auto [l2, a2, b2] = lab(rgb2);
+  const double deg = M_PI / 180;
+  const double cbar = (std::hypot(a1, b1) + std::hypot(a2, b2)) / 2;
+  const double g = 0.5 * (1 - std::sqrt(std::pow(cbar, 7) / (std::pow(cbar, 7) + std::pow(25.0, 7))));
+  const double a1p = (1 + g) * a1, a2p = (1 + g) * a2;
+  const double c1p = std::hypot(a1p, b1), c2p = std::hypot(a2p, b2);
+  auto hue = [&](double b, double ap) {
+    if (b == 0 && ap == 0) return 0.0;
+    const double h = std::atan2(b, ap) / deg;
+    return h < 0 ? h + 360 : h;
+  };
+  const double h1p = hue(b1, a1p), h2p = hue(b2, a2p);
+  double dhp = 0;
+  if (c1p * c2p != 0) {
+    dhp = h2p - h1p;
+    if (dhp > 180) dhp -= 360;
+    if (dhp < -180) dhp += 360;
+  }
+  const double dl = l2 - l1, dc = c2p - c1p;
+  const double dh = 2 * std::sqrt(c1p * c2p) * std::sin(dhp / 2 * deg);
+  const double lbar = (l1 + l2) / 2, cbarp = (c1p + c2p) / 2;
+  double hbar = h1p + h2p;
+  if (c1p * c2p != 0) {
+    if (std::abs(h1p - h2p) <= 180) {
+      hbar = (h1p + h2p) / 2;
+    } else {
+      hbar = h1p + h2p < 360 ? (h1p + h2p + 360) / 2 : (h1p + h2p - 360) / 2;
+    }
+  }
+  const double t = 1 - 0.17 * std::cos((hbar - 30) * deg) + 0.24 * std::cos(2 * hbar * deg) +
+                   0.32 * std::cos((3 * hbar + 6) * deg) - 0.20 * std::cos((4 * hbar - 63) * deg);
+  const double dtheta = 30 * std::exp(-std::pow((hbar - 275) / 25, 2));
+  const double rc = 2 * std::sqrt(std::pow(cbarp, 7) / (std::pow(cbarp, 7) + std::pow(25.0, 7)));
+  const double sl = 1 + 0.015 * std::pow(lbar - 50, 2) / std::sqrt(20 + std::pow(lbar - 50, 2));
+  const double sc = 1 + 0.045 * cbarp, sh = 1 + 0.015 * cbarp * t;
+  const double rt = -std::sin(2 * dtheta * deg) * rc;
+  return std::sqrt(std::pow(dl / sl, 2) + std::pow(dc / sc, 2) + std::pow(dh / sh, 2) +
+                   rt * (dc / sc) * (dh / sh));
+}
+
+// Palette indices a Fetch model uses: its bodies (world, robot, table, object) and sites.
+constexpr int kFetchObjects = 36;
+// The least CIEDE2000 difference between two colours in one segmentation image (Kelly's two
+// oranges, the old palette's closest pair in a Fetch image, are 11.8 apart), and among all of
+// the palette's colours.
+constexpr double kApartInOneImage = 15.0;
+constexpr double kApartAll = 14.0;
 
 class RendererTest : public ::testing::TestWithParam<const char*> {
  protected:
@@ -529,6 +600,16 @@ TEST_P(RendererTest, SegmentationNamesObjects) {
     background += o.pixels;
   }
   EXPECT_EQ(background, static_cast<long>(kSize) * kSize) << "a pixel of no object's colour";
+  // the colours used in this image are clearly apart, pair by pair
+  EXPECT_GE(legend.size(), 20u);
+  for (size_t i = 0; i < legend.size(); ++i) {
+    EXPECT_LT(legend[i].index, kFetchObjects) << legend[i].body;
+    for (size_t j = 0; j < i; ++j) {
+      EXPECT_GE(Ciede2000(legend[i].color, legend[j].color), kApartInOneImage)
+          << legend[i].body << " " << legend[i].site << " and " << legend[j].body << " "
+          << legend[j].site;
+    }
+  }
   // the same object keeps its colour in another view
   RenderOptions other = Options("default");
   other.cameras = ParseCameraList("external_camera_0", model_.get());
@@ -554,7 +635,23 @@ TEST(SegmentationPalette, FixedDistinctAndNeverBlack) {
     seen.insert(c);
   }
   EXPECT_EQ(seen.size(), 200u);
-  EXPECT_EQ(SegmentationColor(0), (std::array<uint8_t, 3>{0xF3, 0xC3, 0x00}));  // Kelly's first
+}
+
+TEST(SegmentationPalette, ColoursAreClearlyApart) {
+  // the metric, on the pair that made the old palette (Kelly's) ambiguous: two oranges
+  EXPECT_NEAR(Ciede2000({0xF3, 0x84, 0x00}, {0xF6, 0xA6, 0x00}), 11.8, 0.1);
+  EXPECT_NEAR(Ciede2000({0, 0, 0}, {255, 255, 255}), 100.0, 0.01);
+  double closest = 1e9, darkest = 1e9;
+  for (int i = 0; i < kSegmentationColors; ++i) {
+    darkest = std::min(darkest, Ciede2000(SegmentationColor(i), {0, 0, 0}));
+    for (int j = 0; j < i; ++j) {
+      const double d = Ciede2000(SegmentationColor(i), SegmentationColor(j));
+      if (i < kFetchObjects) closest = std::min(closest, d);
+      EXPECT_GE(d, kApartAll) << i << " " << j;
+    }
+  }
+  EXPECT_GE(closest, kApartInOneImage);
+  EXPECT_GE(darkest, 25.0) << "every colour stands out from the black background";
 }
 
 TEST_P(RendererTest, CamerasTileOneFrame) {
@@ -700,6 +797,239 @@ TEST_P(RendererTest, HudOpacitySetsTheBox) {
 
 INSTANTIATE_TEST_SUITE_P(Models, RendererTest, ::testing::Values("genuine", "bundled"));
 
+// A GL context for the episode tests below, or nullptr where this machine has none.
+std::unique_ptr<GlContext> AnyContext() {
+  unsetenv("DISPLAY");
+  mju_user_error = OnMujocoError;
+  try {
+    return CreateGlContext("auto");
+  } catch (const RunError& e) {
+    std::cout << "[  SKIPPED ] no GL: " << e.what() << "\n";
+    return nullptr;
+  }
+}
+
+// Runs episode 0 of `policy` on FetchPush-v4 (bundled) as `record --seed seed` does, calling
+// `on_step` after the reset and after every step.
+EpisodeRecord RunPush(FetchEnv& env, const std::string& policy, uint64_t seed, int steps,
+                      const StepCallback& on_step) {
+  PolicyContext context;
+  context.seed = seed;
+  context.steps_per_episode = steps;
+  auto p = MakePolicy(policy, env.spec(), context);
+  return RunEpisode(env, *p, 0, seed, steps, on_step);
+}
+
+// Every frame of a short scripted Push episode, at sizes around the HUD's threshold and where
+// it used to come and go with the width of the action line (144-160 px): the HUD is on every
+// frame or on none, in the same box on every frame, within its share of the frame.
+TEST(HudEpisode, OnEveryFrameOrOnNoneInOneBoxWithinItsShare) {
+  auto gl = AnyContext();
+  if (!gl) GTEST_SKIP();
+  FetchEnv env(FindEnvSpec("FetchPush-v4"), ResolveAssets("bundled"));
+  struct View {
+    int w = 0, h = 0;
+    std::unique_ptr<Renderer> plain, hud;
+    int frames = 0, with_hud = 0;
+    std::optional<Difference> first_box;
+  };
+  std::vector<View> views;
+  for (auto [w, h] : std::vector<std::pair<int, int>>{{144, 144}, {150, 150}, {160, 160}, {219, 219},
+                                                     {240, 240}, {319, 319}, {320, 239}, {320, 240},
+                                                     {336, 336}, {480, 270}}) {
+    View v;
+    v.w = w;
+    v.h = h;
+    RenderOptions options;
+    options.width = w;
+    options.height = h;
+    options.msaa_samples = 0;
+    options.overlays = ParseOverlays("action");
+    v.plain = std::make_unique<Renderer>(*gl, env.model(), options);
+    options.overlays = ParseOverlays("action,hud");  // the arrow adds a row
+    v.hud = std::make_unique<Renderer>(*gl, env.model(), options);
+    views.push_back(std::move(v));
+  }
+  RunPush(env, "scripted", 0, 8, [&](const StepRecord& record, const StepResult*) {
+    const FrameInfo info = cli::MakeFrameInfo(env, record);
+    for (View& v : views) {
+      std::vector<uint8_t> a(static_cast<size_t>(v.w) * v.h * 3), b(a.size());
+      v.plain->Render(env.data(), info, a.data());
+      v.hud->Render(env.data(), info, b.data());
+      const Difference d = Compare(a, b, v.w);
+      ++v.frames;
+      if (d.fraction == 0) continue;
+      ++v.with_hud;
+      // the box: darkened, every pixel of it differs
+      EXPECT_LE(d.max_col - d.min_col + 1, kHudMaxWidthShare * v.w) << v.w << "x" << v.h;
+      EXPECT_LE(d.max_row - d.min_row + 1, kHudMaxHeightShare * v.h) << v.w << "x" << v.h;
+      if (!v.first_box) {
+        v.first_box = d;
+      } else {
+        EXPECT_EQ(d.min_col, v.first_box->min_col) << v.w << "x" << v.h << " step " << record.t;
+        EXPECT_EQ(d.max_col, v.first_box->max_col) << v.w << "x" << v.h << " step " << record.t;
+        EXPECT_EQ(d.min_row, v.first_box->min_row) << v.w << "x" << v.h << " step " << record.t;
+        EXPECT_EQ(d.max_row, v.first_box->max_row) << v.w << "x" << v.h << " step " << record.t;
+      }
+    }
+    return true;
+  });
+  for (const View& v : views) {
+    ASSERT_EQ(v.frames, 9);
+    const bool expected = v.w >= kHudMinTileWidth && v.h >= kHudMinTileHeight;
+    EXPECT_EQ(v.with_hud, expected ? v.frames : 0) << v.w << "x" << v.h;
+  }
+}
+
+bool IsBeadGreen(Rgb c) { return c.g > 120 && c.r < 80 && c.g > c.b + 60; }
+bool IsBeadRed(Rgb c) { return c.r > 120 && c.g < 80 && c.b < 80; }
+
+// A failed random Push episode with the hindsight overlay: every relabelled goal's bead shows
+// in its reward colour where it projects (unless the robot or the table hides it), and is not
+// there without the overlay. Before the pins, the markers sat inside the block and none showed.
+TEST(HindsightOverlay, PinsShowInTheRewardColoursWhereTheyProject) {
+  auto gl = AnyContext();
+  if (!gl) GTEST_SKIP();
+  FetchEnv env(FindEnvSpec("FetchPush-v4"), ResolveAssets("bundled"));
+  constexpr int kSteps = 20, kSize = 320;
+  constexpr uint64_t kSeed = 1;
+  const EpisodeRecord episode = RunPush(env, "random", kSeed, kSteps, nullptr);
+  std::vector<std::array<double, 3>> achieved;
+  for (const StepRecord& r : episode.steps) {
+    ASSERT_FALSE(r.is_success) << "step " << r.t << ": the episode must fail";
+    achieved.push_back(r.obs.achieved_goal);
+  }
+  const HindsightEpisode her = SampleHindsight(
+      achieved, episode.steps[0].obs.desired_goal, HindsightSeed(kSeed, 0), kHindsightK,
+      [&](const auto& a, const auto& g) { return env.ComputeReward(a, g); },
+      [&](const auto& a, const auto& g) { return env.IsSuccess(a, g); });
+  ASSERT_GT(her.relabelled_successes, 0);
+
+  RenderOptions options;
+  options.width = options.height = kSize;
+  options.msaa_samples = 0;
+  options.overlays = ParseOverlays("goal,achieved,hindsight");
+  Renderer pins(*gl, env.model(), options);
+  options.overlays = ParseOverlays("goal,achieved");
+  Renderer plain(*gl, env.model(), options);
+  const FreeCamera cam = DefaultFreeCamera();
+  const double fovy = env.model()->vis.global.fovy;
+  const double bead_px = kHindsightBeadRadius * kSize / (2 * 2.5 * std::tan(fovy * M_PI / 360));
+  int green = 0, red = 0, hidden = 0;
+  RunPush(env, "random", kSeed, kSteps, [&](const StepRecord& record, const StepResult*) {
+    if (record.t == 0) return true;
+    FrameInfo info = cli::MakeFrameInfo(env, record);
+    for (const HindsightGoal& g : her.transitions[record.t - 1]) info.relabelled.push_back({g.goal, g.success});
+    std::vector<uint8_t> a(kSize * kSize * 3), b(a.size()), depth;
+    pins.Render(env.data(), info, a.data());
+    plain.Render(env.data(), info, b.data());
+    plain.RenderLayer(env.data(), info, Layer::kDepth, &depth);  // the scene without overlays
+    const auto* mm = reinterpret_cast<const uint16_t*>(depth.data());
+    const std::vector<HindsightPin> all = HindsightPins(info);
+    for (const HindsightPin& pin : all) {
+      const Pixel p = Project(cam, pin.head, kSize, kSize, fovy);
+      if (p.col < 1 || p.col >= kSize - 1 || p.row < 1 || p.row >= kSize - 1) {
+        ADD_FAILURE() << "step " << record.t << ": a bead out of the frame";
+        continue;
+      }
+      // hidden by the robot or the table (nearer than the bead's front)?
+      const double bead_mm = 1000 * (ViewDepth(cam, pin.head) - kHindsightBeadRadius);
+      const uint16_t scene_mm = mm[p.row * kSize + p.col];
+      bool covered = scene_mm != 0 && scene_mm < bead_mm;
+      // or by a bead of the other colour in front of it
+      for (const HindsightPin& other : all) {
+        const Pixel q = Project(cam, other.head, kSize, kSize, fovy);
+        if (other.success != pin.success && std::hypot(q.col - p.col, q.row - p.row) < 2 * bead_px &&
+            ViewDepth(cam, other.head) < ViewDepth(cam, pin.head)) {
+          covered = true;
+        }
+      }
+      if (covered) {
+        ++hidden;
+        continue;
+      }
+      const auto is_bead = pin.success ? IsBeadGreen : IsBeadRed;
+      bool found = false;
+      for (int dy = -1; dy <= 1; ++dy) {
+        for (int dx = -1; dx <= 1; ++dx) {
+          const Pixel q{p.col + dx, p.row + dy};
+          if (is_bead(At(a, kSize, q)) && !is_bead(At(b, kSize, q))) found = true;
+        }
+      }
+      EXPECT_TRUE(found) << "step " << record.t << ": no " << (pin.success ? "green" : "red")
+                         << " bead at column " << p.col << ", row " << p.row;
+      ++(pin.success ? green : red);
+    }
+    return true;
+  });
+  std::cout << green << " green and " << red << " red beads seen, " << hidden << " hidden\n";
+  EXPECT_GE(green, 20);
+  EXPECT_GE(red, 3);
+  EXPECT_LE(hidden, (green + red) / 4);
+}
+
+TEST(HindsightOverlay, IdenticalGoalsStringTheirBeadsOnOneStem) {
+  FrameInfo info;
+  const std::array<double, 3> block = {1.3, 0.75, 0.425};
+  info.relabelled = {{block, true}, {block, true}, {{1.5, 0.75, 0.425}, false}, {block, true}};
+  const std::vector<HindsightPin> pins = HindsightPins(info);
+  ASSERT_EQ(pins.size(), 4u);
+  auto length = [&](const HindsightPin& pin) {
+    double along = 0, off = 0;
+    for (int k = 0; k < 3; ++k) along += (pin.head[k] - pin.base[k]) * kHindsightPinDirection[k];
+    for (int k = 0; k < 3; ++k) {
+      off += std::pow(pin.head[k] - pin.base[k] - along * kHindsightPinDirection[k], 2);
+    }
+    EXPECT_LT(off, 1e-20) << "the bead is on the stem's line";
+    return along;
+  };
+  std::set<double> lengths;
+  for (int i : {0, 1, 3}) {
+    EXPECT_EQ(pins[i].base, block);
+    EXPECT_TRUE(pins[i].success);
+    lengths.insert(length(pins[i]));
+  }
+  // three beads on one stem, apart, the nearest clear of the 5 cm block (corners 4.4 cm out)
+  ASSERT_EQ(lengths.size(), 3u);
+  EXPECT_NEAR(*lengths.begin(), kHindsightPinLength, 1e-12);
+  EXPECT_GT(*lengths.begin() - kHindsightBeadRadius, 0.044);
+  EXPECT_NEAR(*lengths.rbegin() - *lengths.begin(), 2 * kHindsightBeadSpacing, 1e-12);
+  EXPECT_GT(kHindsightBeadSpacing, 2 * kHindsightBeadRadius);
+  // leaning up: the bead is above g'
+  EXPECT_GT(pins[0].head[2], block[2] + 0.05);
+  // a goal elsewhere gets its own pin at the first length
+  EXPECT_NEAR(length(pins[2]), kHindsightPinLength, 1e-12);
+  EXPECT_FALSE(pins[2].success);
+  // sixteen identical goals: sixteen beads, the loop ends
+  info.relabelled.assign(16, {block, false});
+  EXPECT_EQ(HindsightPins(info).size(), 16u);
+}
+
+// render's segmentation legend is named as its --help says: NAME_segmentation_legend.json for
+// -o NAME.png, whether the segmentation layer goes to NAME_segmentation.png or to NAME.png.
+TEST(RenderCommand, WritesTheLegendWhereTheHelpSays) {
+  const auto help = testing::RunFetchscope("render --help");
+  ASSERT_EQ(help.exit_code, 0);
+  std::string flat;  // the help wraps lines
+  for (char c : help.output) {
+    if (c == '\n') c = ' ';
+    if (c != ' ' || flat.empty() || flat.back() != ' ') flat += c;
+  }
+  EXPECT_NE(flat.find("NAME_segmentation_legend.json"), std::string::npos) << help.output;
+  EXPECT_EQ(flat.find("NAME_legend.json"), std::string::npos);
+  testing::TempDir tmp;
+  const std::string common = "render --env-id FetchPush-v4 --width 96 --height 96 ";
+  auto r = testing::RunFetchscope(common + "--layers rgb,segmentation -o " + (tmp.path() / "both.png").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  r = testing::RunFetchscope(common + "--layers segmentation -o " + (tmp.path() / "alone.png").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  std::set<std::string> files;
+  for (const auto& entry : fs::directory_iterator(tmp.path())) files.insert(entry.path().filename());
+  EXPECT_EQ(files, (std::set<std::string>{"both.png", "both_segmentation.png",
+                                          "both_segmentation_legend.json", "alone.png",
+                                          "alone_segmentation_legend.json"}));
+}
+
 // Overlay helpers that need no GL.
 TEST(Trail, KeepsOnePointPerStepAndRestartsAtZero) {
   Trail trail;
@@ -722,7 +1052,7 @@ TEST(Hud, ShowsTheFrameInfo) {
   info.title = "FetchReach-v4";
   HudText reset = FormatHud(info, OverlaySet{});
   EXPECT_NE(reset.labels.find("reward"), std::string::npos);
-  EXPECT_NE(reset.values.find("FetchReach-v4"), std::string::npos);
+  EXPECT_EQ(reset.title, "FetchReach-v4");
   EXPECT_NE(reset.values.find("\n-\n"), std::string::npos) << "no reward at reset";
   info.step = 12;
   info.reward = -1;
@@ -742,7 +1072,90 @@ TEST(Hud, ShowsTheFrameInfo) {
   // one value per label
   EXPECT_EQ(std::count(step.labels.begin(), step.labels.end(), '\n'),
             std::count(step.values.begin(), step.values.end(), '\n'));
+  // the hindsight row is on every frame, the reset's included, so the box keeps its height
+  OverlaySet her;
+  her.hindsight = true;
+  EXPECT_EQ(FormatHud(FrameInfo{}, her).labels, FormatHud(info, her).labels);
+  info.relabelled = {{{0, 0, 0}, true}, {{0, 0, 0}, true}, {{1, 0, 0}, false}, {{0, 0, 0}, true}};
+  info.relabelled_successes = 3;
+  EXPECT_NE(FormatHud(info, her).values.find("3/4"), std::string::npos);
 }
+
+// The largest HUD there is: every row, the longest env id, the widest values.
+FrameInfo LargestHudFrame() {
+  FrameInfo info;
+  for (const EnvSpec& spec : AllEnvSpecs()) {
+    if (spec.id.size() > info.title.size()) info.title = spec.id;
+  }
+  info.step = 1000;
+  info.reward = -1;
+  info.distance = 1.2345;
+  info.has_action = true;
+  info.action = {1, 1, 1, 1};
+  info.relabelled = {{{0, 0, 0}, true}, {{0, 0, 0}, true}, {{0, 0, 0}, true}, {{0, 0, 0}, true}};
+  info.relabelled_successes = 4;
+  return info;
+}
+
+TEST(HudPlacement, TheTileAloneDecidesAndTheBoxKeepsItsShareOnEveryFrame) {
+  const OverlaySet all = ParseOverlays("all");
+  const HudText largest = FormatHud(LargestHudFrame(), all);
+  FrameInfo reset;  // the same run's reset frame: narrow values, no action, no transition
+  reset.title = LargestHudFrame().title;
+  const HudText first = FormatHud(reset, all);
+  const std::vector<int> sides = {1,   64,  120, 150, 160, 200, 219, 220, 239, 240, 241, 300,
+                                  319, 320, 321, 360, 400, 480, 512, 640, 720, 960, 1080, 1920, 4096};
+  int drawn = 0;
+  for (int w : sides) {
+    for (int h : sides) {
+      const PixelRect tile{7, 3, w, h};
+      const bool big_enough = w >= kHudMinTileWidth && h >= kHudMinTileHeight;
+      EXPECT_EQ(HudTextPixels(w, h) > 0, big_enough) << w << "x" << h;
+      const auto box = PlaceHud(largest, tile, HudPosition::kBottomRight);
+      ASSERT_EQ(box.has_value(), big_enough) << w << "x" << h;
+      // the frame's values never change the box: the same on the reset frame
+      const auto box0 = PlaceHud(first, tile, HudPosition::kBottomRight);
+      ASSERT_EQ(box0.has_value(), big_enough) << w << "x" << h;
+      if (!box) continue;
+      ++drawn;
+      EXPECT_EQ(box->width, box0->width) << w << "x" << h;
+      EXPECT_EQ(box->height, box0->height) << w << "x" << h;
+      EXPECT_LE(box->width, kHudMaxWidthShare * w) << w << "x" << h;
+      EXPECT_LE(box->height, kHudMaxHeightShare * h) << w << "x" << h;
+      EXPECT_GE(box->x, tile.x);
+      EXPECT_GE(box->y, tile.y);
+    }
+  }
+  EXPECT_GT(drawn, 100);
+  EXPECT_EQ(kHudMinTileWidth, 320);  // README: "views at least 320 x 240 pixels"
+  EXPECT_EQ(kHudMinTileHeight, 240);
+}
+
+TEST(HudPlacement, TextNeverLeavesTheBox) {
+  // values far wider than any real one are cut to the box, not drawn past it
+  FrameInfo info = LargestHudFrame();
+  info.title = "FetchPickAndPlaceDense-v4 with a title far too long for the box";
+  info.step = 123456789;
+  info.distance = 123456.789;
+  const HudText hud = FormatHud(info, ParseOverlays("all"));
+  constexpr int kW = 400, kH = 300;
+  std::vector<uint8_t> image(kW * kH * 3, 128);
+  const PixelRect tile{0, 0, kW, kH};
+  const auto box = PlaceHud(hud, tile, HudPosition::kTopLeft);
+  ASSERT_TRUE(box.has_value());
+  ASSERT_TRUE(DrawHud(image.data(), kW, kH, tile, hud, HudPosition::kTopLeft, 0.0));
+  int changed = 0;
+  for (int y = 0; y < kH; ++y) {
+    for (int x = 0; x < kW; ++x) {
+      if (image[(y * kW + x) * 3] == 128) continue;
+      ++changed;
+      EXPECT_TRUE(x >= box->x && x < box->x + box->width && y >= box->y && y < box->y + box->height)
+          << "text at " << x << "," << y;
+    }
+  }
+  EXPECT_GT(changed, 500);
+}
+
 
 }  // namespace
 }  // namespace fetchscope
