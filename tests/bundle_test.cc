@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <fstream>
 #include <set>
 #include <sstream>
 #include <string>
@@ -57,42 +58,54 @@ TempDir* BundleTest::tmp_ = nullptr;
 std::string BundleTest::bundle_output_;
 fs::path BundleTest::archive_, BundleTest::root_;
 
-TEST_F(BundleTest, ArchiveNameAndLayout) {
+// One test for what the archive holds (each test process makes the bundle anew, about 20 s):
+// its name and layout, the libraries a bare CUDA image lacks and none of glibc or the driver
+// (names compared whole: libcjson.so.1 is not glibc's libc.so.6), every dependency resolving
+// inside it with the launcher's library path, and the label font beside the binary.
+TEST_F(BundleTest, HoldsWhatANodeLacksAndNothingOfGlibcOrTheDriver) {
+  SCOPED_TRACE(bundle_output_);
   EXPECT_EQ(archive_.filename().string().rfind("fetchscope-", 0), 0u) << archive_;
   EXPECT_NE(archive_.filename().string().find("-linux-x86_64.tar.xz"), std::string::npos);
   EXPECT_TRUE(fs::exists(root_ / "fetchscope"));
   EXPECT_TRUE(fs::exists(root_ / "bin" / "fetchscope"));
   EXPECT_TRUE(fs::exists(root_ / "bin" / "models" / "push.xml"));
   EXPECT_NE(bundle_output_.find("needs glibc >="), std::string::npos) << bundle_output_;
-}
 
-// The libraries a bare CUDA image lacks are there; glibc and GL vendor libraries are not, and
-// names are compared whole (libcjson.so.1 is not glibc's libc.so.6).
-TEST_F(BundleTest, HoldsWhatANodeLacksAndNothingOfGlibcOrTheDriver) {
   std::set<std::string> libs;
-  for (const auto& e : fs::directory_iterator(root_ / "lib")) libs.insert(e.path().filename());
+  for (const fs::path& dir : {root_ / "lib", root_ / "lib" / "cxx"}) {
+    for (const auto& e : fs::directory_iterator(dir)) {
+      if (e.is_regular_file()) libs.insert(e.path().filename());
+    }
+  }
   for (const char* needed : {"libavcodec.so.59", "libavformat.so.59", "libswscale.so.6",
-                             "libmujoco.so.2.2.2", "libpng16.so.16", "libstdc++.so.6",
-                             "libEGL.so.1", "libGLdispatch.so.0", "libOpenGL.so.0", "libGL.so.1",
+                             "libmujoco.so.2.2.2", "libpng16.so.16", "libEGL.so.1",
+                             "libGLdispatch.so.0", "libOpenGL.so.0", "libGL.so.1",
                              "libcjson.so.1", "libx264.so.164", "libavfilter.so.8",
                              "libvpx.so.7", "libcrypto.so.3", "libfreetype.so.6",
                              "libfontconfig.so.1"}) {
     EXPECT_TRUE(libs.count(needed)) << needed;
   }
+  // the C++ runtime sits apart, for the launcher to use only where the node's is too old
+  EXPECT_TRUE(fs::exists(root_ / "lib" / "cxx" / "libstdc++.so.6"));
+  EXPECT_FALSE(fs::exists(root_ / "lib" / "libstdc++.so.6"));
   for (const std::string& lib : libs) {
     EXPECT_FALSE(kNodeLibraries.count(lib)) << lib << " must come from the node";
     EXPECT_EQ(lib.rfind("libnvidia-", 0), std::string::npos) << lib;
   }
-}
 
-// ldd of the binary and of every bundled library, with the launcher's library path: every
-// dependency resolves inside the bundle, except glibc's.
-TEST_F(BundleTest, EveryDependencyResolvesInsideTheBundle) {
+  // ldd of the binary and of every bundled library, with the library path the launcher sets
+  // where the node's C++ runtime is too old (lib and lib/cxx): every dependency resolves
+  // inside the bundle, except glibc's
   std::vector<fs::path> objects = {root_ / "bin" / "fetchscope"};
-  for (const auto& e : fs::directory_iterator(root_ / "lib")) objects.push_back(e.path());
+  for (const fs::path& dir : {root_ / "lib", root_ / "lib" / "cxx"}) {
+    for (const auto& e : fs::directory_iterator(dir)) {
+      if (e.is_regular_file()) objects.push_back(e.path());
+    }
+  }
   const std::string lib = fs::canonical(root_ / "lib").string();
   for (const fs::path& object : objects) {
-    const CommandResult ldd = RunCommand("LD_LIBRARY_PATH=" + lib + " ldd " + object.string());
+    const CommandResult ldd =
+        RunCommand("LD_LIBRARY_PATH=" + lib + ":" + lib + "/cxx ldd " + object.string());
     std::istringstream lines(ldd.output);
     for (std::string line; std::getline(lines, line);) {
       const size_t arrow = line.find("=>");
@@ -106,14 +119,40 @@ TEST_F(BundleTest, EveryDependencyResolvesInsideTheBundle) {
           << object.filename() << " takes " << name << " from outside the bundle: " << line;
     }
   }
-}
 
-// The label font travels beside the binary, where render/text.h looks first.
-TEST_F(BundleTest, HoldsTheLabelFontBesideTheBinary) {
+  // the label font travels beside the binary, where render/text.h looks first
   const fs::path font = root_ / "bin" / "fonts" / "DejaVuSans.ttf";
   ASSERT_TRUE(fs::is_regular_file(font)) << font;
   EXPECT_EQ(testing::ReadFile(font),
             testing::ReadFile("/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf"));
+}
+
+// The launcher takes the node's C++ runtime when it has every version the bundle needs (this
+// Debian machine's does: it built the binary), and the bundled one when the node's is older
+// (a file without those version strings stands in for it). ld.so's log says which was loaded.
+TEST_F(BundleTest, LauncherPrefersTheNodesCxxRuntimeUnlessItIsTooOld) {
+  const std::string launcher = (root_ / "fetchscope").string();
+  auto loaded_from = [&](const std::string& env) {
+    const CommandResult r =
+        RunCommand(env + " LD_DEBUG=libs " + launcher +
+                   " list-envs 2>&1 >/dev/null | grep 'calling init:.*libstdc'");
+    std::istringstream lines(r.output);
+    for (std::string line; std::getline(lines, line);) {
+      if (line.find("calling init:") != std::string::npos &&
+          line.find("libstdc++.so.6") != std::string::npos) {
+        return line.substr(line.find("calling init:") + 14);
+      }
+    }
+    return std::string("(libstdc++ not loaded)\n") + r.output.substr(0, 2000);
+  };
+  const std::string bundled = fs::canonical(root_ / "lib" / "cxx").string() + "/libstdc++.so.6";
+  EXPECT_NE(loaded_from(""), bundled);
+  EXPECT_EQ(loaded_from("").find(root_.string()), std::string::npos) << loaded_from("");
+  TempDir old;
+  const fs::path old_runtime = old.path() / "libstdc++.so.6";
+  std::ofstream(old_runtime) << "GLIBCXX_3.4 GLIBCXX_3.4.21 CXXABI_1.3";
+  EXPECT_EQ(loaded_from("FETCHSCOPE_HOST_LIBSTDCXX=" + old_runtime.string()), bundled);
+  EXPECT_EQ(loaded_from("FETCHSCOPE_HOST_LIBSTDCXX=/nonexistent"), bundled);
 }
 
 // The launcher, called through a symbolic link from elsewhere, records an episode that plays,

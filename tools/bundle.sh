@@ -96,9 +96,20 @@ fi
 cp -L "$font" "$root/bin/fonts/DejaVuSans.ttf"
 strip --strip-unneeded "$root/bin/fetchscope" "$root"/lib/*.so* 2>/dev/null || true
 
+# The C++ runtime goes to lib/cxx/: the launcher takes the node's own libstdc++/libgcc_s when it
+# provides every version the bundle needs (a node's newer Mesa or driver may need its newer one;
+# an older copy first on the path would break it), and the bundled pair only when it does not.
+mkdir -p "$root/lib/cxx"
+for lib in libstdc++.so.6 libgcc_s.so.1; do
+  if [[ -e $root/lib/$lib ]]; then mv "$root/lib/$lib" "$root/lib/cxx/$lib"; fi
+done
+cxx_needed=$(objdump -T "$root/bin/fetchscope" "$root"/lib/*.so* 2>/dev/null |
+  grep -o -E '(GLIBCXX|CXXABI)_[0-9][0-9.]*' | sort -u | sort -t_ -k1,1 -k2,2V |
+  awk -F_ '{last[$1]=$0} END {for (k in last) print last[k]}' | sort | tr '\n' ' ')
+
 # The newest glibc symbol version anything in the bundle needs: the node's glibc must be at
 # least that.
-glibc_needed=$(objdump -T "$root/bin/fetchscope" "$root"/lib/*.so* 2>/dev/null |
+glibc_needed=$(objdump -T "$root/bin/fetchscope" "$root"/lib/*.so* "$root"/lib/cxx/* 2>/dev/null |
   grep -o 'GLIBC_[0-9][0-9.]*' | sed 's/GLIBC_//' | sort -t. -k1,1n -k2,2n | tail -1)
 
 cat > "$root/fetchscope" <<'LAUNCHER'
@@ -107,7 +118,24 @@ cat > "$root/fetchscope" <<'LAUNCHER'
 here=$(dirname "$(readlink -f "$0")")
 # the caller's own library path, restored for programs fetchscope starts (exec: policies)
 export FETCHSCOPE_CALLER_LD_LIBRARY_PATH="${LD_LIBRARY_PATH-__unset__}"
-export LD_LIBRARY_PATH="$here/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}"
+# the C++ runtime: the node's when it has every version fetchscope needs, else the bundled one
+# (FETCHSCOPE_HOST_LIBSTDCXX names the node's copy to check instead of searching for it)
+cxx_needed="@CXX_NEEDED@"
+cxx_dir="$here/lib/cxx"
+if [ -n "${FETCHSCOPE_HOST_LIBSTDCXX+set}" ]; then
+  candidates=$FETCHSCOPE_HOST_LIBSTDCXX
+else
+  candidates="$( (ldconfig -p || /sbin/ldconfig -p) 2>/dev/null |
+    awk '/libstdc\+\+\.so\.6 \(libc6,x86-64\)/ {print $NF}')
+    /lib/x86_64-linux-gnu/libstdc++.so.6 /usr/lib64/libstdc++.so.6"
+fi
+for host in $candidates; do
+  [ -f "$host" ] || continue
+  ok=1
+  for v in $cxx_needed; do grep -qaF "$v" "$host" || { ok=""; break; }; done
+  if [ -n "$ok" ]; then cxx_dir=""; break; fi
+done
+export LD_LIBRARY_PATH="$here/lib${cxx_dir:+:$cxx_dir}${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}"
 # libglvnd finds the NVIDIA EGL driver through a vendor file; container runtimes put it in
 # different places. Point at one when none of the standard folders holds any.
 if [ -z "${__EGL_VENDOR_LIBRARY_FILENAMES:-}" ] && [ -z "${__EGL_VENDOR_LIBRARY_DIRS:-}" ]; then
@@ -124,13 +152,14 @@ if [ -z "${__EGL_VENDOR_LIBRARY_FILENAMES:-}" ] && [ -z "${__EGL_VENDOR_LIBRARY_
 fi
 exec "$here/bin/fetchscope" "$@"
 LAUNCHER
+sed -i "s/@CXX_NEEDED@/${cxx_needed% }/" "$root/fetchscope"
 chmod +x "$root/fetchscope"
 
 cat > "$root/README.txt" <<README
 fetchscope $version for Linux x86_64, relocatable.
 
-Run ./fetchscope (the launcher; it puts lib/ on the library path). Needs glibc >= $glibc_needed
-on the node, and for rendering an NVIDIA driver (EGL) or the node's Mesa (libegl-mesa0 or
+Run ./fetchscope (the launcher; it puts lib/ on the library path, and lib/cxx/ too when the
+node's own C++ runtime lacks ${cxx_needed% }). Needs glibc >= $glibc_needed on the node, and for rendering an NVIDIA driver (EGL) or the node's Mesa (libegl-mesa0 or
 libosmesa6): GL vendor libraries are never bundled. First on a new node:
   ./fetchscope list-gpus
 Record on a node (all its usable cores, CUDA's GPU numbering when CUDA_VISIBLE_DEVICES is set):
