@@ -197,7 +197,7 @@ TEST_F(RecordFromTest, ReRenderWithLayersIsProbedAndTheSameWithJobs) {
   for (int jobs : {1, 2}) {
     const fs::path out = tmp.path() / ("j" + std::to_string(jobs));
     r = RunFetchscope(
-        "record --quiet --width 64 --height 48 --layers rgb,segmentation,depth "
+        "record --quiet --width 96 --height 72 --layers rgb,segmentation,depth "
         "--crf 0 --format mp4,gif --jobs " +
         std::to_string(jobs) + (jobs == 2 ? " --readback async" : " --readback sync") +
         " --from " + run.string() + " --out " + out.string());
@@ -232,8 +232,8 @@ TEST_F(RecordFromTest, ReRenderWithLayersIsProbedAndTheSameWithJobs) {
       ASSERT_EQ(probe.exit_code, 0) << probe.output;
       const auto stream = nlohmann::json::parse(probe.output)["streams"][0];
       EXPECT_EQ(stream["nb_read_frames"], "7") << layer;  // the reset frame and 6 steps
-      EXPECT_EQ(stream["width"], 64) << layer;
-      EXPECT_EQ(stream["height"], 48) << layer;
+      EXPECT_EQ(stream["width"], 96) << layer;
+      EXPECT_EQ(stream["height"], 72) << layer;
     }
 
     // the segmentation frame shows the legend's colours (to within the video's chroma loss)
@@ -245,7 +245,7 @@ TEST_F(RecordFromTest, ReRenderWithLayersIsProbedAndTheSameWithJobs) {
     EXPECT_TRUE(bodies.count("object0")) << legend.dump();
     EXPECT_TRUE(bodies.count("table0")) << legend.dump();
     const std::string seg = FirstFrame(out / (stem + "_segmentation.mp4"));
-    ASSERT_EQ(seg.size(), 64u * 48 * 3);
+    ASSERT_EQ(seg.size(), 96u * 72 * 3);
     int coloured = 0, near_legend = 0;
     for (size_t i = 0; i < seg.size(); i += 3) {
       const int r8 = static_cast<uint8_t>(seg[i]), g8 = static_cast<uint8_t>(seg[i + 1]),
@@ -263,16 +263,16 @@ TEST_F(RecordFromTest, ReRenderWithLayersIsProbedAndTheSameWithJobs) {
     }
     // the robot, table, block and floor take about a fifth of the frame, the rest is black;
     // yuv420p halves the colour resolution, so edge pixels stray from the legend
-    EXPECT_GT(coloured, 64 * 48 / 8);
-    EXPECT_LT(coloured, 64 * 48 / 2);
+    EXPECT_GT(coloured, 96 * 72 / 8);
+    EXPECT_LT(coloured, 96 * 72 / 2);
     EXPECT_GT(near_legend, coloured * 2 / 3) << near_legend << " of " << coloured;
     const std::string depth = FirstFrame(out / (stem + "_depth.mp4"));
-    ASSERT_EQ(depth.size(), 64u * 48 * 3);
+    ASSERT_EQ(depth.size(), 96u * 72 * 3);
     int grey = 0;
     for (size_t i = 0; i < depth.size(); i += 3) {
       grey += std::abs(depth[i] - depth[i + 1]) < 6 && std::abs(depth[i + 1] - depth[i + 2]) < 6;
     }
-    EXPECT_GT(grey, 64 * 48 * 9 / 10);
+    EXPECT_GT(grey, 96 * 72 * 9 / 10);
     EXPECT_NE(depth, FirstFrame(out / (stem + ".mp4")));
   }
   // the trajectories are the recorded ones; the contact sheets stay rgb (the same as without
