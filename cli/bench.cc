@@ -91,6 +91,8 @@ void RegisterBench(CLI::App& app) {
   auto peers = std::make_shared<bool>(true);
   CLI::App* sub = app.add_subcommand("bench", "Measure simulation, rendering, encoding and record throughput");
   auto soak_frames = std::make_shared<int>(10000);
+  auto node_width = std::make_shared<int>(480);
+  auto node_height = std::make_shared<int>(480);
   sub->add_option("--what", *what,
                   "sim, render, encode, record, all (those four); node: what sizes a job on this "
                   "machine (render frames/s of one context, sync and async readback; record "
@@ -102,6 +104,12 @@ void RegisterBench(CLI::App& app) {
   sub->add_option("--soak-frames", *soak_frames, "Frames of the soak run (whole 51-frame episodes)")
       ->capture_default_str()
       ->check(CLI::Range(51, 1000000));
+  sub->add_option("--width", *node_width, "--what node: frame width, the size your jobs record at")
+      ->capture_default_str()
+      ->check(CLI::Range(16, 4096));
+  sub->add_option("--height", *node_height, "--what node: frame height")
+      ->capture_default_str()
+      ->check(CLI::Range(16, 4096));
   sub->add_option("--assets", *assets, "bundled, auto or a Gymnasium-Robotics assets folder")->capture_default_str();
   sub->add_option("--seconds", *seconds, "Time budget per measurement group")->capture_default_str()->check(CLI::Range(0.1, 600.0));
   sub->add_option("--backends", *backends, "Render backends to measure: a comma list of egl, osmesa")
@@ -131,7 +139,7 @@ void RegisterBench(CLI::App& app) {
     if (all || *what == "render") j["render"] = BenchRender(source, *backends, *seconds, *peers);
     if (all || *what == "encode") j["encode"] = BenchEncode(*seconds);
     if (all || *what == "record") j["record"] = BenchRecord(source, *backends, *seconds, *peers);
-    if (*what == "node") j["node"] = BenchNode(source, *backends, *seconds);
+    if (*what == "node") j["node"] = BenchNode(source, *backends, *seconds, *node_width, *node_height);
     if (*what == "soak") j["soak"] = BenchSoak(source, *backends, *soak_frames, 1.0);
     j["peak_rss_mib"] = PeakRssMiB();
     std::printf("peak RSS %.1f MiB\n", PeakRssMiB());

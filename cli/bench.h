@@ -23,9 +23,11 @@ nlohmann::json BenchEncode(double budget_s);
 /// --jobs, beside mujoco-record + ffmpeg.
 nlohmann::json BenchRecord(const AssetSource& assets, const std::string& backends, double budget_s, bool peers);
 /// What a user needs to size a job on this node, side by side: its cores, GPUs and encoder;
-/// one context's render frames/s (sync against async readback, msaa auto and 0) at 480x480;
-/// whole record runs at --jobs 1, cores/2 and cores, worker processes against threads.
-nlohmann::json BenchNode(const AssetSource& assets, const std::string& backends, double budget_s);
+/// one context's render frames/s (sync against async readback, msaa auto and 0) at
+/// `width` x `height`; whole record runs at --jobs 1, cores/2 and cores, worker processes
+/// against threads.
+nlohmann::json BenchNode(const AssetSource& assets, const std::string& backends, double budget_s,
+                         int width = 480, int height = 480);
 /// One record run of about `target_frames` frames at 640x480 on the first of `backends`, its
 /// resident set sampled every `interval_s`: whether memory stays flat over a long run.
 nlohmann::json BenchSoak(const AssetSource& assets, const std::string& backends, int target_frames,

@@ -498,12 +498,13 @@ nlohmann::json NodeRenderRow(GlContext& gl, const AssetSource& assets, int w, in
 
 }  // namespace
 
-nlohmann::json BenchNode(const AssetSource& assets, const std::string& backends, double budget_s) {
+nlohmann::json BenchNode(const AssetSource& assets, const std::string& backends, double budget_s,
+                         int width, int height) {
   nlohmann::json result;
   const Cores machine_cores = UsableCores();
   const int cores = machine_cores.usable;
   const std::string backend = Split(backends).empty() ? "egl" : Split(backends).front();
-  const int w = 480, h = 480;
+  const int w = width, h = height;
 
   // the node: GPUs and the encoder a run would choose
   nlohmann::json gpus = nlohmann::json::array();
@@ -520,6 +521,8 @@ nlohmann::json BenchNode(const AssetSource& assets, const std::string& backends,
   } catch (const std::exception& e) {
     encoder_reason = e.what();
   }
+  result["width"] = w;
+  result["height"] = h;
   result["cores"] = cores;
   result["cores_online"] = machine_cores.online;
   result["cores_source"] = machine_cores.source;

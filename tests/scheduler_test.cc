@@ -8,6 +8,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <set>
 #include <string>
 
 #include <nlohmann/json.hpp>
@@ -150,6 +151,48 @@ TEST(Scheduler, ManifestSaysWhichEncoderAndWhy) {
     ASSERT_EQ(probe.exit_code, 0) << probe.output;
     EXPECT_EQ(probe.output, "h264\n");  // libx264 and h264_nvenc both write H.264
   }
+}
+
+// bench --what node, small: the figures a user sizes a job with, side by side in one JSON. On
+// this machine (software GL, so msaa auto is 0) record runs at --jobs 1 and at every usable
+// core, as processes and as threads, each with the encoder it used.
+TEST(Scheduler, BenchNodeReportsCoresEncoderRenderAndRecordRows) {
+  TempDir tmp;
+  const auto r = RunFetchscope("bench --what node --backends egl --seconds 0.4 --width 48 "
+                               "--height 48 --json-out " + (tmp.path() / "b.json").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const nlohmann::json node = nlohmann::json::parse(ReadFile(tmp.path() / "b.json"))["node"];
+  const int cores = node["cores"];
+  EXPECT_EQ(cores, AffinityCores());
+  EXPECT_EQ(node["width"], 48);
+  EXPECT_EQ(node["encoder"]["codec"], "libx264");
+  EXPECT_FALSE(node["encoder"]["reason"].get<std::string>().empty());
+  std::set<std::string> readbacks;
+  for (const auto& row : node["render"]) {
+    ASSERT_TRUE(row.contains("render_frames_per_s")) << row.dump();
+    EXPECT_GT(row["render_frames_per_s"].get<double>(), 0);
+    readbacks.insert(row["readback"].get<std::string>().substr(0, 4));
+  }
+  EXPECT_EQ(readbacks, (std::set<std::string>{"sync", "asyn"}));
+  std::set<std::pair<int, std::string>> runs;
+  for (const auto& row : node["record"]) {
+    ASSERT_TRUE(row.contains("frames_per_s")) << row.dump();
+    EXPECT_GT(row["frames_per_s"].get<double>(), 0);
+    EXPECT_EQ(row["video"]["codec"], "libx264");
+    EXPECT_EQ(row["msaa"], 0);  // auto on llvmpipe; no separate msaa 0 run then
+    runs.insert({row["jobs"].get<int>(), row["worker_mode"].get<std::string>()});
+  }
+  std::set<std::pair<int, std::string>> expected = {{1, "process"}};
+  if (cores > 1) {
+    expected.insert({cores, "process"});
+    expected.insert({cores, "thread"});
+  }
+  if (cores / 2 > 1) {
+    expected.insert({cores / 2, "process"});
+    expected.insert({cores / 2, "thread"});
+  }
+  EXPECT_EQ(runs, expected);
+  EXPECT_NE(r.output.find("usable cores"), std::string::npos) << r.output;
 }
 
 }  // namespace
