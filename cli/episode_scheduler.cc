@@ -9,6 +9,8 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <chrono>
+#include <condition_variable>
 #include <cstdio>
 #include <cstring>
 #include <mutex>
@@ -186,6 +188,8 @@ class ProcessScheduler {
       }
       const int ready = poll(fds.data(), fds.size(), 100);
       if (ready < 0 && errno != EINTR) throw RunError(std::string("poll: ") + std::strerror(errno));
+      // a heartbeat: the progress line stays alive while an episode makes no frames
+      if (options_.on_progress) options_.on_progress(0);
       for (size_t i = 0; ready > 0 && i < fds.size(); ++i) {
         if (fds[i].revents == 0) continue;
         WorkerProcess& p = *owners[i];
@@ -324,8 +328,24 @@ class ThreadScheduler {
     result_.pids.assign(jobs_, getpid());
     std::vector<std::thread> threads;
     for (int w = 1; w < jobs_; ++w) threads.emplace_back([this, w] { Work(w); });
+    // a heartbeat once a second: the progress line stays alive while an episode makes no
+    // frames (a slow exec: policy)
+    bool finished = false;
+    std::condition_variable beat;
+    std::thread heartbeat([&] {
+      std::unique_lock<std::mutex> lock(mutex_);
+      while (!beat.wait_for(lock, std::chrono::seconds(1), [&] { return finished; })) {
+        if (options_.on_progress) options_.on_progress(0);
+      }
+    });
     Work(0);  // worker 0 on this thread
     for (std::thread& t : threads) t.join();
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      finished = true;
+    }
+    beat.notify_all();
+    heartbeat.join();
     result_.signal = StopSignal();
     return std::move(result_);
   }

@@ -3,12 +3,28 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cstdlib>
+
+#include "src/errors.h"
 
 namespace fetchscope::cli {
 namespace {
 
 double SteadySeconds() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+// FETCHSCOPE_PROGRESS_INTERVAL: seconds between log lines when stderr is not a terminal.
+double LogIntervalFromEnvironment() {
+  const char* text = std::getenv("FETCHSCOPE_PROGRESS_INTERVAL");
+  if (!text || !*text) return 30;
+  char* end = nullptr;
+  const double seconds = std::strtod(text, &end);
+  if (*end != '\0' || !(seconds >= 0.1 && seconds <= 86400)) {
+    throw UsageError(std::string("FETCHSCOPE_PROGRESS_INTERVAL '") + text +
+                     "' is not accepted: seconds between progress lines, 0.1 to 86400");
+  }
+  return seconds;
 }
 
 }  // namespace
@@ -23,6 +39,7 @@ ProgressReporter::ProgressReporter(const std::string& label, int episodes, long 
             o.frames_per_episode = frames_per_episode;
             o.quiet = quiet;
             o.terminal = isatty(STDERR_FILENO);
+            o.log_interval_s = LogIntervalFromEnvironment();
             return o;
           }(),
           SteadySeconds) {}

@@ -5,7 +5,9 @@
 // Not on a terminal (Slurm and Kubernetes logs, a pipe, a file): a plain line
 //   "<label>: progress 3/10 episodes (30%), 153/510 frames, 41.7 frames/s, ETA 8 s"
 // each time another 10% of the episodes is done and whenever 30 s have passed since the last
-// line, so a long run shows it is alive and a short one prints no more than ten lines.
+// line (FETCHSCOPE_PROGRESS_INTERVAL seconds instead of 30 when set), so a long run shows it is
+// alive, even while an episode makes no frames (the scheduler beats once a second), and a short
+// one prints no more than ten lines.
 #pragma once
 
 #include <chrono>
@@ -28,7 +30,8 @@ class ProgressReporter {
     std::FILE* out = stderr;
   };
 
-  /// terminal = isatty(stderr); the clock is std::chrono::steady_clock.
+  /// terminal = isatty(stderr); log_interval_s from FETCHSCOPE_PROGRESS_INTERVAL (UsageError
+  /// when malformed); the clock is std::chrono::steady_clock.
   ProgressReporter(const std::string& label, int episodes, long frames_per_episode, bool quiet);
   /// For tests: every option, and a clock in seconds.
   ProgressReporter(const Options& options, std::function<double()> clock_s);

@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include <filesystem>
+
 #include <cstdio>
 #include <cstdlib>
 #include <regex>
@@ -18,6 +20,7 @@ namespace {
 
 using testing::RunCommand;
 using testing::TempDir;
+namespace fs = std::filesystem;
 
 std::vector<std::string> Lines(const std::string& text) {
   std::vector<std::string> lines;
@@ -148,6 +151,40 @@ TEST(ProgressInAPipeTest, RecordPrintsProgressLinesWhenStderrIsNotATerminal) {
   EXPECT_EQ(last_done, 10) << r.output;
   EXPECT_EQ(r.output.find('\r'), std::string::npos) << "terminal bar in a pipe";
   EXPECT_NE(r.output.find("record: 10 episode(s)"), std::string::npos) << r.output;
+}
+
+// An episode that makes no frames for a while (an exec: policy thinking 3 s over step 1) still
+// shows the run is alive in a batch log: with FETCHSCOPE_PROGRESS_INTERVAL=1 the scheduler's
+// heartbeat prints lines while the frame count stands still, in-process (--jobs 1) and with
+// worker processes (--jobs 2).
+TEST(ProgressInAPipeTest, ALongStepStillPrintsProgressLines) {
+  unsetenv("DISPLAY");
+  TempDir tmp;
+  const std::string policy =
+      "exec:python3 -c \"import sys,time\nfor i,l in enumerate(sys.stdin):\n"
+      "  time.sleep(3 if i==1 else 0); print('[0,0,0,0]', flush=True)\"";
+  for (const char* jobs : {"1", "2"}) {
+    SCOPED_TRACE(std::string("--jobs ") + jobs);
+    const auto r = RunCommand(
+        "FETCHSCOPE_PROGRESS_INTERVAL=1 " + std::string(FETCHSCOPE_BIN) +
+        " record --env-id FetchReach-v4 --episodes 2 --steps 3 --width 32 --height 32 --jobs " +
+        jobs + " --policy '" + policy + "' --out " + (tmp.path() / jobs).string() +
+        " 2>&1 >/dev/null | cat");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    // lines printed while no episode was done yet: the heartbeat's (the 10% lines need one)
+    int stalled = 0;
+    for (const std::string& line : Lines(r.output)) {
+      if (line.find("record: progress 0/2 episodes") != std::string::npos) ++stalled;
+    }
+    EXPECT_GE(stalled, 2) << r.output;
+  }
+  const auto bad = RunCommand("FETCHSCOPE_PROGRESS_INTERVAL=soon " + std::string(FETCHSCOPE_BIN) +
+                              " record --episodes 1 --steps 1 --width 32 --height 32 --out " +
+                              (tmp.path() / "bad").string());
+  EXPECT_EQ(bad.exit_code, 2) << bad.output;
+  EXPECT_NE(bad.output.find("FETCHSCOPE_PROGRESS_INTERVAL 'soon'"), std::string::npos)
+      << bad.output;
+  EXPECT_FALSE(fs::exists(tmp.path() / "bad"));
 }
 
 }  // namespace
