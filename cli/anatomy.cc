@@ -810,8 +810,10 @@ std::string FramingCamera(const std::vector<Vec3>& points, int width, int height
 // One rendered view of the panel's state: its pixels and its projection.
 class View {
  public:
+  // `show_goal` false: without the goal marker.
   View(GlContext& gl, FetchEnv& fetch, const StepRecord& reset, const ViewOptions& base,
-       const std::string& camera, int width, int height, const std::vector<Geom>& spheres)
+       const std::string& camera, int width, int height, const std::vector<Geom>& spheres,
+       bool show_goal = true)
       : camera_(camera), width_(width), height_(height) {
     ViewOptions view = base;
     view.camera = camera;
@@ -835,7 +837,9 @@ class View {
     };
     renderer_ = std::make_unique<Renderer>(gl, fetch.model(), options);
     rgb_.resize(static_cast<size_t>(width) * height * 3);
-    renderer_->Render(fetch.data(), MakeFrameInfo(fetch, reset), rgb_.data());
+    FrameInfo info = MakeFrameInfo(fetch, reset);
+    if (!show_goal) info.goal = {0, 0, -100};  // far under the floor, out of view
+    renderer_->Render(fetch.data(), info, rgb_.data());
   }
 
   std::optional<Pixel> Project(const Vec3& p) const {
@@ -926,7 +930,7 @@ Detail MakeDetail(GlContext& gl, FetchEnv& fetch, const StepRecord& reset, const
   d.view = std::make_unique<View>(
       gl, fetch, reset, base,
       DetailCamera(content.detail_at, content.detail_distance, content.detail_across), dw, dh,
-      std::vector<Geom>{});
+      std::vector<Geom>{}, /*show_goal=*/false);  // the goal beyond the fingers is no part of them
   Canvas canvas(&d.view->rgb(), dw, dh);
   d.markers = ProjectMarkers(content.detail_markers, *d.view, st);
   DrawMarkers(d.markers, st, &canvas);
