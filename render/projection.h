@@ -10,11 +10,23 @@
 namespace fetchscope {
 
 /// A pixel position in a frame: x to the right, y down from the top row (row 0 = top, as the
-/// images fetchscope writes), in pixels; may lie outside the frame.
+/// images fetchscope writes), in pixels; may lie outside the frame. Pixel (i, j) covers
+/// [i, i + 1) x [j, j + 1), so its centre is (i + 0.5, j + 0.5).
 struct Pixel {
   double x;  ///< column, 0 = left edge of the frame
   double y;  ///< row, 0 = top edge of the frame
 };
+
+/// The scene camera's unit axes in world coordinates, as mjr_render's view matrix uses them.
+struct CameraAxes {
+  std::array<double, 3> right;    ///< the image's +x direction
+  std::array<double, 3> up;       ///< the image's upward direction (-y in pixels)
+  std::array<double, 3> forward;  ///< into the image
+};
+
+/// The axes of the scene's camera after mjv_updateScene (the average of scene.camera[0] and
+/// [1], as mjr_render uses).
+CameraAxes SceneCameraAxes(const mjvScene& scene);
 
 /// Where world point `point` (m) appears in a frame `frame_height` pixels tall whose camera
 /// viewport is `tile` (OpenGL convention, bottom-left origin, as Renderer::tiles()), for the
