@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Remakes README's docs/report.png and docs/compare.png with the tool itself: two record runs of
+# Remakes README's pictures with the tool itself: docs/pick_and_place.png and
+# docs/push_three_views.png (render), docs/report.png and docs/compare.png: two record runs of
 # FetchPush-v4, 5 episodes of 20 steps each (the scripted policy reaches the goal in time in
 # some episodes and not in others, so the report shows successes and failures; the zero policy
 # never moves), the scripted run's report and the comparison of the two. Headless Chromium
@@ -30,4 +31,9 @@ shoot() {  # PAGE PNG: the whole page; a failed check (console error, no page) f
 }
 shoot "$work/scripted/index.html" "$out/report.png"
 shoot "$work/compare/index.html" "$out/compare.png"
-echo "docs-screenshots: $out/report.png $out/compare.png"
+# the README's first two pictures: frames as `render` draws them
+"$bin" render --env-id FetchPickAndPlace-v4 --policy scripted --seed 0 --steps 30 \
+  --overlay goal,achieved,hud,action,trail --width 480 --height 480 -o "$out/pick_and_place.png" >/dev/null
+"$bin" render --env-id FetchPush-v4 --policy scripted --seed 0 --steps 8 \
+  --camera default,external_camera_0,track --width 320 --height 320 -o "$out/push_three_views.png" >/dev/null
+echo "docs-screenshots: $out/report.png $out/compare.png $out/pick_and_place.png $out/push_three_views.png"

@@ -127,6 +127,9 @@ try {
       v.addEventListener('seeked', done, {once: true});
       v.currentTime = v.duration * f;
     }))), Number(args.seek));
+    // a still picture: the frame itself, without the player's controls (which a full-page
+    // capture draws in their not-yet-loaded state)
+    await page.$$eval('video', (vs) => vs.forEach((v) => { v.controls = false; }));
   }
   await page.screenshot({path: args.screenshot, fullPage: true});
   result.screenshot = resolve(args.screenshot);
