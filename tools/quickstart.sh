@@ -7,4 +7,4 @@ cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DBUILD_TESTING=ON >/dev/null
 cmake --build build -j"$(nproc)" --target fetchscope
 build/fetchscope record --env-id FetchPickAndPlace-v4 --policy scripted --seed 0 --episodes 1 \
   --out out/demo --overwrite  # a second run replaces the first
-echo "demo written to out/demo: episode_000.mp4, episode_000_sheet.png, episode_000.json, manifest.json"
+echo "demo written to out/demo: episode_000.mp4, episode_000_sheet.png, episode_000.json, manifest.json, index.html (the run report: open it in a browser)"
