@@ -175,28 +175,12 @@ const char* LayerName(Layer layer) {
   return "?";
 }
 
-// Parses --layers: a comma list of rgb, depth, segmentation, each once. rgb is always recorded
-// (the episode video, sheet and report need it), so the result is the layers beyond it, in the
-// order given. UsageError names a bad or repeated entry and what is accepted.
+// --layers beyond rgb, in the order given: rgb is always recorded (the episode video, sheet and
+// report need it).
 std::vector<Layer> ParseRecordLayers(const std::string& list) {
-  const std::vector<std::string> names = {"rgb", "depth", "segmentation"};
   std::vector<Layer> extra;
-  std::set<std::string> seen;
-  for (const std::string& token : SplitCommaList(list)) {
-    if (token.empty()) {
-      throw UsageError("--layers '" + list +
-                       "' has an empty entry; use a comma list of rgb, "
-                       "depth, segmentation");
-    }
-    if (std::find(names.begin(), names.end(), token) == names.end()) {
-      throw UsageError("--layers: unknown layer '" + token + "'" + DidYouMean(token, names) +
-                       "; use a comma list of rgb, depth, segmentation");
-    }
-    if (!seen.insert(token).second) {
-      throw UsageError("--layers names '" + token + "' twice; each layer once");
-    }
-    if (token == "depth") extra.push_back(Layer::kDepth);
-    if (token == "segmentation") extra.push_back(Layer::kSegmentation);
+  for (Layer layer : ParseLayers(list)) {
+    if (layer != Layer::kRgb) extra.push_back(layer);
   }
   return extra;
 }
@@ -291,17 +275,11 @@ class EpisodeLegend {
   nlohmann::json Json(int episode) const {
     nlohmann::json list = nlohmann::json::array();
     for (const auto& [index, e] : objects_) {
-      char hex[8];
-      std::snprintf(hex, sizeof(hex), "#%02x%02x%02x", e.object.color[0], e.object.color[1],
-                    e.object.color[2]);
-      list.push_back({{"color", hex},
-                      {"rgb", {e.object.color[0], e.object.color[1], e.object.color[2]}},
-                      {"body", e.object.body},
-                      {"geoms", std::vector<std::string>(e.geoms.begin(), e.geoms.end())},
-                      {"site", e.object.site.empty() ? nlohmann::json(nullptr)
-                                                     : nlohmann::json(e.object.site)},
-                      {"pixels", e.object.pixels},
-                      {"frames", e.frames}});
+      SegmentObject object = e.object;
+      object.geoms.assign(e.geoms.begin(), e.geoms.end());
+      nlohmann::json entry = SegmentObjectJson(object);
+      entry["frames"] = e.frames;
+      list.push_back(std::move(entry));
     }
     return {{"episode", episode},
             {"frames", frames_},

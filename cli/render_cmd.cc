@@ -1,5 +1,6 @@
 // fetchscope render: one frame (after reset, or after --steps K of a policy) to PNG;
 // fetchscope list-cameras: the cameras a model names.
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 
@@ -9,7 +10,6 @@
 #include "render/png_io.h"
 #include "render/renderer.h"
 #include "src/errors.h"
-#include "src/suggest.h"
 
 namespace fetchscope::cli {
 namespace {
@@ -29,16 +29,7 @@ std::string LegendPath(const std::string& output) {
 
 nlohmann::json SegmentationLegendJson(const std::vector<SegmentObject>& objects) {
   nlohmann::json list = nlohmann::json::array();
-  for (const SegmentObject& o : objects) {
-    char hex[8];
-    std::snprintf(hex, sizeof(hex), "#%02x%02x%02x", o.color[0], o.color[1], o.color[2]);
-    list.push_back({{"color", hex},
-                    {"rgb", {o.color[0], o.color[1], o.color[2]}},
-                    {"body", o.body},
-                    {"geoms", o.geoms},
-                    {"site", o.site.empty() ? nlohmann::json(nullptr) : nlohmann::json(o.site)},
-                    {"pixels", o.pixels}});
-  }
+  for (const SegmentObject& o : objects) list.push_back(SegmentObjectJson(o));
   return {{"background", "#000000"},
           {"note", "one colour per body (all its geoms) or site; fixed palette, the same in every frame"},
           {"objects", list}};
@@ -71,20 +62,10 @@ void RegisterRender(CLI::App& app) {
   sub->add_option("-o,--output", *output, "Output PNG")->required();
   sub->add_flag("-v,--verbose", *verbose, "Print the GL vendor, renderer and version, and the MSAA samples used and why");
   sub->callback([=]() {
-    bool want_rgb = false, want_depth = false, want_seg = false;
-    for (const std::string& token : SplitCommaList(*layers)) {
-      if (token == "rgb") {
-        want_rgb = true;
-      } else if (token == "depth") {
-        want_depth = true;
-      } else if (token == "segmentation") {
-        want_seg = true;
-      } else {
-        throw UsageError("--layers: unknown layer '" + token + "'" +
-                         DidYouMean(token, {"rgb", "depth", "segmentation"}) +
-                         ": use rgb, depth, segmentation");
-      }
-    }
+    const std::vector<Layer> wanted = ParseLayers(*layers);
+    auto want = [&](Layer l) { return std::find(wanted.begin(), wanted.end(), l) != wanted.end(); };
+    const bool want_rgb = want(Layer::kRgb), want_depth = want(Layer::kDepth),
+               want_seg = want(Layer::kSegmentation);
     const EnvSpec& spec = FindEnvSpec(env->env_id);
     const uint64_t seed = ParseSeed(env->seed);
     ParseOverlays(view->overlay);  // reject a bad --overlay before any work

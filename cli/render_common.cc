@@ -1,10 +1,14 @@
 #include "cli/render_common.h"
 
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
+#include <algorithm>
+#include <set>
 #include <vector>
 
 #include "src/errors.h"
+#include "src/suggest.h"
 
 namespace fetchscope::cli {
 
@@ -136,6 +140,40 @@ FrameInfo MakeFrameInfo(const FetchEnv& env, const StepRecord& record) {
   info.distance_threshold = env.spec().distance_threshold;
   info.title = env.spec().id;
   return info;
+}
+
+std::vector<Layer> ParseLayers(const std::string& list) {
+  const std::vector<std::string> names = {"rgb", "depth", "segmentation"};
+  std::vector<Layer> layers;
+  std::set<std::string> seen;
+  for (const std::string& token : SplitCommaList(list)) {
+    if (token.empty()) {
+      throw UsageError("--layers '" + list +
+                       "' has an empty entry; use a comma list of rgb, depth, segmentation");
+    }
+    if (std::find(names.begin(), names.end(), token) == names.end()) {
+      throw UsageError("--layers: unknown layer '" + token + "'" + DidYouMean(token, names) +
+                       "; use a comma list of rgb, depth, segmentation");
+    }
+    if (!seen.insert(token).second) {
+      throw UsageError("--layers names '" + token + "' twice; each layer once");
+    }
+    layers.push_back(token == "rgb" ? Layer::kRgb
+                     : token == "depth" ? Layer::kDepth
+                                        : Layer::kSegmentation);
+  }
+  return layers;
+}
+
+nlohmann::json SegmentObjectJson(const SegmentObject& o) {
+  char hex[8];
+  std::snprintf(hex, sizeof(hex), "#%02x%02x%02x", o.color[0], o.color[1], o.color[2]);
+  return {{"color", hex},
+          {"rgb", {o.color[0], o.color[1], o.color[2]}},
+          {"body", o.body},
+          {"geoms", o.geoms},
+          {"site", o.site.empty() ? nlohmann::json(nullptr) : nlohmann::json(o.site)},
+          {"pixels", o.pixels}};
 }
 
 }  // namespace fetchscope::cli

@@ -5,6 +5,8 @@
 
 #include <string>
 
+#include <nlohmann/json.hpp>
+
 #include "render/gpu_select.h"
 #include "render/overlay.h"
 #include "render/renderer.h"
@@ -59,5 +61,14 @@ std::unique_ptr<GlContext> CreateViewContext(const ViewOptions& view, const GpuC
 
 /// The overlay/HUD description of the env's current state after `record`.
 FrameInfo MakeFrameInfo(const FetchEnv& env, const StepRecord& record);
+
+/// Parses --layers: a comma list of rgb, depth, segmentation (spaces after the commas allowed),
+/// each once, in the order given. UsageError names an empty, unknown (with "did you mean") or
+/// repeated entry and what is accepted.
+std::vector<Layer> ParseLayers(const std::string& list);
+
+/// One object of a segmentation legend (render's and record's): its colour as "#rrggbb" and as
+/// rgb, body, geoms, site (null for a body) and pixels.
+nlohmann::json SegmentObjectJson(const SegmentObject& object);
 
 }  // namespace fetchscope::cli
