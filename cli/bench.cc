@@ -1,4 +1,6 @@
 // fetchscope bench: throughput of simulation, rendering, encoding and recording.
+#include "cli/bench.h"
+
 #include <sys/resource.h>
 
 #include <chrono>
@@ -6,7 +8,6 @@
 #include <sstream>
 #include <string>
 
-#include "cli/bench.h"
 #include "cli/common.h"
 #include "src/episode.h"
 #include "src/fetch_env.h"
@@ -63,7 +64,8 @@ double PeakRssMiB() {
 
 nlohmann::json BenchSim(const AssetSource& assets, double budget_s) {
   nlohmann::json rows = nlohmann::json::array();
-  std::printf("%-22s %14s %16s %12s %8s\n", "sim", "mj_step/s", "bound steps/s", "env steps/s", "ratio");
+  std::printf("%-22s %14s %16s %12s %8s\n", "sim", "mj_step/s", "bound steps/s", "env steps/s",
+              "ratio");
   for (const EnvSpec& spec : AllEnvSpecs()) {
     if (spec.dense) continue;  // dense and sparse differ only in the reward formula
     FetchEnv env(spec, assets);
@@ -76,8 +78,11 @@ nlohmann::json BenchSim(const AssetSource& assets, double budget_s) {
     const double bound = raw / spec.n_substeps;
     std::printf("%-22s %14.0f %16.1f %12.1f %7.1f%%\n", spec.id.c_str(), raw, bound, stepped,
                 100 * stepped / bound);
-    rows.push_back({{"env_id", spec.id}, {"mj_step_per_s", raw}, {"bound_env_steps_per_s", bound},
-                    {"env_steps_per_s", stepped}, {"ratio_to_bound", stepped / bound}});
+    rows.push_back({{"env_id", spec.id},
+                    {"mj_step_per_s", raw},
+                    {"bound_env_steps_per_s", bound},
+                    {"env_steps_per_s", stepped},
+                    {"ratio_to_bound", stepped / bound}});
   }
   return rows;
 }
@@ -89,16 +94,18 @@ void RegisterBench(CLI::App& app) {
   auto seconds = std::make_shared<double>(3.0);
   auto backends = std::make_shared<std::string>("egl,osmesa");
   auto peers = std::make_shared<bool>(true);
-  CLI::App* sub = app.add_subcommand("bench", "Measure simulation, rendering, encoding and record throughput");
+  CLI::App* sub =
+      app.add_subcommand("bench", "Measure simulation, rendering, encoding and record throughput");
   auto soak_frames = std::make_shared<int>(10000);
   auto node_width = std::make_shared<int>(480);
   auto node_height = std::make_shared<int>(480);
-  sub->add_option("--what", *what,
-                  "sim, render, encode, record, all (those four); node: what sizes a job on this "
-                  "machine (render frames/s of one context, sync and async readback; record "
-                  "frames/s at --jobs 1, cores/2 and cores as processes and as threads; the encoder); "
-                  "or soak: one long record run (--soak-frames, minutes) with its memory sampled "
-                  "every second. node and soak are not part of all")
+  sub->add_option(
+         "--what", *what,
+         "sim, render, encode, record, all (those four); node: what sizes a job on this "
+         "machine (render frames/s of one context, sync and async readback; record "
+         "frames/s at --jobs 1, cores/2 and cores as processes and as threads; the encoder); "
+         "or soak: one long record run (--soak-frames, minutes) with its memory sampled "
+         "every second. node and soak are not part of all")
       ->capture_default_str()
       ->check(CLI::IsMember({"sim", "render", "encode", "record", "all", "node", "soak"}));
   sub->add_option("--soak-frames", *soak_frames, "Frames of the soak run (whole 51-frame episodes)")
@@ -110,9 +117,13 @@ void RegisterBench(CLI::App& app) {
   sub->add_option("--height", *node_height, "--what node: frame height")
       ->capture_default_str()
       ->check(CLI::Range(16, 4096));
-  sub->add_option("--assets", *assets, "bundled, auto or a Gymnasium-Robotics assets folder")->capture_default_str();
-  sub->add_option("--seconds", *seconds, "Time budget per measurement group")->capture_default_str()->check(CLI::Range(0.1, 600.0));
-  sub->add_option("--backends", *backends, "Render backends to measure: a comma list of egl, osmesa")
+  sub->add_option("--assets", *assets, "bundled, auto or a Gymnasium-Robotics assets folder")
+      ->capture_default_str();
+  sub->add_option("--seconds", *seconds, "Time budget per measurement group")
+      ->capture_default_str()
+      ->check(CLI::Range(0.1, 600.0));
+  sub->add_option("--backends", *backends,
+                  "Render backends to measure: a comma list of egl, osmesa")
       ->capture_default_str()
       ->check(
           [](const std::string& list) -> std::string {
@@ -139,7 +150,8 @@ void RegisterBench(CLI::App& app) {
     if (all || *what == "render") j["render"] = BenchRender(source, *backends, *seconds, *peers);
     if (all || *what == "encode") j["encode"] = BenchEncode(*seconds);
     if (all || *what == "record") j["record"] = BenchRecord(source, *backends, *seconds, *peers);
-    if (*what == "node") j["node"] = BenchNode(source, *backends, *seconds, *node_width, *node_height);
+    if (*what == "node")
+      j["node"] = BenchNode(source, *backends, *seconds, *node_width, *node_height);
     if (*what == "soak") j["soak"] = BenchSoak(source, *backends, *soak_frames, 1.0);
     j["peak_rss_mib"] = PeakRssMiB();
     std::printf("peak RSS %.1f MiB\n", PeakRssMiB());

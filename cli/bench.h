@@ -1,9 +1,8 @@
 // The parts of `fetchscope bench`, one per pipeline stage.
 #pragma once
 
-#include <string>
-
 #include <nlohmann/json.hpp>
+#include <string>
 
 #include "src/assets.h"
 
@@ -16,12 +15,14 @@ nlohmann::json MachineJson();
 /// Env steps/s per task beside the raw mj_step bound.
 nlohmann::json BenchSim(const AssetSource& assets, double budget_s);
 /// Render+readback frames/s per backend and size, beside mujoco-record.
-nlohmann::json BenchRender(const AssetSource& assets, const std::string& backends, double budget_s, bool peers);
+nlohmann::json BenchRender(const AssetSource& assets, const std::string& backends, double budget_s,
+                           bool peers);
 /// Encode frames/s per codec.
 nlohmann::json BenchEncode(double budget_s);
 /// Record seconds per frame (msaa auto beside 4), --jobs 1 against --jobs 2 where record has
 /// --jobs, beside mujoco-record + ffmpeg.
-nlohmann::json BenchRecord(const AssetSource& assets, const std::string& backends, double budget_s, bool peers);
+nlohmann::json BenchRecord(const AssetSource& assets, const std::string& backends, double budget_s,
+                           bool peers);
 /// What a user needs to size a job on this node, side by side: its cores, GPUs and encoder;
 /// one context's render frames/s (sync against async readback, msaa auto and 0) at
 /// `width` x `height`; whole record runs at --jobs 1, cores/2 and cores, worker processes

@@ -2,10 +2,9 @@
 // (random-episodes), shared by those subcommands and by `anatomy`, which makes them all at once.
 #pragma once
 
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "cli/common.h"
 #include "src/fetch_env.h"

@@ -1,7 +1,6 @@
 #include "cli/common.h"
 
 #include <mujoco/mujoco.h>
-
 #include <sched.h>
 #include <signal.h>
 #include <unistd.h>
@@ -39,14 +38,16 @@ void AddEnvOptions(CLI::App* sub, EnvOptions* options, bool with_seed) {
 }
 
 uint64_t ParseSeed(const std::string& text) {
-  const std::string accepted = ": a seed is a non-negative integer below 2^64, as Gymnasium accepts";
+  const std::string accepted =
+      ": a seed is a non-negative integer below 2^64, as Gymnasium accepts";
   if (text.empty() || text.find_first_not_of("0123456789") != std::string::npos) {
     throw UsageError("--seed '" + text + "' is not valid" + accepted);
   }
   errno = 0;
   char* end = nullptr;
   unsigned long long v = std::strtoull(text.c_str(), &end, 10);
-  if (errno == ERANGE || *end != '\0') throw UsageError("--seed '" + text + "' is too large" + accepted);
+  if (errno == ERANGE || *end != '\0')
+    throw UsageError("--seed '" + text + "' is too large" + accepted);
   return v;
 }
 

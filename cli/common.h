@@ -2,13 +2,11 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
-
 #include <cstdint>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 namespace fetchscope::cli {
 
@@ -74,7 +72,8 @@ std::string& CommandLine();
 
 /// The --help formatter of every command: a placeholder named after the option instead of
 /// CLI11's type names ("--seed SEED", not "--seed TEXT=0"), defaults in the description, no
-/// "{false}" after negated flags. Set on the app before the subcommands are added (they inherit it).
+/// "{false}" after negated flags. Set on the app before the subcommands are added (they inherit
+/// it).
 std::shared_ptr<CLI::Formatter> MakeHelpFormatter();
 
 /// Registration of each subcommand (one file each).

@@ -37,7 +37,8 @@ std::vector<ObservationLabel> ObservationLabels(bool has_object) {
       {"grip_velp.y", "gripper linear velocity y times dt", "m/step"},
       {"grip_velp.z", "gripper linear velocity z times dt", "m/step"}};
   const std::vector<Label> finger_vel = {
-      {"gripper_vel.right", "right finger joint velocity times dt (not a linear velocity)", "m/step"},
+      {"gripper_vel.right", "right finger joint velocity times dt (not a linear velocity)",
+       "m/step"},
       {"gripper_vel.left", "left finger joint velocity times dt", "m/step"}};
   std::vector<Label> out = grip;
   if (!has_object) {
@@ -57,7 +58,8 @@ std::vector<ObservationLabel> ObservationLabels(bool has_object) {
       {"object_rot.x", "object Euler angle x (rotations.mat2euler of the site matrix)", "rad"},
       {"object_rot.y", "object Euler angle y", "rad"},
       {"object_rot.z", "object Euler angle z", "rad"},
-      {"object_velp.x", "object linear velocity minus gripper linear velocity x, times dt", "m/step"},
+      {"object_velp.x", "object linear velocity minus gripper linear velocity x, times dt",
+       "m/step"},
       {"object_velp.y", "object minus gripper linear velocity y, times dt", "m/step"},
       {"object_velp.z", "object minus gripper linear velocity z, times dt", "m/step"},
       {"object_velr.x", "object angular velocity x (world axes, absolute) times dt", "rad/step"},
@@ -92,7 +94,8 @@ nlohmann::json DescribeJson(const FetchEnv& env) {
   nlohmann::json obs_labels = nlohmann::json::array();
   int i = 0;
   for (const ObservationLabel& l : ObservationLabels(s.has_object)) {
-    obs_labels.push_back({{"index", i++}, {"name", l.name}, {"meaning", l.meaning}, {"unit", l.unit}});
+    obs_labels.push_back(
+        {{"index", i++}, {"name", l.name}, {"meaning", l.meaning}, {"unit", l.unit}});
   }
   const std::string gripper_meaning =
       s.block_gripper
@@ -102,11 +105,26 @@ nlohmann::json DescribeJson(const FetchEnv& env) {
             "0.05; servo target clamped to [0, 0.2], joint range [0, 0.05]): action[3] > 0 OPENS "
             "the fingers, < 0 closes them; |action[3]| above about 0.05 already drives a finger to "
             "its limit";
-  nlohmann::json actions = nlohmann::json::array({
-      {{"index", 0}, {"name", "dx"}, {"meaning", "displace the mocap target of the gripper by 0.05 m * action[0] along world x per step (position, not velocity; re-anchored on the gripper each step, so the gripper itself lags: probe-actions measures about 0.02-0.03 m per step at |a| = 1)"}, {"unit", "0.05 m"}},
-      {{"index", 1}, {"name", "dy"}, {"meaning", "displace the gripper target by 0.05 m * action[1] along world y per step"}, {"unit", "0.05 m"}},
-      {{"index", 2}, {"name", "dz"}, {"meaning", "displace the gripper target by 0.05 m * action[2] along world z per step"}, {"unit", "0.05 m"}},
-      {{"index", 3}, {"name", "gripper"}, {"meaning", gripper_meaning}, {"unit", "m (finger target offset)"}}});
+  nlohmann::json actions = nlohmann::json::array(
+      {{{"index", 0},
+        {"name", "dx"},
+        {"meaning",
+         "displace the mocap target of the gripper by 0.05 m * action[0] along world x per step "
+         "(position, not velocity; re-anchored on the gripper each step, so the gripper itself "
+         "lags: probe-actions measures about 0.02-0.03 m per step at |a| = 1)"},
+        {"unit", "0.05 m"}},
+       {{"index", 1},
+        {"name", "dy"},
+        {"meaning", "displace the gripper target by 0.05 m * action[1] along world y per step"},
+        {"unit", "0.05 m"}},
+       {{"index", 2},
+        {"name", "dz"},
+        {"meaning", "displace the gripper target by 0.05 m * action[2] along world z per step"},
+        {"unit", "0.05 m"}},
+       {{"index", 3},
+        {"name", "gripper"},
+        {"meaning", gripper_meaning},
+        {"unit", "m (finger target offset)"}}});
   const int obs_size = s.has_object ? 25 : 10;
   nlohmann::json j;
   j["env_id"] = s.id;
@@ -114,7 +132,8 @@ nlohmann::json DescribeJson(const FetchEnv& env) {
   j["reward_type"] = s.dense ? "dense" : "sparse";
   j["action_space"] = Box(4, "float32", -1.0, 1.0);
   j["action_space"]["labels"] = actions;
-  j["action_space"]["clipping"] = "actions are clipped to [-1, 1] before use; larger commands saturate";
+  j["action_space"]["clipping"] =
+      "actions are clipped to [-1, 1] before use; larger commands saturate";
   // the chapter's layout: the three Boxes directly under observation_space (Gymnasium's Dict
   // space, keys sorted as Dict sorts them); our labels and meanings are extra keys in each Box
   j["observation_space"] = {{"achieved_goal", Box(3, "float64", -INFINITY, INFINITY)},
@@ -131,9 +150,10 @@ nlohmann::json DescribeJson(const FetchEnv& env) {
       {"dense", "-d (float64)"},
       {"this_env", s.dense ? "dense" : "sparse"},
       {"is_success", "1.0 if d < distance_threshold else 0.0 (strict <; reward uses strict >)"},
-      {"relabelling", "compute_reward(achieved_goal, desired_goal, info) depends only on the two "
-                      "goals (info is ignored), so any achieved goal can be paired with any goal "
-                      "after the fact: that is what makes hindsight experience replay work"}};
+      {"relabelling",
+       "compute_reward(achieved_goal, desired_goal, info) depends only on the two "
+       "goals (info is ignored), so any achieved goal can be paired with any goal "
+       "after the fact: that is what makes hindsight experience replay work"}};
   j["distance_threshold"] = s.distance_threshold;
   j["max_episode_steps"] = s.max_episode_steps;
   j["n_substeps"] = s.n_substeps;
@@ -152,9 +172,8 @@ nlohmann::json DescribeJson(const FetchEnv& env) {
   j["versions"] = VersionsJson();
   j["answers"] = {
       {"observation_size", obs_size},
-      {"action_index_3", s.block_gripper
-                             ? "nothing in this task: the gripper is blocked"
-                             : "the two finger position servos: > 0 opens, < 0 closes"},
+      {"action_index_3", s.block_gripper ? "nothing in this task: the gripper is blocked"
+                                         : "the two finger position servos: > 0 opens, < 0 closes"},
       {"success_threshold_m", s.distance_threshold},
       {"why_relabelling_works", "the reward is a pure function of (achieved_goal, desired_goal)"}};
   return j;
@@ -179,8 +198,9 @@ void RegisterDescribe(CLI::App& app) {
   CLI::App* sub = app.add_subcommand(
       "describe", "Observation/action schema with a label per index, reward formulas, timing");
   AddEnvOptions(sub, env.get(), false);
-  sub->add_option("--json-out", *json_out, "Write P (if it ends in .json) else P_describe.json; "
-                                           "without it the JSON goes to stdout");
+  sub->add_option("--json-out", *json_out,
+                  "Write P (if it ends in .json) else P_describe.json; "
+                  "without it the JSON goes to stdout");
   sub->callback([env, json_out]() { RunDescribe(*env, *json_out); });
 }
 

@@ -88,7 +88,9 @@ std::string SignalName(int sig) {
   const char* abbrev = sigabbrev_np(sig);
   const char* description = sigdescr_np(sig);
   std::string text = "signal " + std::to_string(sig);
-  if (abbrev) text += std::string(" (SIG") + abbrev + (description ? std::string(": ") + description : "") + ")";
+  if (abbrev)
+    text +=
+        std::string(" (SIG") + abbrev + (description ? std::string(": ") + description : "") + ")";
   return text;
 }
 
@@ -177,7 +179,8 @@ class ProcessScheduler {
     result_.jobs = jobs_;
     result_.workers.assign(jobs_, nullptr);
     Spawn();
-    while (std::any_of(procs_.begin(), procs_.end(), [](const WorkerProcess& p) { return p.alive; })) {
+    while (
+        std::any_of(procs_.begin(), procs_.end(), [](const WorkerProcess& p) { return p.alive; })) {
       ForwardStopSignal();
       std::vector<pollfd> fds;
       std::vector<WorkerProcess*> owners;
@@ -212,7 +215,8 @@ class ProcessScheduler {
         throw RunError(std::string("cannot create a worker socket: ") + std::strerror(errno));
       }
       const pid_t pid = fork();
-      if (pid < 0) throw RunError(std::string("cannot start a worker process: ") + std::strerror(errno));
+      if (pid < 0)
+        throw RunError(std::string("cannot start a worker process: ") + std::strerror(errno));
       if (pid == 0) {
         // The worker: its own process group, so a terminal's Ctrl-C reaches only the parent,
         // which forwards it; and it dies with the parent, so none is ever orphaned.
@@ -298,9 +302,11 @@ class ProcessScheduler {
     if (p.reported_error) return;
     const bool clean = WIFEXITED(status) && WEXITSTATUS(status) == 0;
     if (clean && p.in_hand.empty()) return;
-    std::string why = WIFSIGNALED(status) ? "died of " + SignalName(WTERMSIG(status))
-                                          : "exited with status " + std::to_string(WEXITSTATUS(status));
-    Fail(p, "worker " + std::to_string(p.worker) + " (pid " + std::to_string(p.pid) + ") " + why, false);
+    std::string why = WIFSIGNALED(status)
+                          ? "died of " + SignalName(WTERMSIG(status))
+                          : "exited with status " + std::to_string(WEXITSTATUS(status));
+    Fail(p, "worker " + std::to_string(p.worker) + " (pid " + std::to_string(p.pid) + ") " + why,
+         false);
   }
 
   const ScheduleOptions& options_;

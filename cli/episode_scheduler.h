@@ -11,15 +11,14 @@
 
 #include <sys/types.h>
 
+#include <CLI/CLI.hpp>
 #include <functional>
 #include <map>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <CLI/CLI.hpp>
-#include <nlohmann/json.hpp>
 
 #include "src/episode.h"
 #include "src/fetch_env.h"
@@ -113,7 +112,7 @@ class EpisodeSequence {
   /// Plays episode k (k greater than any played before), calling `on_step` as RunEpisode does.
   EpisodeRecord Play(int k, const StepCallback& on_step = nullptr);
 
-  FetchEnv& env() { return *env_; }   ///< the environment
+  FetchEnv& env() { return *env_; }      ///< the environment
   Policy& policy() { return *policy_; }  ///< the policy
   int steps() const { return steps_; }   ///< steps per episode
 

@@ -153,8 +153,8 @@ struct CheckRow {
   double badness = 0;   // how far over its limits, for sorting worst first
 };
 
-void WriteFailureImages(const std::string& out, const GoldenScene& s, const Image* golden, int width, int height,
-                        const std::vector<uint8_t>& actual) {
+void WriteFailureImages(const std::string& out, const GoldenScene& s, const Image* golden,
+                        int width, int height, const std::vector<uint8_t>& actual) {
   std::error_code ec;
   fs::create_directories(out, ec);
   if (!fs::is_directory(out)) {

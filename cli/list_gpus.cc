@@ -37,12 +37,13 @@ void RegisterListGpus(CLI::App& app) {
     }
     nlohmann::json devices = nlohmann::json::array();
     for (const EglDevice& d : list.devices) {
-      devices.push_back({{"egl_index", d.index},
-                         {"cuda_id", d.cuda_id < 0 ? nlohmann::json(nullptr) : nlohmann::json(d.cuda_id)},
-                         {"software", d.software},
-                         {"drm_node", d.drm_node},
-                         {"extensions", d.extensions},
-                         {"description", d.Describe()}});
+      devices.push_back(
+          {{"egl_index", d.index},
+           {"cuda_id", d.cuda_id < 0 ? nlohmann::json(nullptr) : nlohmann::json(d.cuda_id)},
+           {"software", d.software},
+           {"drm_node", d.drm_node},
+           {"extensions", d.extensions},
+           {"description", d.Describe()}});
     }
     out["devices"] = devices;
     const char* visible = std::getenv("CUDA_VISIBLE_DEVICES");
@@ -52,9 +53,10 @@ void RegisterListGpus(CLI::App& app) {
     try {
       const GpuSpec spec = EffectiveGpuSpec(*gpu);
       const GpuChoice choice = ChooseGpus(spec, list);
-      resolved = {{"request", spec.kind == GpuSpec::Kind::kAuto ? "auto" : spec.source + " " + spec.text},
-                  {"devices", choice.devices},
-                  {"reason", choice.reason}};
+      resolved = {
+          {"request", spec.kind == GpuSpec::Kind::kAuto ? "auto" : spec.source + " " + spec.text},
+          {"devices", choice.devices},
+          {"reason", choice.reason}};
     } catch (const std::exception& e) {
       resolved = {{"error", e.what()}};
     }
@@ -79,9 +81,9 @@ void RegisterListGpus(CLI::App& app) {
     }
     std::printf("%-10s %-6s %-22s %s\n", "EGL index", "CUDA", "DRM node", "kind");
     for (const EglDevice& d : list.devices) {
-      std::printf("%-10d %-6s %-22s %s\n", d.index,
-                  d.cuda_id < 0 ? "-" : std::to_string(d.cuda_id).c_str(),
-                  d.drm_node.empty() ? "-" : d.drm_node.c_str(), d.software ? "software" : "hardware");
+      std::printf(
+          "%-10d %-6s %-22s %s\n", d.index, d.cuda_id < 0 ? "-" : std::to_string(d.cuda_id).c_str(),
+          d.drm_node.empty() ? "-" : d.drm_node.c_str(), d.software ? "software" : "hardware");
     }
     if (list.devices.empty()) std::printf("(no devices)\n");
     std::printf("CUDA_VISIBLE_DEVICES: %s\n", visible ? visible : "(unset)");
@@ -93,7 +95,8 @@ void RegisterListGpus(CLI::App& app) {
     if (out["encoder"].contains("error")) {
       std::printf("encoder: error: %s\n", out["encoder"]["error"].get<std::string>().c_str());
     } else {
-      std::printf("encoder (--codec auto): %s (%s)\n", out["encoder"]["codec"].get<std::string>().c_str(),
+      std::printf("encoder (--codec auto): %s (%s)\n",
+                  out["encoder"]["codec"].get<std::string>().c_str(),
                   out["encoder"]["reason"].get<std::string>().c_str());
     }
   });

@@ -1,6 +1,5 @@
 // fetchscope: Gymnasium-Robotics Fetch episodes on MuJoCo, rendered headless.
 #include <CLI/CLI.hpp>
-
 #include <cstdio>
 #include <exception>
 #include <string>

@@ -5,9 +5,8 @@
 #pragma once
 
 #include <functional>
-#include <string>
-
 #include <nlohmann/json.hpp>
+#include <string>
 
 #include "cli/render_common.h"
 #include "render/video_writer.h"
@@ -16,9 +15,9 @@ namespace fetchscope::cli {
 
 /// The node facts a run decides once, in the parent.
 struct NodeProbe {
-  GpuChoice gpu;              ///< the EGL devices workers render on (empty: auto)
-  VideoCodecDecision codec;   ///< the encoder every worker opens
-  std::string warnings;       ///< e.g. a device of --gpu all that failed to initialise
+  GpuChoice gpu;             ///< the EGL devices workers render on (empty: auto)
+  VideoCodecDecision codec;  ///< the encoder every worker opens
+  std::string warnings;      ///< e.g. a device of --gpu all that failed to initialise
 };
 
 /// Resolves the GPU request of `view` (testing each named device by making a context on it:

@@ -35,9 +35,9 @@ constexpr double kMetresPerUnit = 0.05;
 constexpr int kOpenPrepSteps = 5;
 // Thresholds behind the flags (m, per step unless said otherwise).
 constexpr double kCosineFloor = 0.9;
-constexpr double kStillPerStep = 1e-3;      // slower than this counts as not moving
-constexpr double kFingerStill = 1e-4;       // |finger change| below this over a probe: no motion
-constexpr double kFingerUncommanded = 2e-3; // finger change without a gripper command
+constexpr double kStillPerStep = 1e-3;         // slower than this counts as not moving
+constexpr double kFingerStill = 1e-4;          // |finger change| below this over a probe: no motion
+constexpr double kFingerUncommanded = 2e-3;    // finger change without a gripper command
 constexpr double kSaturationTolerance = 0.05;  // relative: "same displacement as |a| = 1"
 constexpr int kMaxMagnitudes = 16;
 
@@ -62,26 +62,25 @@ struct Probe {
 
 // What one probe measured.
 struct Measurement {
-  Vec3 mean_step{};              // (p_end - p_start) / steps, m
-  double norm = 0;               // |mean_step|
-  double along = 0;              // mean_step . axis (signed), m per step
-  double cosine = NAN;           // with the commanded axis; NaN for gripper probes or no motion
-  double drift = 0;              // |component perpendicular to the axis| per step (all of it if
-                                 // no axis was commanded)
-  double finger_delta = 0;       // change of r + l finger opening over the probe, m
-  double finger_baseline = 0;    // the same change with an all-zero command (same preparation)
-  double commanded = 0;          // 0.05 * min(|a|, 1) m per step along the axis
-  double ratio = NAN;            // along / commanded
+  Vec3 mean_step{};            // (p_end - p_start) / steps, m
+  double norm = 0;             // |mean_step|
+  double along = 0;            // mean_step . axis (signed), m per step
+  double cosine = NAN;         // with the commanded axis; NaN for gripper probes or no motion
+  double drift = 0;            // |component perpendicular to the axis| per step (all of it if
+                               // no axis was commanded)
+  double finger_delta = 0;     // change of r + l finger opening over the probe, m
+  double finger_baseline = 0;  // the same change with an all-zero command (same preparation)
+  double commanded = 0;        // 0.05 * min(|a|, 1) m per step along the axis
+  double ratio = NAN;          // along / commanded
   std::vector<std::string> flags;
-  SheetTile first, last;         // frames, when rendering
+  SheetTile first, last;  // frames, when rendering
 };
 
 double Norm(const Vec3& v) { return std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]); }
 
 // Parses --magnitudes: a comma list of finite numbers > 0.
 std::vector<double> ParseMagnitudes(const std::string& text) {
-  const std::string accepted =
-      ": use a comma list of 1 to 16 positive numbers, e.g. 0.25,0.5,1,2";
+  const std::string accepted = ": use a comma list of 1 to 16 positive numbers, e.g. 0.25,0.5,1,2";
   if (text.empty()) throw UsageError("--magnitudes is empty" + accepted);
   std::vector<double> values;
   std::stringstream ss(text);
@@ -96,7 +95,8 @@ std::vector<double> ParseMagnitudes(const std::string& text) {
     }
     values.push_back(v);
   }
-  if (text.back() == ',') throw UsageError("--magnitudes '" + text + "' ends with a comma" + accepted);
+  if (text.back() == ',')
+    throw UsageError("--magnitudes '" + text + "' ends with a comma" + accepted);
   if (static_cast<int>(values.size()) > kMaxMagnitudes) {
     throw UsageError("--magnitudes '" + text + "' has " + std::to_string(values.size()) +
                      " values" + accepted);
@@ -143,7 +143,9 @@ std::vector<Probe> MakeProbes(const std::vector<double>& magnitudes) {
   return probes;
 }
 
-Vec3 GripPos(const Observation& obs) { return {obs.observation[0], obs.observation[1], obs.observation[2]}; }
+Vec3 GripPos(const Observation& obs) {
+  return {obs.observation[0], obs.observation[1], obs.observation[2]};
+}
 
 // r finger + l finger positions: indices 3, 4 (Reach) or 9, 10 (object tasks).
 double FingerOpening(const Observation& obs, bool has_object) {
@@ -250,7 +252,8 @@ void FlagSaturation(const std::vector<Probe>& probes, std::vector<Measurement>* 
     if (!probes[i].sweep || probes[i].magnitude <= 1) continue;
     const double along = (*ms)[i].along;
     if (std::fabs(along - unit) <= kSaturationTolerance * std::fabs(unit)) {
-      (*ms)[i].flags.push_back("saturated: same displacement as |a| = 1 (actions are clipped to [-1, 1])");
+      (*ms)[i].flags.push_back(
+          "saturated: same displacement as |a| = 1 (actions are clipped to [-1, 1])");
     } else {
       (*ms)[i].flags.push_back("not saturated: displacement differs from |a| = 1");
     }
@@ -295,7 +298,8 @@ nlohmann::json SummaryJson(const EnvSpec& spec, const std::vector<Probe>& probes
                                          "clipped to [-1, 1])") != ms[i].flags.end();
     }
   }
-  const bool blocked = std::fabs(open_delta) < kFingerStill && std::fabs(close_delta) < kFingerStill;
+  const bool blocked =
+      std::fabs(open_delta) < kFingerStill && std::fabs(close_delta) < kFingerStill;
   std::string opens;
   if (blocked) {
     opens = "neither: the fingers do not move (gripper blocked)";
@@ -312,11 +316,11 @@ nlohmann::json SummaryJson(const EnvSpec& spec, const std::vector<Probe>& probes
                 "%.4f m per step at |a| = 1 (mean over the six axis probes; commanded %.2f m)",
                 step, kMetresPerUnit);
   std::string saturation = !any_above_one ? "not measured (no magnitude above 1 in --magnitudes)"
-                           : saturated   ? "yes: magnitudes above 1 move as far as 1"
-                                         : "no: a magnitude above 1 moved differently from 1";
+                           : saturated    ? "yes: magnitudes above 1 move as far as 1"
+                                          : "no: a magnitude above 1 moved differently from 1";
   return {{"opens_fingers", opens},
-          {"opening_sign", blocked ? nlohmann::json(nullptr)
-                                   : nlohmann::json(open_delta > 0 ? "+" : "-")},
+          {"opening_sign",
+           blocked ? nlohmann::json(nullptr) : nlohmann::json(open_delta > 0 ? "+" : "-")},
           {"gripper", std::string(blocked ? "blocked" : "free") + " in " + spec.id +
                           (blocked ? ": action[3] does not move the fingers"
                                    : ": action[3] moves the fingers")},
@@ -336,7 +340,8 @@ void PrintTable(const EnvSpec& spec, uint64_t seed, int steps, const std::vector
   for (size_t i = 0; i < probes.size(); ++i) {
     const Measurement& m = ms[i];
     char vec[64];
-    std::snprintf(vec, sizeof(vec), "%+.4f %+.4f %+.4f", m.mean_step[0], m.mean_step[1], m.mean_step[2]);
+    std::snprintf(vec, sizeof(vec), "%+.4f %+.4f %+.4f", m.mean_step[0], m.mean_step[1],
+                  m.mean_step[2]);
     std::string flags;
     for (const auto& f : m.flags) flags += (flags.empty() ? "" : "; ") + f;
     char cosine[16] = "-", ratio[16] = "-";
@@ -372,8 +377,8 @@ void RunProbeActions(const ProbeOptions& o) {
     std::error_code ec;
     fs::create_directories(o.out, ec);
     if (!fs::is_directory(o.out)) {
-      throw RunError("cannot create output folder '" + o.out + "': " +
-                     (ec ? ec.message() : std::string("a file is in the way")));
+      throw RunError("cannot create output folder '" + o.out +
+                     "': " + (ec ? ec.message() : std::string("a file is in the way")));
     }
     gl = CreateViewContext(o.view, ResolveGpuChoice(o.view));
     renderer.emplace(*gl, env.model(), options);

@@ -23,15 +23,15 @@ class RandomEpisodeRunner : public EpisodeRunner {
       : sequence_(std::make_unique<FetchEnv>(spec, assets), MakePolicy("random", spec, context),
                   context.seed, spec.max_episode_steps) {}
   void Run(int k, WorkerChannel& channel) override {
-    const EpisodeRecord ep = sequence_.Play(k, [&](const StepRecord&, const StepResult*) {
-      return !channel.StopRequested();
-    });
+    const EpisodeRecord ep = sequence_.Play(
+        k, [&](const StepRecord&, const StepResult*) { return !channel.StopRequested(); });
     const StepRecord& last = ep.steps.back();
-    channel.Done(k, {{"index", k},
-                     {"return", JsonDouble(ep.episode_return)},
-                     {"length", static_cast<int>(ep.steps.size()) - 1},
-                     {"is_success", last.is_success},
-                     {"final_distance", GoalDistance(last.obs.achieved_goal, last.obs.desired_goal)}});
+    channel.Done(k,
+                 {{"index", k},
+                  {"return", JsonDouble(ep.episode_return)},
+                  {"length", static_cast<int>(ep.steps.size()) - 1},
+                  {"is_success", last.is_success},
+                  {"final_distance", GoalDistance(last.obs.achieved_goal, last.obs.desired_goal)}});
   }
 
  private:
@@ -100,10 +100,11 @@ void RunRandomEpisodes(const RandomEpisodesOptions& o) {
   }
   const std::string path = JsonOutPath(o.json_out, "random_metrics");
   WriteJson(path, j);
-  std::printf("%s, %d random episodes (seed %s): success rate %.3f, mean return %.3f (std %.3f), "
-              "mean length %.1f, mean final distance %.4f m\nwrote %s\n",
-              spec.id.c_str(), o.n_episodes, o.env.seed.c_str(), successes / n, mean,
-              std::sqrt(var), total_length / n, mean_final, path.c_str());
+  std::printf(
+      "%s, %d random episodes (seed %s): success rate %.3f, mean return %.3f (std %.3f), "
+      "mean length %.1f, mean final distance %.4f m\nwrote %s\n",
+      spec.id.c_str(), o.n_episodes, o.env.seed.c_str(), successes / n, mean, std::sqrt(var),
+      total_length / n, mean_final, path.c_str());
 }
 
 void RegisterRandomEpisodes(CLI::App& app) {

@@ -48,7 +48,9 @@ namespace {
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 
-double Since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+double Since(Clock::time_point t) {
+  return std::chrono::duration<double>(Clock::now() - t).count();
+}
 
 struct RecordOptions {
   EnvOptions env;
@@ -67,17 +69,17 @@ struct RecordOptions {
   int sheet_every = 0;
   std::string out = "out";
   bool quiet = false;
-  int jobs = 1;                     // workers; 0 = one per core
+  int jobs = 1;  // workers; 0 = one per core
   std::string worker_mode = "process";
-  std::string shard;                // "I/N"; empty: from the environment, else the whole run
-  int shard_count = 0;              // with JOB_COMPLETION_INDEX; 0 = not given
-  bool overwrite = false;           // replace the run already in --out
-  bool resume = false;              // continue the run already in --out
-  std::string replay_dtype;         // --replay-dtype: "", float32, float64
-  bool episodes_given = false;      // --episodes was on the command line
-  bool no_report = false;           // no index.html (cli/report.h)
-  std::string from;                 // record --from: a run folder or trajectory JSON
-  std::string layers = "rgb";       // --layers: rgb plus depth, segmentation
+  std::string shard;            // "I/N"; empty: from the environment, else the whole run
+  int shard_count = 0;          // with JOB_COMPLETION_INDEX; 0 = not given
+  bool overwrite = false;       // replace the run already in --out
+  bool resume = false;          // continue the run already in --out
+  std::string replay_dtype;     // --replay-dtype: "", float32, float64
+  bool episodes_given = false;  // --episodes was on the command line
+  bool no_report = false;       // no index.html (cli/report.h)
+  std::string from;             // record --from: a run folder or trajectory JSON
+  std::string layers = "rgb";   // --layers: rgb plus depth, segmentation
 };
 
 // Everything the parent decided before the workers start; workers only read it.
@@ -87,12 +89,12 @@ struct RecordPlan {
   uint64_t seed = 0;
   AssetSource assets;
   PolicyContext policy_context;
-  VideoOptions video;      // codec already decided; format and metadata set per file
+  VideoOptions video;                // codec already decided; format and metadata set per file
   std::vector<std::string> formats;  // --format, in the order given
-  GpuChoice gpu;           // EGL devices, worker w on devices[w % size]
-  int encoders = 1;        // episodes a worker encodes at once
+  GpuChoice gpu;                     // EGL devices, worker w on devices[w % size]
+  int encoders = 1;                  // episodes a worker encodes at once
   const TrajectorySource* from = nullptr;  // record --from: the episodes to replay
-  bool hindsight = false;  // the hindsight overlay: run the episode first, then render it
+  bool hindsight = false;     // the hindsight overlay: run the episode first, then render it
   std::vector<Layer> layers;  // --layers beyond rgb (depth, segmentation), in the order given
 };
 
@@ -318,8 +320,8 @@ std::string FormatCodec(const std::string& format, const std::string& h264) {
 VideoOptions EpisodeVideoOptions(const RecordPlan& plan, int k, const std::string& format) {
   VideoOptions video = plan.video;
   video.format = format;
-  video.metadata = {{"title", plan.spec->id + " seed " + std::to_string(plan.seed) +
-                                  " episode " + std::to_string(k) + " (" + plan.o->policy + ")"},
+  video.metadata = {{"title", plan.spec->id + " seed " + std::to_string(plan.seed) + " episode " +
+                                  std::to_string(k) + " (" + plan.o->policy + ")"},
                     {"env_id", plan.spec->id},
                     {"seed", std::to_string(plan.seed)},
                     {"policy", plan.o->policy},
@@ -333,7 +335,11 @@ VideoOptions EpisodeVideoOptions(const RecordPlan& plan, int k, const std::strin
 class EpisodeEncoder {
  public:
   EpisodeEncoder(const RecordPlan& plan, int k, int worker, FramePool* pool, WorkerChannel* channel)
-      : plan_(plan), k_(k), worker_(worker), pool_(*pool), channel_(*channel),
+      : plan_(plan),
+        k_(k),
+        worker_(worker),
+        pool_(*pool),
+        channel_(*channel),
         name_(EpisodeName(k)) {
     const std::vector<int> indices = SheetFrameIndices(plan.o->steps + 1, plan.o->sheet_every);
     on_sheet_.insert(indices.begin(), indices.end());
@@ -478,27 +484,27 @@ class EpisodeEncoder {
     const bool success = episode_.steps.back().is_success;
     nlohmann::json videos = nlohmann::json::object();  // format -> file and frames in it
     for (size_t i = 0; i < writers_.size(); ++i) {
-      videos[plan_.formats[i]] = {
-          {"file", fs::path(writers_[i].path()).filename().string()},
-          {"frames", writers_[i].frames_encoded()}};
+      videos[plan_.formats[i]] = {{"file", fs::path(writers_[i].path()).filename().string()},
+                                  {"frames", writers_[i].frames_encoded()}};
     }
     const VideoWriter& first = writers_.front();
-    nlohmann::json entry = {{"index", k_},
-                       {"video", fs::path(first.path()).filename().string()},
-                       {"videos", videos},
-                       {"sheet", name_ + "_sheet.png"},
-                       {"trajectory", name_ + ".json"},
-                       {"frames", first.frames_written()},
-                       {"steps", steps},
-                       {"complete", complete},
-                       {"return", JsonDouble(episode_.episode_return)},
-                       {"is_success", success},
-                       {"worker", worker_},
-                       {"codec", first.codec_name()},
-                       {"encoded_width", first.encoded_width()},
-                       {"encoded_height", first.encoded_height()},
-                       {"timings_s", {{"sim", sim_s_}, {"render", render_s_},
-                                      {"encode", encode_s_}, {"write", write_s}}}};
+    nlohmann::json entry = {
+        {"index", k_},
+        {"video", fs::path(first.path()).filename().string()},
+        {"videos", videos},
+        {"sheet", name_ + "_sheet.png"},
+        {"trajectory", name_ + ".json"},
+        {"frames", first.frames_written()},
+        {"steps", steps},
+        {"complete", complete},
+        {"return", JsonDouble(episode_.episode_return)},
+        {"is_success", success},
+        {"worker", worker_},
+        {"codec", first.codec_name()},
+        {"encoded_width", first.encoded_width()},
+        {"encoded_height", first.encoded_height()},
+        {"timings_s",
+         {{"sim", sim_s_}, {"render", render_s_}, {"encode", encode_s_}, {"write", write_s}}}};
     if (!layers.empty()) entry["layers"] = layers;
     if (extra_.is_object()) entry.update(extra_);
     channel_.Done(k_, entry);
@@ -549,7 +555,7 @@ class EpisodeEncoder {
   WorkerChannel& channel_;
   const std::string name_;
   std::set<int> on_sheet_;
-  std::vector<VideoWriter> writers_;  // one per plan.formats entry, in that order
+  std::vector<VideoWriter> writers_;        // one per plan.formats entry, in that order
   std::vector<VideoWriter> layer_writers_;  // per plan.layers entry, one per format
   std::vector<SheetTile> tiles_;
   EpisodeRecord episode_;
@@ -570,7 +576,8 @@ class EpisodeEncoder {
 class RecordRunner : public EpisodeRunner {
  public:
   RecordRunner(const RecordPlan& plan, int worker)
-      : plan_(plan), worker_(worker),
+      : plan_(plan),
+        worker_(worker),
         sequence_(std::make_unique<FetchEnv>(*plan.spec, plan.assets),
                   // --from replays recorded actions: the policy that made them is not run
                   MakePolicy(plan.from ? "zero" : plan.o->policy, *plan.spec, plan.policy_context),
@@ -590,8 +597,8 @@ class RecordRunner : public EpisodeRunner {
     // the frames being read back, 4 in flight between rendering and encoding, one held by each
     // encoder, and a whole episode for each further encoder so that the render thread can run
     // an episode ahead
-    const size_t frames = 4 + kReadbackDepth + plan_.encoders +
-                          (plan_.encoders - 1) * (plan_.o->steps + 1);
+    const size_t frames =
+        4 + kReadbackDepth + plan_.encoders + (plan_.encoders - 1) * (plan_.o->steps + 1);
     pool_.emplace(frames, frame_bytes, plan_.layers.size());
     const GlInfo& gi = gl_->info();
     return {{"worker", worker_},
@@ -609,8 +616,8 @@ class RecordRunner : public EpisodeRunner {
 
   void Run(int k, WorkerChannel& channel) override {
     // at most plan.encoders episodes encode at once: wait for the oldest beyond that
-    while (!encoders_.empty() &&
-           (encoders_.front()->finished() || static_cast<int>(encoders_.size()) >= plan_.encoders)) {
+    while (!encoders_.empty() && (encoders_.front()->finished() ||
+                                  static_cast<int>(encoders_.size()) >= plan_.encoders)) {
       encoders_.front()->Join();
       encoders_.pop_front();
     }
@@ -699,9 +706,8 @@ class RecordRunner : public EpisodeRunner {
       script = &plan_.from->episodes.at(k).steps;
       script_complete = plan_.from->episodes.at(k).complete;
     } else {
-      first_pass = sequence_.Play(k, [&](const StepRecord&, const StepResult*) {
-        return !channel.StopRequested();
-      });
+      first_pass = sequence_.Play(
+          k, [&](const StepRecord&, const StepResult*) { return !channel.StopRequested(); });
       script = &first_pass.steps;
       script_complete = first_pass.complete;
     }
@@ -754,7 +760,7 @@ class RecordRunner : public EpisodeRunner {
   const RecordPlan& plan_;
   const int worker_;
   EpisodeSequence sequence_;
-  std::unique_ptr<FetchEnv> replay_env_;       // hindsight: the env the replay renders
+  std::unique_ptr<FetchEnv> replay_env_;  // hindsight: the env the replay renders
   std::optional<EpisodeReplayer> replayer_;
   FetchEnv* render_env_ = nullptr;             // the env being replayed, while it is
   std::optional<HindsightEpisode> hindsight_;  // this episode's relabelling (hindsight overlay)
@@ -818,7 +824,8 @@ void ValidatePolicy(const std::string& policy, const EnvSpec& spec, const Policy
 // What makes two record runs the same run, by option: what a resumed run must repeat for its
 // episodes to come out byte for byte as the run it continues (--jobs, --gpu and --backend
 // are free: outputs do not depend on them on one machine).
-nlohmann::json RecordParameters(const RecordOptions& o, const RecordPlan& plan, const Shard& shard) {
+nlohmann::json RecordParameters(const RecordOptions& o, const RecordPlan& plan,
+                                const Shard& shard) {
   nlohmann::json parameters = {{"--env-id", plan.spec->id},
                                {"--seed", plan.seed},
                                {"--policy", o.policy},
@@ -1025,14 +1032,15 @@ void RunRecord(const RecordOptions& options, const std::string& command_line,
   }
   nlohmann::json workers_json = nlohmann::json::array();
   for (size_t w = 0; w < result.workers.size(); ++w) {
-    nlohmann::json entry = result.workers[w].is_null() ? nlohmann::json{{"worker", w}}
-                                                       : result.workers[w];
+    nlohmann::json entry =
+        result.workers[w].is_null() ? nlohmann::json{{"worker", w}} : result.workers[w];
     entry["episodes"] = by_worker[static_cast<int>(w)];
     workers_json.push_back(std::move(entry));
   }
   nlohmann::json failures_json = nlohmann::json::array();
   for (const WorkerFailure& f : result.failures) {
-    failures_json.push_back({{"worker", f.worker}, {"episodes", f.episodes}, {"message", f.message}});
+    failures_json.push_back(
+        {{"worker", f.worker}, {"episodes", f.episodes}, {"message", f.message}});
   }
   const nlohmann::json shard_json = {
       {"index", shard.index},
@@ -1154,19 +1162,27 @@ void RegisterRecord(CLI::App& app) {
       "episode_NNN.json, manifest.json");
   AddEnvOptions(sub, &o->env);
   AddViewOptions(sub, &o->view);
-  sub->add_option("--episodes", o->episodes, "Number of episodes")->capture_default_str()->check(CLI::Range(1, 1000000));
-  sub->add_option("--steps", o->steps, "Steps per episode (TimeLimit is 50)")->capture_default_str()->check(CLI::Range(1, 50));
+  sub->add_option("--episodes", o->episodes, "Number of episodes")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 1000000));
+  sub->add_option("--steps", o->steps, "Steps per episode (TimeLimit is 50)")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 50));
   sub->add_option("--policy", o->policy, kPolicyHelp)->capture_default_str();
   sub->add_option("--exec-timeout", o->exec_timeout, "Seconds an exec: policy may take per answer")
-      ->capture_default_str()->check(CLI::Range(0.001, 86400.0));
+      ->capture_default_str()
+      ->check(CLI::Range(0.001, 86400.0));
   sub->add_option("--replay-dtype", o->replay_dtype, kReplayDtypeHelp);
-  sub->add_option("--fps", o->fps, "Video frame rate (25 = the control rate: real time)")->capture_default_str();
+  sub->add_option("--fps", o->fps, "Video frame rate (25 = the control rate: real time)")
+      ->capture_default_str();
   sub->add_option("--codec", o->codec,
                   "auto (h264_nvenc where the GPU has NVENC, else libx264; decided once per run), "
                   "libx264 or h264_nvenc")
       ->capture_default_str();
-  sub->add_option("--crf", o->crf, "H.264 quality, 0 (lossless) .. 51 (worst)")->capture_default_str();
-  sub->add_option("--preset", o->preset, std::string("Encoder preset (default ") + kDefaultVideoPreset + ")");
+  sub->add_option("--crf", o->crf, "H.264 quality, 0 (lossless) .. 51 (worst)")
+      ->capture_default_str();
+  sub->add_option("--preset", o->preset,
+                  std::string("Encoder preset (default ") + kDefaultVideoPreset + ")");
   sub->add_option("--format", o->formats,
                   "Video formats, a comma list: mp4 (H.264), webm (VP9, plays in every browser and "
                   "wandb), gif (one palette per clip, scaled by --gif-fps/--gif-width); one file "
@@ -1174,8 +1190,9 @@ void RegisterRecord(CLI::App& app) {
       ->capture_default_str();
   sub->add_option("--gif-fps", o->gif_fps, "GIF frame rate, 1..50 (at most --fps)")
       ->capture_default_str();
-  sub->add_option("--gif-width", o->gif_width,
-                  "GIF width in pixels, 16..4096 (never wider than the frames; height keeps the aspect)")
+  sub->add_option(
+         "--gif-width", o->gif_width,
+         "GIF width in pixels, 16..4096 (never wider than the frames; height keeps the aspect)")
       ->capture_default_str();
   sub->add_option("--layers", o->layers,
                   "Comma list of rgb (always recorded), depth, segmentation: each extra layer is "
@@ -1186,8 +1203,11 @@ void RegisterRecord(CLI::App& app) {
                   "episode_NNN_segmentation_legend.json naming each colour's body and geoms. "
                   "Layers show no overlays; contact sheets stay rgb")
       ->capture_default_str();
-  sub->add_option("--sheet-every", o->sheet_every, "Contact sheet: every K-th frame (0: about 12 tiles); the last frame is always included")
-      ->capture_default_str()->check(CLI::Range(0, 1000));
+  sub->add_option(
+         "--sheet-every", o->sheet_every,
+         "Contact sheet: every K-th frame (0: about 12 tiles); the last frame is always included")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 1000));
   sub->add_option("--out", o->out, "Output folder")->capture_default_str();
   sub->add_flag("-q,--quiet", o->quiet, "No progress or summary on stderr");
   sub->add_flag("--overwrite", o->overwrite,

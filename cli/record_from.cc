@@ -57,7 +57,9 @@ RecordedEpisode ParseEpisode(const nlohmann::json& e, const std::string& file) {
     throw RunError("--from: " + file + ": an episode lacks an integer 'index' or its 'steps'");
   }
   out.index = e["index"].get<int>();
-  if (out.index < 0) throw RunError("--from: " + file + ": episode index " + std::to_string(out.index) + " is negative");
+  if (out.index < 0)
+    throw RunError("--from: " + file + ": episode index " + std::to_string(out.index) +
+                   " is negative");
   if (e.contains("complete")) {  // absent in trajectories from before the flag: complete
     if (!e["complete"].is_boolean()) {
       throw RunError("--from: " + file + ": episode " + std::to_string(out.index) +
@@ -85,7 +87,8 @@ RecordedEpisode ParseEpisode(const nlohmann::json& e, const std::string& file) {
       std::copy(a.begin(), a.end(), action.value.begin());
       action.is_float32 = f32;
       r.action = action;
-      if (!s.contains("reward") || !s["reward"].is_number()) throw RunError(where + ": 'reward' is not a number");
+      if (!s.contains("reward") || !s["reward"].is_number())
+        throw RunError(where + ": 'reward' is not a number");
       r.reward = s["reward"].get<double>();
     }
     if (!s.contains("is_success") || !s["is_success"].is_boolean()) {
@@ -265,8 +268,8 @@ void AddFromOption(CLI::App* sub, std::string* from) {
 }
 
 void CheckFromFlags(const CLI::App& sub, const std::string& from) {
-  for (const char* flag : {"--env-id", "--seed", "--policy", "--episodes", "--steps", "--shard",
-                           "--shard-count"}) {
+  for (const char* flag :
+       {"--env-id", "--seed", "--policy", "--episodes", "--steps", "--shard", "--shard-count"}) {
     if (sub.count(flag) > 0) {
       throw UsageError(std::string(flag) + " cannot be used with --from: the env, seed, policy, " +
                        "steps and episodes come from the trajectory '" + from + "'");

@@ -28,13 +28,13 @@ struct RecordedEpisode {
 
 /// What --from names: the run's env, seed, policy and assets, and its episodes by index.
 struct TrajectorySource {
-  std::string path;                          ///< as given
-  std::string env_id;                        ///< trajectory env_id
-  uint64_t seed = 0;                         ///< trajectory seed (episode 0's reset)
-  std::string policy;                        ///< the policy that made it (for the manifest)
-  nlohmann::json assets;                     ///< trajectory assets {kind, path, sha256, origin}
-  std::map<int, RecordedEpisode> episodes;   ///< by index
-  int max_steps = 0;                         ///< the longest episode's steps
+  std::string path;                         ///< as given
+  std::string env_id;                       ///< trajectory env_id
+  uint64_t seed = 0;                        ///< trajectory seed (episode 0's reset)
+  std::string policy;                       ///< the policy that made it (for the manifest)
+  nlohmann::json assets;                    ///< trajectory assets {kind, path, sha256, origin}
+  std::map<int, RecordedEpisode> episodes;  ///< by index
+  int max_steps = 0;                        ///< the longest episode's steps
 };
 
 /// Reads a trajectory JSON file, or every episode_NNN.json of a run folder. Throws UsageError

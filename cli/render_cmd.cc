@@ -31,7 +31,8 @@ nlohmann::json SegmentationLegendJson(const std::vector<SegmentObject>& objects)
   nlohmann::json list = nlohmann::json::array();
   for (const SegmentObject& o : objects) list.push_back(SegmentObjectJson(o));
   return {{"background", "#000000"},
-          {"note", "one colour per body (all its geoms) or site; fixed palette, the same in every frame"},
+          {"note",
+           "one colour per body (all its geoms) or site; fixed palette, the same in every frame"},
           {"objects", list}};
 }
 
@@ -45,7 +46,8 @@ void RegisterRender(CLI::App& app) {
   auto layers = std::make_shared<std::string>("rgb");
   auto output = std::make_shared<std::string>();
   auto verbose = std::make_shared<bool>(false);
-  CLI::App* sub = app.add_subcommand("render", "Render one frame to PNG (after reset, or after --steps K)");
+  CLI::App* sub =
+      app.add_subcommand("render", "Render one frame to PNG (after reset, or after --steps K)");
   AddEnvOptions(sub, env.get());
   AddViewOptions(sub, view.get());
   sub->add_option("--steps", *steps, "Steps of --policy to take before the frame")
@@ -60,7 +62,8 @@ void RegisterRender(CLI::App& app) {
                   "other layers go to NAME_depth.png and NAME_segmentation.png")
       ->capture_default_str();
   sub->add_option("-o,--output", *output, "Output PNG")->required();
-  sub->add_flag("-v,--verbose", *verbose, "Print the GL vendor, renderer and version, and the MSAA samples used and why");
+  sub->add_flag("-v,--verbose", *verbose,
+                "Print the GL vendor, renderer and version, and the MSAA samples used and why");
   sub->callback([=]() {
     const std::vector<Layer> wanted = ParseLayers(*layers);
     auto want = [&](Layer l) { return std::find(wanted.begin(), wanted.end(), l) != wanted.end(); };
@@ -72,7 +75,8 @@ void RegisterRender(CLI::App& app) {
     // a trajectory JSON (replay:episode_003.json) renders its first episode, under its own
     // index and so from its own reset; any other policy plays episode 0
     const std::vector<int> replayed =
-        ReplayedEpisodes(*policy_spec, 0, spec.id, seed, /*quiet=*/false).value_or(std::vector<int>{0});
+        ReplayedEpisodes(*policy_spec, 0, spec.id, seed, /*quiet=*/false)
+            .value_or(std::vector<int>{0});
     const int k = replayed.front();
     PolicyContext context;
     context.seed = seed;
@@ -88,10 +92,12 @@ void RegisterRender(CLI::App& app) {
     Renderer renderer(*gl, fetch.model(), options);
     if (*verbose) {
       const GlInfo& i = gl->info();
-      std::fprintf(stderr, "GL: backend %s (%s), vendor %s, renderer %s, version %s\n", i.backend.c_str(),
-                   i.device.c_str(), i.vendor.c_str(), i.renderer.c_str(), i.version.c_str());
+      std::fprintf(stderr, "GL: backend %s (%s), vendor %s, renderer %s, version %s\n",
+                   i.backend.c_str(), i.device.c_str(), i.vendor.c_str(), i.renderer.c_str(),
+                   i.version.c_str());
       std::fprintf(stderr, "GPU: %s\n", gl->selection().c_str());
-      std::fprintf(stderr, "MSAA: %d samples (%s)\n", renderer.msaa_samples(), renderer.msaa_reason().c_str());
+      std::fprintf(stderr, "MSAA: %d samples (%s)\n", renderer.msaa_samples(),
+                   renderer.msaa_reason().c_str());
     }
     const FrameInfo info = MakeFrameInfo(fetch, episode.steps.back());
     if (want_rgb) {
@@ -109,7 +115,8 @@ void RegisterRender(CLI::App& app) {
     }
     if (want_seg) {
       renderer.RenderLayer(fetch.data(), info, Layer::kSegmentation, &layer);
-      const std::string path = (want_rgb || want_depth) ? LayerPath(*output, "segmentation") : *output;
+      const std::string path =
+          (want_rgb || want_depth) ? LayerPath(*output, "segmentation") : *output;
       WritePng(path, renderer.width(), renderer.height(), 3, 8, layer.data());
       const std::string legend = LegendPath(*output);
       WriteJson(legend, SegmentationLegendJson(renderer.segmentation_legend()));
@@ -120,13 +127,16 @@ void RegisterRender(CLI::App& app) {
 
 void RegisterListCameras(CLI::App& app) {
   auto env = std::make_shared<EnvOptions>();
-  CLI::App* sub = app.add_subcommand("list-cameras", "List the cameras --camera accepts for a model");
+  CLI::App* sub =
+      app.add_subcommand("list-cameras", "List the cameras --camera accepts for a model");
   AddEnvOptions(sub, env.get(), false);
   sub->callback([env]() {
     const EnvSpec& spec = FindEnvSpec(env->env_id);
     FetchEnv fetch(spec, ResolveAssets(env->assets));
     const mjModel* m = fetch.model();
-    std::printf("default   Gymnasium's free camera: distance 2.5, azimuth 132, elevation -14, lookat 1.3 0.75 0.55\n");
+    std::printf(
+        "default   Gymnasium's free camera: distance 2.5, azimuth 132, elevation -14, lookat 1.3 "
+        "0.75 0.55\n");
     std::printf("track     follows robot0:gripper_link\n");
     std::printf("free:...  free:lookat=x,y,z,distance=d,azimuth=a,elevation=e (any subset)\n");
     for (int i = 0; i < m->ncam; ++i) {

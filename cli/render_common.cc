@@ -1,9 +1,9 @@
 #include "cli/render_common.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <algorithm>
 #include <set>
 #include <vector>
 
@@ -27,9 +27,11 @@ void AddViewOptions(CLI::App* sub, ViewOptions* o) {
   sub->add_option("--width", o->width,
                   "Width in pixels of each camera's view: N tiled cameras make a frame N views "
                   "wide (a near-square grid from 4 on)")
-      ->capture_default_str()->check(CLI::Range(1, 8192));
+      ->capture_default_str()
+      ->check(CLI::Range(1, 8192));
   sub->add_option("--height", o->height, "Height in pixels of each camera's view")
-      ->capture_default_str()->check(CLI::Range(1, 8192));
+      ->capture_default_str()
+      ->check(CLI::Range(1, 8192));
   sub->add_option("--hud-position", o->hud_position,
                   "Corner of the HUD: top-left, top-right, bottom-left or bottom-right (within "
                   "the tile at that corner). The HUD text grows with the view; views smaller "
@@ -45,14 +47,16 @@ void AddViewOptions(CLI::App* sub, ViewOptions* o) {
                   "model's 4 (as Gymnasium renders) on hardware GL, 0 on a software rasterizer "
                   "(llvmpipe, softpipe, swrast), where multisampling is about half the frame time")
       ->capture_default_str()
-      ->check(CLI::IsMember(std::vector<std::string>(std::begin(kMsaaValues), std::end(kMsaaValues))));
+      ->check(
+          CLI::IsMember(std::vector<std::string>(std::begin(kMsaaValues), std::end(kMsaaValues))));
   sub->add_option("--readback", o->readback,
                   "How frames come back from the GPU: auto, sync or async. async reads through "
                   "pixel buffer objects, 3 frames in flight, so the GPU draws the next frame "
                   "while one comes back (same pixels); auto: async on hardware GL, sync on a "
                   "software rasterizer")
       ->capture_default_str()
-      ->check(CLI::IsMember(std::vector<std::string>(std::begin(kReadbackValues), std::end(kReadbackValues))));
+      ->check(CLI::IsMember(
+          std::vector<std::string>(std::begin(kReadbackValues), std::end(kReadbackValues))));
   sub->add_option("--gpu", o->gpu,
                   std::string("GPU(s) to render on: ") + kGpuForms +
                       ". Default: $MUJOCO_EGL_DEVICE_ID (EGL index), else cuda:0 when "
@@ -118,8 +122,7 @@ GpuChoice ResolveGpuChoice(const ViewOptions& view) {
 
 std::unique_ptr<GlContext> CreateViewContext(const ViewOptions& view, const GpuChoice& choice,
                                              int worker) {
-  const int device =
-      choice.devices.empty() ? -1 : choice.devices[worker % choice.devices.size()];
+  const int device = choice.devices.empty() ? -1 : choice.devices[worker % choice.devices.size()];
   auto gl = CreateGlContext(view.backend, device);
   gl->set_selection(gl->info().backend == "egl" ? choice.reason : "osmesa (no device)");
   return gl;
@@ -158,7 +161,7 @@ std::vector<Layer> ParseLayers(const std::string& list) {
     if (!seen.insert(token).second) {
       throw UsageError("--layers names '" + token + "' twice; each layer once");
     }
-    layers.push_back(token == "rgb" ? Layer::kRgb
+    layers.push_back(token == "rgb"     ? Layer::kRgb
                      : token == "depth" ? Layer::kDepth
                                         : Layer::kSegmentation);
   }

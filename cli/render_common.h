@@ -2,10 +2,8 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
-
-#include <string>
-
 #include <nlohmann/json.hpp>
+#include <string>
 
 #include "render/gpu_select.h"
 #include "render/overlay.h"
@@ -17,16 +15,16 @@ namespace fetchscope::cli {
 
 /// --camera, --overlay, --width, --height, --backend, --gpu, --msaa.
 struct ViewOptions {
-  std::string camera = "default";                 ///< see ParseCameraList
-  std::string overlay = "goal,achieved,hud,labels";///< see ParseOverlays
-  int width = 480;                                ///< pixels
-  int height = 480;                               ///< pixels
-  std::string backend;                            ///< auto|egl|osmesa; empty: $MUJOCO_GL or auto
-  std::string gpu;                                ///< see ParseGpuSpec; empty: from the environment
-  std::string msaa = "auto";                      ///< see ParseMsaa
-  std::string readback = "auto";                  ///< see ParseReadback
-  std::string hud_position = "top-left";          ///< see ParseHudPosition
-  double hud_opacity = 0.6;                       ///< see CheckHudOpacity
+  std::string camera = "default";                    ///< see ParseCameraList
+  std::string overlay = "goal,achieved,hud,labels";  ///< see ParseOverlays
+  int width = 480;                                   ///< pixels
+  int height = 480;                                  ///< pixels
+  std::string backend;                               ///< auto|egl|osmesa; empty: $MUJOCO_GL or auto
+  std::string gpu;                        ///< see ParseGpuSpec; empty: from the environment
+  std::string msaa = "auto";              ///< see ParseMsaa
+  std::string readback = "auto";          ///< see ParseReadback
+  std::string hud_position = "top-left";  ///< see ParseHudPosition
+  double hud_opacity = 0.6;               ///< see CheckHudOpacity
 };
 
 /// The accepted --readback values, and RenderOptions::readback for one (UsageError otherwise).

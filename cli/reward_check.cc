@@ -66,27 +66,30 @@ bool RunRewardCheck(const RewardCheckOptions& options) {
         }
         double d2 = 0;
         for (int i = 0; i < 3; ++i) {
-          d2 += (s.obs.achieved_goal[i] - s.obs.desired_goal[i]) * (s.obs.achieved_goal[i] - s.obs.desired_goal[i]);
+          d2 += (s.obs.achieved_goal[i] - s.obs.desired_goal[i]) *
+                (s.obs.achieved_goal[i] - s.obs.desired_goal[i]);
         }
         ++success_checks;
         if (r->is_success != (std::sqrt(d2) < spec.distance_threshold)) {
-          mismatches.push_back({spec.id, "is_success", episode, s.t, double(r->is_success),
-                                double(!r->is_success)});
+          mismatches.push_back(
+              {spec.id, "is_success", episode, s.t, double(r->is_success), double(!r->is_success)});
         }
         return true;
       };
-      RunEpisode(fetch, *policy, episode, episode == 0 ? std::optional<uint64_t>(seed) : std::nullopt,
-                 steps, check);
+      RunEpisode(fetch, *policy, episode,
+                 episode == 0 ? std::optional<uint64_t>(seed) : std::nullopt, steps, check);
       // relabel: pair each achieved goal with a future achieved goal and with a random goal
       for (size_t t = 0; t < achieved.size(); ++t) {
-        const size_t future = t + static_cast<size_t>(relabel_rng.NextDouble() * (achieved.size() - t));
+        const size_t future =
+            t + static_cast<size_t>(relabel_rng.NextDouble() * (achieved.size() - t));
         std::array<double, 3> random_goal;
         for (int i = 0; i < 3; ++i) {
           random_goal[i] = fetch.initial_gripper_xpos()[i] + relabel_rng.Uniform(-0.3, 0.3);
         }
         for (const auto& goal : {achieved[std::min(future, achieved.size() - 1)], random_goal}) {
           const double got = fetch.ComputeReward(achieved[t], goal);
-          const double expected = FormulaReward(spec.dense, spec.distance_threshold, achieved[t], goal);
+          const double expected =
+              FormulaReward(spec.dense, spec.distance_threshold, achieved[t], goal);
           ++relabel_checks;
           if (!SameBits(got, expected)) {
             mismatches.push_back({spec.id, "relabelled reward", episode, int(t), got, expected});
@@ -108,18 +111,23 @@ bool RunRewardCheck(const RewardCheckOptions& options) {
   nlohmann::json first = nlohmann::json::array();
   for (size_t i = 0; i < mismatches.size() && i < 20; ++i) {
     const Mismatch& mm = mismatches[i];
-    first.push_back({{"env_id", mm.env_id}, {"kind", mm.kind}, {"episode", mm.episode},
-                     {"t", mm.t}, {"got", JsonDouble(mm.got)}, {"expected", JsonDouble(mm.expected)}});
+    first.push_back({{"env_id", mm.env_id},
+                     {"kind", mm.kind},
+                     {"episode", mm.episode},
+                     {"t", mm.t},
+                     {"got", JsonDouble(mm.got)},
+                     {"expected", JsonDouble(mm.expected)}});
     std::printf("  mismatch: %s %s episode %d t %d: got %.17g expected %.17g\n", mm.env_id.c_str(),
                 mm.kind.c_str(), mm.episode, mm.t, mm.got, mm.expected);
   }
   const bool pass = mismatches.empty();
   std::printf("reward-check %s: %s (n-steps %d, seed %s, assets %s)\n",
-              TaskName(chosen.task).c_str(), pass ? "PASS" : "FAIL", options.n_steps, options.env.seed.c_str(),
-              assets.kind.c_str());
+              TaskName(chosen.task).c_str(), pass ? "PASS" : "FAIL", options.n_steps,
+              options.env.seed.c_str(), assets.kind.c_str());
   if (!options.json_out.empty()) {
-    nlohmann::json j = {{"task", TaskName(chosen.task)}, {"pass", pass}, {"n_steps", options.n_steps},
-                        {"seed", seed}, {"assets", AssetsJson(assets)}, {"variants", variants},
+    nlohmann::json j = {{"task", TaskName(chosen.task)},       {"pass", pass},
+                        {"n_steps", options.n_steps},          {"seed", seed},
+                        {"assets", AssetsJson(assets)},        {"variants", variants},
                         {"mismatch_count", mismatches.size()}, {"first_mismatches", first},
                         {"versions", VersionsJson()}};
     const std::string path = JsonOutPath(options.json_out, "reward_check");
@@ -138,7 +146,8 @@ void RegisterRewardCheck(CLI::App& app) {
   sub->add_option("--n-steps", o->n_steps, "Random-policy steps per variant")
       ->capture_default_str()
       ->check(CLI::Range(1, 10000000));
-  sub->add_option("--json-out", o->json_out, "Write P (.json) or P_reward_check.json; without it only the table is "
+  sub->add_option("--json-out", o->json_out,
+                  "Write P (.json) or P_reward_check.json; without it only the table is "
                   "printed");
   sub->callback([o]() {
     if (!RunRewardCheck(*o)) ExitStatus() = 1;

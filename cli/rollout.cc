@@ -35,9 +35,8 @@ class RolloutRunner : public EpisodeRunner {
       : sequence_(std::make_unique<FetchEnv>(spec, assets), MakePolicy(policy, spec, context),
                   context.seed, steps) {}
   void Run(int k, WorkerChannel& channel) override {
-    const EpisodeRecord episode = sequence_.Play(k, [&](const StepRecord&, const StepResult*) {
-      return !channel.StopRequested();
-    });
+    const EpisodeRecord episode = sequence_.Play(
+        k, [&](const StepRecord&, const StepResult*) { return !channel.StopRequested(); });
     channel.Progress(static_cast<int>(episode.steps.size()) - 1);
     channel.Done(k, EpisodeJson(episode));
   }
@@ -99,27 +98,33 @@ void RunRollout(const RolloutOptions& o) {
   }
   const std::string path = JsonOutPath(o.json_out, "rollout");
   WriteJson(path, j);
-  std::printf("%s: %d episode(s) of %d steps, policy %s, seed %s: success %d/%d (%.0f%%)\nwrote %s\n",
-              spec.id.c_str(), count, o.steps, o.policy.c_str(), o.env.seed.c_str(), successes,
-              count, 100.0 * successes / count, path.c_str());
+  std::printf(
+      "%s: %d episode(s) of %d steps, policy %s, seed %s: success %d/%d (%.0f%%)\nwrote %s\n",
+      spec.id.c_str(), count, o.steps, o.policy.c_str(), o.env.seed.c_str(), successes, count,
+      100.0 * successes / count, path.c_str());
 }
 
 }  // namespace
 
 void RegisterRollout(CLI::App& app) {
   auto o = std::make_shared<RolloutOptions>();
-  CLI::App* sub = app.add_subcommand(
-      "rollout", "Run episodes without rendering and write the trajectory JSON");
+  CLI::App* sub =
+      app.add_subcommand("rollout", "Run episodes without rendering and write the trajectory JSON");
   AddEnvOptions(sub, &o->env);
   sub->add_option("--episodes", o->episodes,
                   "Number of episodes (a replay:FILE.json trajectory plays its own episodes)")
-      ->capture_default_str()->check(CLI::Range(1, 1000000));
-  sub->add_option("--steps", o->steps, "Steps per episode (TimeLimit is 50)")->capture_default_str()->check(CLI::Range(1, 50));
+      ->capture_default_str()
+      ->check(CLI::Range(1, 1000000));
+  sub->add_option("--steps", o->steps, "Steps per episode (TimeLimit is 50)")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 50));
   sub->add_option("--policy", o->policy, kPolicyHelp)->capture_default_str();
   sub->add_option("--exec-timeout", o->exec_timeout, "Seconds an exec: policy may take per answer")
-      ->capture_default_str()->check(CLI::Range(0.001, 86400.0));
+      ->capture_default_str()
+      ->check(CLI::Range(0.001, 86400.0));
   sub->add_option("--replay-dtype", o->replay_dtype, kReplayDtypeHelp);
-  sub->add_option("--json-out", o->json_out, "Write F (.json) or F_rollout.json; without it JSON goes to stdout");
+  sub->add_option("--json-out", o->json_out,
+                  "Write F (.json) or F_rollout.json; without it JSON goes to stdout");
   AddJobsOptions(sub, &o->jobs, &o->worker_mode);
   sub->callback([o, sub]() {
     o->episodes_given = sub->count("--episodes") > 0;

@@ -16,7 +16,9 @@ namespace {
 namespace fs = std::filesystem;
 
 bool AllDigits(const std::string& s) {
-  return !s.empty() && std::all_of(s.begin(), s.end(), [](char c) { return std::isdigit(static_cast<unsigned char>(c)); });
+  return !s.empty() && std::all_of(s.begin(), s.end(), [](char c) {
+    return std::isdigit(static_cast<unsigned char>(c));
+  });
 }
 
 bool EndsWith(const std::string& s, const std::string& tail) {
@@ -161,8 +163,9 @@ std::optional<RunFileName> ParseRunFileName(const std::string& name) {
 
 ReuseMode ParseReuseMode(bool overwrite, bool resume) {
   if (overwrite && resume) {
-    throw UsageError("--overwrite and --resume contradict each other: --overwrite replaces the run "
-                     "in --out, --resume continues it; pass one");
+    throw UsageError(
+        "--overwrite and --resume contradict each other: --overwrite replaces the run "
+        "in --out, --resume continues it; pass one");
   }
   return overwrite ? ReuseMode::kOverwrite : resume ? ReuseMode::kResume : ReuseMode::kRefuse;
 }
@@ -187,9 +190,9 @@ RunFolder::RunFolder(const RunFolderRequest& request) : request_(request) {
     created_dirs_.push_back(p);
     if (p == p.parent_path()) break;
   }
-  std::vector<std::string> run_files;   // this run's (or, unsharded, any run's) visible files
-  std::vector<std::string> hidden;      // leftover temporaries of those
-  std::vector<std::string> manifests;   // other manifests
+  std::vector<std::string> run_files;  // this run's (or, unsharded, any run's) visible files
+  std::vector<std::string> hidden;     // leftover temporaries of those
+  std::vector<std::string> manifests;  // other manifests
   if (created_dirs_.empty()) {
     if (!fs::is_directory(out, ec)) {
       throw RunError("cannot create output folder '" + request.out + "': a file is in the way");
@@ -296,13 +299,16 @@ RunFolder::RunFolder(const RunFolderRequest& request) : request_(request) {
       }
       const std::string why = FirstDifference(m["parameters"], request.parameters, "");
       if (!why.empty()) {
-        throw UsageError("cannot --resume " + quoted + " with other parameters: " + why +
-                         "; pass the options of the run being resumed, or --overwrite to replace it");
+        throw UsageError(
+            "cannot --resume " + quoted + " with other parameters: " + why +
+            "; pass the options of the run being resumed, or --overwrite to replace it");
       }
       std::set<int> done;
       for (const nlohmann::json& e : m["episodes"]) {
         const int k = e.value("index", -1);
-        if (!e.value("complete", false) || !std::binary_search(request.episodes.begin(), request.episodes.end(), k)) continue;
+        if (!e.value("complete", false) ||
+            !std::binary_search(request.episodes.begin(), request.episodes.end(), k))
+          continue;
         bool files = true;
         for (const std::string& file : EntryFiles(e)) {
           files = files && fs::is_regular_file(out / file, ec);
@@ -339,8 +345,8 @@ RunFolder::RunFolder(const RunFolderRequest& request) : request_(request) {
 
   fs::create_directories(out, ec);
   if (!fs::is_directory(out)) {
-    throw RunError("cannot create output folder '" + request.out + "': " +
-                   (ec ? ec.message() : std::string("a file is in the way")));
+    throw RunError("cannot create output folder '" + request.out +
+                   "': " + (ec ? ec.message() : std::string("a file is in the way")));
   }
   for (const auto& entry : fs::directory_iterator(out, ec)) {
     before_.insert(entry.path().filename().string());

@@ -20,12 +20,11 @@
 
 #include <filesystem>
 #include <functional>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <set>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 namespace fetchscope::cli {
 
@@ -50,12 +49,12 @@ std::optional<RunFileName> ParseRunFileName(const std::string& name);
 
 /// What a run asks of its folder.
 struct RunFolderRequest {
-  std::string out;                 ///< --out
+  std::string out;  ///< --out
   ReuseMode mode = ReuseMode::kRefuse;
-  std::string manifest_name;       ///< this run's manifest (manifest.json or a shard's)
-  bool sharded = false;            ///< other shards' files may be there
-  std::function<bool(int)> owns;   ///< true for the episodes of this run (its shard)
-  std::vector<int> episodes;       ///< this run's episodes, ascending
+  std::string manifest_name;      ///< this run's manifest (manifest.json or a shard's)
+  bool sharded = false;           ///< other shards' files may be there
+  std::function<bool(int)> owns;  ///< true for the episodes of this run (its shard)
+  std::vector<int> episodes;      ///< this run's episodes, ascending
   /// What makes two manifests the same run: option name ("--steps") -> value. Stored in the
   /// manifest as "parameters"; --resume refuses a folder whose run differs in any of them.
   nlohmann::json parameters;

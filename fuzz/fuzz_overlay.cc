@@ -4,7 +4,8 @@
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   fetchscope::fuzz::ExpectOnlyOurErrors([&] {
-    const fetchscope::OverlaySet set = fetchscope::ParseOverlays(fetchscope::fuzz::AsString(data, size));
+    const fetchscope::OverlaySet set =
+        fetchscope::ParseOverlays(fetchscope::fuzz::AsString(data, size));
     fetchscope::FrameInfo info;
     info.step = 3;
     info.reward = -0.5;

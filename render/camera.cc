@@ -134,7 +134,8 @@ CameraSpec ParseOne(const std::string& token, const mjModel* model) {
     return spec;
   }
   std::vector<std::string> names = {"default", "track", "free"};
-  for (int i = 0; model && i < model->ncam; ++i) names.push_back(mj_id2name(model, mjOBJ_CAMERA, i));
+  for (int i = 0; model && i < model->ncam; ++i)
+    names.push_back(mj_id2name(model, mjOBJ_CAMERA, i));
   throw UsageError("camera '" + token + "' is not known" + DidYouMean(token, names) + "; " +
                    kAccepted + " (model cameras: " + ModelCameraNames(model) + ")");
 }

@@ -4,8 +4,8 @@
 #include <EGL/eglext.h>
 #include <dlfcn.h>
 
-#include <cstdlib>
 #include <algorithm>
+#include <cstdlib>
 #include <cstring>
 #include <map>
 #include <mutex>
@@ -305,7 +305,7 @@ bool CanEnumerate(const char* client_extensions, std::string* why) {
                        HasExtension(client_extensions, "EGL_EXT_device_base");
   const bool platform = HasExtension(client_extensions, "EGL_EXT_platform_device");
   if (listing && platform && egl.QueryDevicesEXT) return true;
-  *why = !listing ? "neither EGL_EXT_device_enumeration nor EGL_EXT_device_base"
+  *why = !listing    ? "neither EGL_EXT_device_enumeration nor EGL_EXT_device_base"
          : !platform ? "no EGL_EXT_platform_device"
                      : "eglQueryDevicesEXT is missing";
   return false;

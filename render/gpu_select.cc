@@ -17,7 +17,8 @@ std::string Trim(const std::string& s) {
 
 // A non-negative integer below 4096, or -1.
 int ParseIndex(const std::string& text) {
-  if (text.empty() || text.size() > 4 || text.find_first_not_of("0123456789") != std::string::npos) {
+  if (text.empty() || text.size() > 4 ||
+      text.find_first_not_of("0123456789") != std::string::npos) {
     return -1;
   }
   const int value = std::atoi(text.c_str());
@@ -40,8 +41,8 @@ std::vector<int> ParseIndexList(const std::string& text) {
   size_t start = 0;
   while (true) {
     const size_t comma = text.find(',', start);
-    const int id = ParseIndex(Trim(text.substr(start, comma == std::string::npos ? std::string::npos
-                                                                                  : comma - start)));
+    const int id = ParseIndex(
+        Trim(text.substr(start, comma == std::string::npos ? std::string::npos : comma - start)));
     if (id < 0 || std::find(ids.begin(), ids.end(), id) != ids.end()) return {};
     ids.push_back(id);
     if (comma == std::string::npos) return ids;
@@ -129,14 +130,13 @@ GpuSpec EffectiveGpuSpec(const std::string& flag, const EnvLookup& env) {
 GpuChoice ChooseGpus(const GpuSpec& spec, const EglDeviceList& list) {
   using Kind = GpuSpec::Kind;
   GpuChoice choice;
-  const std::string named = spec.source == "CUDA_VISIBLE_DEVICES" ? spec.text
-                                                                  : spec.source + " " + spec.text;
+  const std::string named =
+      spec.source == "CUDA_VISIBLE_DEVICES" ? spec.text : spec.source + " " + spec.text;
   if (spec.kind == Kind::kAuto) {
     choice.reason = "auto";
     return choice;
   }
-  const std::string no_devices =
-      list.enumerable ? "it lists no devices" : list.why_not;
+  const std::string no_devices = list.enumerable ? "it lists no devices" : list.why_not;
   if (!list.enumerable || list.devices.empty()) {
     if (spec.soft) {
       choice.reason = "auto (" + named + ", but this EGL lists no devices)";
@@ -150,9 +150,9 @@ GpuChoice ChooseGpus(const GpuSpec& spec, const EglDeviceList& list) {
     case Kind::kEgl:
       for (int id : spec.ids) {
         if (id >= count) {
-          throw UsageError(spec.source + " " + std::to_string(id) + " is out of range; accepted: 0.." +
-                           std::to_string(count - 1) + " (EGL devices on this machine: " +
-                           std::to_string(count) + ")");
+          throw UsageError(spec.source + " " + std::to_string(id) +
+                           " is out of range; accepted: 0.." + std::to_string(count - 1) +
+                           " (EGL devices on this machine: " + std::to_string(count) + ")");
         }
       }
       choice.devices = spec.ids;
@@ -182,8 +182,8 @@ GpuChoice ChooseGpus(const GpuSpec& spec, const EglDeviceList& list) {
                                [id](const EglDevice& d) { return d.cuda_id == id; });
         if (it == list.devices.end()) {
           if (spec.soft) {
-            choice.reason = "auto (" + named + ", but no EGL device is CUDA " +
-                            std::to_string(id) + "; CUDA ordinals: " + inventory + ")";
+            choice.reason = "auto (" + named + ", but no EGL device is CUDA " + std::to_string(id) +
+                            "; CUDA ordinals: " + inventory + ")";
             choice.devices.clear();
             return choice;
           }

@@ -147,8 +147,9 @@ OverlaySet ParseOverlays(const std::string& spec) {
     } else if (token == "all") {
       set = OverlaySet{true, true, true, true, true, true, true};
     } else {
-      const std::string suggestion = DidYouMean(
-          token, {"goal", "achieved", "hud", "action", "trail", "labels", "hindsight", "default", "none", "all"});
+      const std::string suggestion =
+          DidYouMean(token, {"goal", "achieved", "hud", "action", "trail", "labels", "hindsight",
+                             "default", "none", "all"});
       throw UsageError("overlay '" + token + "' in '" + spec + "' is not known" + suggestion +
                        "; " + kAcceptedOverlays);
     }
@@ -289,10 +290,14 @@ HudPosition ParseHudPosition(const std::string& text) {
 
 const char* HudPositionName(HudPosition position) {
   switch (position) {
-    case HudPosition::kTopLeft: return "top-left";
-    case HudPosition::kTopRight: return "top-right";
-    case HudPosition::kBottomLeft: return "bottom-left";
-    case HudPosition::kBottomRight: return "bottom-right";
+    case HudPosition::kTopLeft:
+      return "top-left";
+    case HudPosition::kTopRight:
+      return "top-right";
+    case HudPosition::kBottomLeft:
+      return "bottom-left";
+    case HudPosition::kBottomRight:
+      return "bottom-right";
   }
   return "top-left";
 }
@@ -397,7 +402,8 @@ bool DrawHud(uint8_t* rgb, int width, int height, const PixelRect& tile, const H
 }
 
 bool DrawTileLabel(uint8_t* rgb, int width, int height, const PixelRect& tile,
-                   const std::string& label, double opacity, const std::optional<PixelRect>& avoid) {
+                   const std::string& label, double opacity,
+                   const std::optional<PixelRect>& avoid) {
   const int pixels = FrameTextPixels(tile.width, tile.height);
   const TextMetrics m = FrameText(label, pixels);
   const int pad = std::max(2, pixels / 4);

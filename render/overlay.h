@@ -19,12 +19,12 @@ namespace fetchscope {
 /// red target0 sphere, moved to the goal as Gymnasium does) is part of the scene, not an
 /// overlay: it shows with every set, "none" included.
 struct OverlaySet {
-  bool goal = true;      ///< translucent shell of radius distance_threshold around the goal
-  bool achieved = true;  ///< achieved-goal marker (green on success, else orange) + line to goal
-  bool hud = true;       ///< text: title, step, reward, distance, success, action
-  bool action = false;   ///< arrow from the grip site along the commanded displacement
-  bool trail = false;    ///< polyline of recent achieved-goal positions
-  bool labels = true;    ///< tiled cameras: each tile labelled with its camera name
+  bool goal = true;        ///< translucent shell of radius distance_threshold around the goal
+  bool achieved = true;    ///< achieved-goal marker (green on success, else orange) + line to goal
+  bool hud = true;         ///< text: title, step, reward, distance, success, action
+  bool action = false;     ///< arrow from the grip site along the commanded displacement
+  bool trail = false;      ///< polyline of recent achieved-goal positions
+  bool labels = true;      ///< tiled cameras: each tile labelled with its camera name
   bool hindsight = false;  ///< goals HER's `future` strategy relabels this transition with
 };
 
@@ -41,7 +41,6 @@ const char* HudPositionName(HudPosition position);
 /// Checks --hud-opacity (0 = no box behind the text, 1 = opaque); throws UsageError naming
 /// the value and the accepted range when it is outside [0, 1] or not a number.
 double CheckHudOpacity(double opacity);
-
 
 /// Throws UsageError naming the bad token and listing the accepted ones.
 /// Parses --overlay: "default", "none", "all", or a comma list of
@@ -107,7 +106,7 @@ struct HindsightPin {
   bool success = false;          ///< relabelled reward counts as success: green, else red
 };
 inline constexpr double kHindsightPinDirection[3] = {0.5, 0.5, 0.70710678118654752};  ///< unit
-inline constexpr double kHindsightPinLength = 0.10;   ///< m from g' to the nearest bead
+inline constexpr double kHindsightPinLength = 0.10;     ///< m from g' to the nearest bead
 inline constexpr double kHindsightBeadRadius = 0.014;   ///< m
 inline constexpr double kHindsightBeadSpacing = 0.032;  ///< m between beads on one stem
 inline constexpr double kHindsightStemRadius = 0.0025;  ///< m

@@ -4,15 +4,15 @@
 #include <cctype>
 #include <chrono>
 #include <cmath>
+#include <cstddef>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
-#include <cstddef>
-#include <memory>
-#include <type_traits>
 #include <map>
+#include <memory>
 #include <set>
 #include <string>
+#include <type_traits>
 
 #include "src/errors.h"
 
@@ -107,12 +107,12 @@ std::string CameraLabel(const CameraSpec& spec) {
 // CIEDE2000, away from the black background; every prefix is spread out, the first 36 (all
 // the objects of a Fetch model) at least 15.9 apart, all 48 at least 14.1.
 constexpr uint32_t kSegmentationPalette[] = {
-    0xFFFF00, 0xFFAAFF, 0x00DDFF, 0xDD6600, 0x008833, 0x6600FF, 0xBB0044, 0x55FFBB, 0x2288FF,
-    0xFFDDCC, 0x665533, 0xAA9944, 0x887788, 0x006666, 0xFF6677, 0xEE00BB, 0x88AA99, 0x225588,
-    0xBBCCFF, 0x77CC11, 0x993300, 0xEEFFFF, 0x9977DD, 0xFFAA22, 0xDDDDAA, 0x883377, 0x0099AA,
-    0xAA7766, 0xCC99AA, 0xEE1122, 0x667766, 0xFF9977, 0x00BB77, 0xBBBBBB, 0x667700, 0x996600,
-    0x665555, 0x665599, 0x557788, 0x66BBFF, 0x00CCBB, 0xFFEEFF, 0xCCFF88, 0xBB6688, 0xCCAA88,
-    0xEECC55, 0xBBFFEE, 0x9999BB};
+    0xFFFF00, 0xFFAAFF, 0x00DDFF, 0xDD6600, 0x008833, 0x6600FF, 0xBB0044, 0x55FFBB,
+    0x2288FF, 0xFFDDCC, 0x665533, 0xAA9944, 0x887788, 0x006666, 0xFF6677, 0xEE00BB,
+    0x88AA99, 0x225588, 0xBBCCFF, 0x77CC11, 0x993300, 0xEEFFFF, 0x9977DD, 0xFFAA22,
+    0xDDDDAA, 0x883377, 0x0099AA, 0xAA7766, 0xCC99AA, 0xEE1122, 0x667766, 0xFF9977,
+    0x00BB77, 0xBBBBBB, 0x667700, 0x996600, 0x665555, 0x665599, 0x557788, 0x66BBFF,
+    0x00CCBB, 0xFFEEFF, 0xCCFF88, 0xBB6688, 0xCCAA88, 0xEECC55, 0xBBFFEE, 0x9999BB};
 
 }  // namespace
 
@@ -173,14 +173,39 @@ std::array<uint8_t, 3> SegmentationColor(int index) {
   const int up = lo + (v - lo) * f / 600, down = v - (v - lo) * f / 600;
   int r = v, g = lo, b = lo;
   switch (sector) {
-    case 0: r = v; g = up; b = lo; break;
-    case 1: r = down; g = v; b = lo; break;
-    case 2: r = lo; g = v; b = up; break;
-    case 3: r = lo; g = down; b = v; break;
-    case 4: r = up; g = lo; b = v; break;
-    default: r = v; g = lo; b = down; break;
+    case 0:
+      r = v;
+      g = up;
+      b = lo;
+      break;
+    case 1:
+      r = down;
+      g = v;
+      b = lo;
+      break;
+    case 2:
+      r = lo;
+      g = v;
+      b = up;
+      break;
+    case 3:
+      r = lo;
+      g = down;
+      b = v;
+      break;
+    case 4:
+      r = up;
+      g = lo;
+      b = v;
+      break;
+    default:
+      r = v;
+      g = lo;
+      b = down;
+      break;
   }
-  std::array<uint8_t, 3> c = {static_cast<uint8_t>(r), static_cast<uint8_t>(g), static_cast<uint8_t>(b)};
+  std::array<uint8_t, 3> c = {static_cast<uint8_t>(r), static_cast<uint8_t>(g),
+                              static_cast<uint8_t>(b)};
   if (c[0] == 0 && c[1] == 0 && c[2] == 0) c[2] = 1;  // black is the background
   return c;
 }
@@ -227,7 +252,8 @@ int Renderer::ResolveMsaa(int max_samples) {
     samples = requested;
     msaa_reason_ = "requested";
   }
-  if (max_samples > 0 && samples > max_samples) {  // a driver without 4x multisampling still renders
+  if (max_samples > 0 &&
+      samples > max_samples) {  // a driver without 4x multisampling still renders
     msaa_reason_ += "; " + std::to_string(samples) + " capped at the driver's maximum " +
                     std::to_string(max_samples);
     samples = max_samples;
@@ -245,7 +271,8 @@ Renderer::Renderer(GlContext& gl, mjModel* model, const RenderOptions& options)
   const int w = frame_.width, h = frame_.height;
   const int msaa = options_.msaa_samples;
   if (msaa != kMsaaAuto && msaa != kMsaaModel && msaa != 0 && !IsPowerOfTwoUpTo16(msaa)) {
-    throw UsageError("msaa " + std::to_string(msaa) + " is not accepted; use auto, 0, 1, 2, 4, 8 or " +
+    throw UsageError("msaa " + std::to_string(msaa) +
+                     " is not accepted; use auto, 0, 1, 2, 4, 8 or " +
                      std::to_string(kMaxMsaaSamples));
   }
   gl_.MakeCurrent();
@@ -315,9 +342,9 @@ Renderer::~Renderer() {
     std::fprintf(stderr,
                  "fetchscope profile: %ld frames %dx%d msaa %d on %s, ms/frame: scene %.2f, "
                  "submit %.2f, raster %.2f, readback %.2f, flip %.2f\n",
-                 p.frames, frame_.width, frame_.height, msaa_samples_,
-                 gl_.info().renderer.c_str(), p.scene_ms / n, p.submit_ms / n, p.raster_ms / n,
-                 p.readback_ms / n, p.flip_ms / n);
+                 p.frames, frame_.width, frame_.height, msaa_samples_, gl_.info().renderer.c_str(),
+                 p.scene_ms / n, p.submit_ms / n, p.raster_ms / n, p.readback_ms / n,
+                 p.flip_ms / n);
   }
   // mjr_freeContext deletes GL objects: our context must be the current one.
   try {
@@ -358,16 +385,15 @@ void Renderer::SetUpReadback() {
   gl->GenBuffers(kReadbackDepth, pbos_);
   for (unsigned pbo : pbos_) {
     gl->BindBuffer(kGlPixelPackBuffer, pbo);
-    gl->BufferData(kGlPixelPackBuffer,
-                   static_cast<std::ptrdiff_t>(gl->row_stride * frame_.height), nullptr,
-                   kGlStreamRead);
+    gl->BufferData(kGlPixelPackBuffer, static_cast<std::ptrdiff_t>(gl->row_stride * frame_.height),
+                   nullptr, kGlStreamRead);
   }
   gl->BindBuffer(kGlPixelPackBuffer, 0);
   pbo_gl_ = std::move(gl);
   async_ = true;
   readback_reason_ = std::string("async: ") +
-                     (mode == Readback::kAsync ? "requested" : "auto, hardware renderer") +
-                     ", " + std::to_string(kReadbackDepth) + " pixel buffers";
+                     (mode == Readback::kAsync ? "requested" : "auto, hardware renderer") + ", " +
+                     std::to_string(kReadbackDepth) + " pixel buffers";
 }
 
 void Renderer::StartAsyncRead(int slot) {
@@ -481,8 +507,7 @@ void Renderer::Draw(const mjData* data, const FrameInfo& info, bool overlays) {
         AddOverlayGeoms(options_.overlays, info, grip, trail_, !placed, scene);
         if (options_.extra_geoms) options_.extra_geoms(scene);
       } else if (!placed) {
-        AddOverlayGeoms(ParseOverlays("none"), info, {}, trail_, true,
-                        scene);
+        AddOverlayGeoms(ParseOverlays("none"), info, {}, trail_, true, scene);
       }
     } else {
       mjv_updateCamera(model_, readonly, &cameras_[i], scene);  // same geoms, next view
@@ -656,7 +681,8 @@ void Renderer::ColourSegments(std::vector<uint8_t>* rgb) {
     }
     SegmentObject& o = objects[index];
     ++o.pixels;
-    if (index < model_->nbody && geom_of_seg[id - 1] >= 0) seen_geoms[index].insert(geom_of_seg[id - 1]);
+    if (index < model_->nbody && geom_of_seg[id - 1] >= 0)
+      seen_geoms[index].insert(geom_of_seg[id - 1]);
     p[0] = o.color[0];
     p[1] = o.color[1];
     p[2] = o.color[2];

@@ -71,9 +71,9 @@ struct RenderOptions {
   std::vector<CameraSpec> cameras;  ///< tiled left to right (grid from 4 on); empty = default
   OverlaySet overlays;              ///< drawn by Render (not by the depth/segmentation layers)
   HudPosition hud_position = HudPosition::kTopLeft;  ///< corner of the frame the HUD sits in
-  double hud_opacity = 0.6;         ///< HUD and tile-label box: 0 = none .. 1 = opaque black
-  int msaa_samples = kMsaaModel;    ///< samples per pixel: 0 (off), 1, 2, 4, 8, 16, kMsaaModel
-                                    ///< or kMsaaAuto; capped at the driver's maximum
+  double hud_opacity = 0.6;             ///< HUD and tile-label box: 0 = none .. 1 = opaque black
+  int msaa_samples = kMsaaModel;        ///< samples per pixel: 0 (off), 1, 2, 4, 8, 16, kMsaaModel
+                                        ///< or kMsaaAuto; capped at the driver's maximum
   Readback readback = Readback::kAuto;  ///< how Submit/Collect read frames back
   /// Optional: adds more decor geoms after the overlays (the anatomy card's markers), in Render
   /// only; must stay within scene->maxgeom (kMaxOverlayGeoms are free when overlays are off).
@@ -103,8 +103,9 @@ class Renderer {
   /// frame size (hence the non-const model). Throws UsageError for a frame size that is not
   /// positive or exceeds the GL limits (the message gives the accepted range), for a camera
   /// the model lacks, or for an msaa_samples value not listed on RenderOptions; RunError when
-  /// MuJoCo cannot make its offscreen buffer. With FETCHSCOPE_PROFILE set in the environment, the destructor
-  /// prints a per-phase time breakdown to stderr (see README: "Where a frame's time goes").
+  /// MuJoCo cannot make its offscreen buffer. With FETCHSCOPE_PROFILE set in the environment, the
+  /// destructor prints a per-phase time breakdown to stderr (see README: "Where a frame's time
+  /// goes").
   Renderer(GlContext& gl, mjModel* model, const RenderOptions& options);
   ~Renderer();
   Renderer(const Renderer&) = delete;
@@ -157,7 +158,8 @@ class Renderer {
  private:
   // Per-phase wall time, summed over frames (FETCHSCOPE_PROFILE only).
   struct Profile {
-    Profile() {}  // user-provided: clang 14 rejects emplace() of a nested aggregate with initializers
+    Profile() {
+    }  // user-provided: clang 14 rejects emplace() of a nested aggregate with initializers
     long frames = 0;
     double scene_ms = 0;     // mjv_updateScene, goal marker and overlay geoms
     double submit_ms = 0;    // mjr_render and mjr_overlay calls (GL command submission)

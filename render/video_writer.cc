@@ -235,7 +235,9 @@ struct VideoWriter::Impl {
   Impl(const std::string& path, const VideoOptions& options);
   // Options and sizes only, no file: for ProbeEncoder.
   explicit Impl(const VideoOptions& opts)
-      : options(opts), encoded_width((opts.width + 1) & ~1), encoded_height((opts.height + 1) & ~1) {
+      : options(opts),
+        encoded_width((opts.width + 1) & ~1),
+        encoded_height((opts.height + 1) & ~1) {
     if (options.preset.empty()) options.preset = kDefaultVideoPreset;
   }
   // Opens options.codec for options' size and closes it again; throws RunError with FFmpeg's
@@ -535,8 +537,7 @@ void VideoWriter::Impl::SendFrame(const AVFrame* input) {
     ++frames_encoded;
     // Takes the packet's reference and leaves it blank for the next one.
     if (int write_rc = av_interleaved_write_frame(muxer.get(), packet.get()); write_rc < 0) {
-      throw RunError("cannot write video " + Quoted(final_path) + ": " +
-                     DescribeAvError(write_rc));
+      throw RunError("cannot write video " + Quoted(final_path) + ": " + DescribeAvError(write_rc));
     }
   }
 }
@@ -553,12 +554,10 @@ void VideoWriter::Impl::Finish() {
   SendFrame(nullptr);
   ClearLastAvError();
   if (int rc = av_write_trailer(muxer.get()); rc < 0) {
-    throw RunError("cannot finish video " + Quoted(final_path) + ": " +
-                   DescribeAvError(rc));
+    throw RunError("cannot finish video " + Quoted(final_path) + ": " + DescribeAvError(rc));
   }
   if (int rc = avio_closep(&muxer->pb); rc < 0) {
-    throw RunError("cannot close video " + Quoted(final_path) + ": " +
-                   DescribeAvError(rc));
+    throw RunError("cannot close video " + Quoted(final_path) + ": " + DescribeAvError(rc));
   }
   if (gif && !options.metadata.empty()) {
     InsertGifComment(temporary.path(), GifComment(options.metadata));

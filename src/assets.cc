@@ -101,7 +101,8 @@ AssetSource ResolveAssets(const std::string& spec) {
       return FromDir(env, "--assets auto: $FETCHSCOPE_ASSETS");
     }
     std::string installed = FindInstalledGymnasiumRobotics();
-    if (!installed.empty()) return FromDir(installed, "--assets auto: installed gymnasium_robotics");
+    if (!installed.empty())
+      return FromDir(installed, "--assets auto: installed gymnasium_robotics");
     return Bundled("--assets auto: bundled (no $FETCHSCOPE_ASSETS, no gymnasium_robotics found)");
   }
   return FromDir(spec, "--assets " + spec);

@@ -47,8 +47,8 @@ std::string TempPathFor(const std::string& final_path);
 void CommitTempFile(const std::string& temp_path, const std::string& final_path);
 
 /// A file being written atomically. The constructor creates missing parent folders (see
-/// ParentFolders; removed again if the file is never committed) and the temporary file; Commit() checks
-/// every write succeeded and renames it to the final path; destruction without Commit() (an
+/// ParentFolders; removed again if the file is never committed) and the temporary file; Commit()
+/// checks every write succeeded and renames it to the final path; destruction without Commit() (an
 /// error, an interrupt) removes the temporary. Not thread-safe; movable, not copyable.
 class AtomicFile {
  public:
@@ -83,7 +83,7 @@ class AtomicFile {
   void Discard() noexcept;
 
   std::string final_path_;
-  ParentFolders parents_;      // created before the temporary, removed after it if not committed
+  ParentFolders parents_;  // created before the temporary, removed after it if not committed
   std::string temp_path_;
   std::FILE* file_ = nullptr;  // open until Commit() or destruction
   bool pending_ = false;       // the temporary exists and is ours to remove

@@ -68,8 +68,8 @@ const EnvSpec& FindEnvSpec(const std::string& id) {
     valid += (valid.empty() ? "" : ", ") + s.id;
     names.push_back(s.id);
   }
-  throw UsageError("unknown env id '" + id + "'" + DidYouMean(id, names) + ": use one of " +
-                   valid + " (or auto)");
+  throw UsageError("unknown env id '" + id + "'" + DidYouMean(id, names) + ": use one of " + valid +
+                   " (or auto)");
 }
 
 std::string TaskName(Task task) {

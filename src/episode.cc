@@ -39,7 +39,9 @@ EpisodeRecord RunEpisode(FetchEnv& env, Policy& policy, int index, std::optional
 }
 
 nlohmann::json AssetsJson(const AssetSource& assets) {
-  return {{"kind", assets.kind}, {"path", assets.root}, {"sha256", assets.sha256},
+  return {{"kind", assets.kind},
+          {"path", assets.root},
+          {"sha256", assets.sha256},
           {"origin", assets.origin}};
 }
 

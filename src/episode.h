@@ -4,11 +4,10 @@
 #include <array>
 #include <cstdint>
 #include <functional>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "src/fetch_env.h"
 #include "src/policy.h"
@@ -17,11 +16,11 @@ namespace fetchscope {
 
 /// One row of a trajectory: t = 0 is the reset observation.
 struct StepRecord {
-  int t = 0;                                   ///< steps since reset
-  Observation obs;                             ///< observation after this step
-  std::optional<Action> action;                ///< what the policy gave (none at t = 0)
-  std::optional<double> reward;                ///< none at t = 0
-  bool is_success = false;                     ///< distance < threshold
+  int t = 0;                     ///< steps since reset
+  Observation obs;               ///< observation after this step
+  std::optional<Action> action;  ///< what the policy gave (none at t = 0)
+  std::optional<double> reward;  ///< none at t = 0
+  bool is_success = false;       ///< distance < threshold
 };
 
 /// A whole episode.

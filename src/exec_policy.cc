@@ -13,9 +13,8 @@
 #include <cstdlib>
 #include <cstring>
 #include <functional>
-#include <vector>
-
 #include <nlohmann/json.hpp>
+#include <vector>
 
 #include "src/errors.h"
 #include "src/json_util.h"
@@ -49,7 +48,8 @@ std::vector<std::string> ChildEnvironment() {
     }
     env.push_back(entry);
   }
-  if (caller && std::string(caller) != "__unset__") env.push_back("LD_LIBRARY_PATH=" + std::string(caller));
+  if (caller && std::string(caller) != "__unset__")
+    env.push_back("LD_LIBRARY_PATH=" + std::string(caller));
   return env;
 }
 
@@ -60,7 +60,8 @@ class ExecPolicy : public Policy {
   // with the thread that made it (PR_SET_PDEATHSIG: the creating thread, which owns this policy
   // and lives as long as it), so no child outlives its worker.
   ExecPolicy(std::string command, double timeout_s, std::function<bool()> stop_requested)
-      : command_(std::move(command)), timeout_s_(timeout_s),
+      : command_(std::move(command)),
+        timeout_s_(timeout_s),
         stop_requested_(std::move(stop_requested)) {
     int to_child[2], from_child[2];
     if (pipe2(to_child, O_CLOEXEC) != 0 || pipe2(from_child, O_CLOEXEC) != 0) {
@@ -133,7 +134,8 @@ class ExecPolicy : public Policy {
     } catch (const RunError& e) {
       // the usual cause: a print() or a library's log line on stdout, which is the protocol's
       throw RunError("exec policy '" + command_ + "' at step " + std::to_string(t) + ": " +
-                     e.what() + "; its stdout must carry only the action lines: send logs and "
+                     e.what() +
+                     "; its stdout must carry only the action lines: send logs and "
                      "prints to stderr (Python: print(..., file=sys.stderr))");
     }
   }
@@ -163,7 +165,8 @@ class ExecPolicy : public Policy {
   }
 
   std::string ReadLine(int t) {
-    const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s_);
+    const auto deadline =
+        std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s_);
     while (true) {
       size_t nl = buffer_.find('\n');
       if (nl != std::string::npos) {
@@ -177,10 +180,12 @@ class ExecPolicy : public Policy {
                        ": answer longer than 64 KiB without a newline");
       }
       const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
-                            deadline - std::chrono::steady_clock::now()).count();
+                            deadline - std::chrono::steady_clock::now())
+                            .count();
       if (left <= 0) {
-        throw RunError("exec policy '" + command_ + "' gave no answer for step " + std::to_string(t) +
-                       " within " + JsonDouble(timeout_s_).dump() + " s (raise --exec-timeout)");
+        throw RunError("exec policy '" + command_ + "' gave no answer for step " +
+                       std::to_string(t) + " within " + JsonDouble(timeout_s_).dump() +
+                       " s (raise --exec-timeout)");
       }
       pollfd p{out_, POLLIN, 0};
       int r = poll(&p, 1, static_cast<int>(std::min<long long>(left, 1000)));
@@ -210,7 +215,8 @@ std::array<double, 4> ParseActionLine(const std::string& line) {
   if (first != std::string::npos && s[first] == '[') {
     nlohmann::json j = nlohmann::json::parse(s, nullptr, false);
     if (j.is_discarded() || !j.is_array()) {
-      throw RunError("answer '" + Shorten(line) + "' is not a valid JSON array: expected 4 numbers");
+      throw RunError("answer '" + Shorten(line) +
+                     "' is not a valid JSON array: expected 4 numbers");
     }
     if (j.size() != 4) {
       throw RunError("answer '" + Shorten(line) + "' has " + std::to_string(j.size()) +
@@ -218,11 +224,14 @@ std::array<double, 4> ParseActionLine(const std::string& line) {
     }
     std::array<double, 4> a;
     for (int i = 0; i < 4; ++i) {
-      if (!j[i].is_number()) throw RunError("answer '" + Shorten(line) + "': value " + std::to_string(i) + " is not a number");
+      if (!j[i].is_number())
+        throw RunError("answer '" + Shorten(line) + "': value " + std::to_string(i) +
+                       " is not a number");
       a[i] = j[i].get<double>();
     }
     for (double v : a) {
-      if (!std::isfinite(v)) throw RunError("answer '" + Shorten(line) + "' holds a non-finite value");
+      if (!std::isfinite(v))
+        throw RunError("answer '" + Shorten(line) + "' holds a non-finite value");
     }
     return a;
   }
@@ -242,7 +251,8 @@ std::array<double, 4> ParseActionLine(const std::string& line) {
       throw RunError("answer '" + Shorten(line) +
                      "' is not 4 numbers separated by spaces or commas (or a JSON array)");
     }
-    if (!std::isfinite(v)) throw RunError("answer '" + Shorten(line) + "' holds a non-finite value");
+    if (!std::isfinite(v))
+      throw RunError("answer '" + Shorten(line) + "' holds a non-finite value");
     if (count < 4) a[count] = v;
     ++count;
     p = end;

@@ -1,6 +1,7 @@
 // exec:CMD — a child process is the policy. Protocol, one JSON line each way per step:
-//   fetchscope → child stdin:  {"t":0,"observation":[...],"achieved_goal":[...],"desired_goal":[...]}
-//   child stdout → fetchscope: 4 numbers separated by spaces or commas, or a JSON array of 4.
+//   fetchscope → child stdin:
+//   {"t":0,"observation":[...],"achieved_goal":[...],"desired_goal":[...]} child stdout →
+//   fetchscope: 4 numbers separated by spaces or commas, or a JSON array of 4.
 #pragma once
 
 #include <array>

@@ -89,7 +89,8 @@ void FetchEnv::Setup() {
   grip_site_ = RequireId(m, mjOBJ_SITE, "robot0:grip", model_path_);
   gripper_body_ = RequireId(m, mjOBJ_BODY, "robot0:gripper_link", model_path_);
   mocap_id_ = m->body_mocapid[RequireId(m, mjOBJ_BODY, "robot0:mocap", model_path_)];
-  if (mocap_id_ < 0) throw RunError("model '" + model_path_ + "': robot0:mocap is not a mocap body");
+  if (mocap_id_ < 0)
+    throw RunError("model '" + model_path_ + "': robot0:mocap is not a mocap body");
   const int l_joint = RequireId(m, mjOBJ_JOINT, "robot0:l_gripper_finger_joint", model_path_);
   const int r_joint = RequireId(m, mjOBJ_JOINT, "robot0:r_gripper_finger_joint", model_path_);
   l_finger_qpos_ = m->jnt_qposadr[l_joint];
@@ -238,7 +239,8 @@ StepResult FetchEnv::Step(const Action& action) {
   return result;
 }
 
-double FetchEnv::ComputeReward(const std::array<double, 3>& a, const std::array<double, 3>& b) const {
+double FetchEnv::ComputeReward(const std::array<double, 3>& a,
+                               const std::array<double, 3>& b) const {
   const double dist = GoalDistance(a, b);
   if (spec_.dense) return -dist;
   return dist > spec_.distance_threshold ? -1.0 : -0.0;

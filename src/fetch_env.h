@@ -28,11 +28,11 @@ struct Observation {
 
 /// What step() returns (terminated is always false for Fetch).
 struct StepResult {
-  Observation obs;                      ///< observation after the step
-  double reward = 0;                    ///< sparse: -1.0 or -0.0; dense: -distance
-  bool is_success = false;              ///< distance < threshold
-  bool truncated = false;               ///< TimeLimit: elapsed steps reached max_episode_steps
-  std::array<double, 4> applied{};      ///< the action after clipping, as promoted to double
+  Observation obs;                  ///< observation after the step
+  double reward = 0;                ///< sparse: -1.0 or -0.0; dense: -distance
+  bool is_success = false;          ///< distance < threshold
+  bool truncated = false;           ///< TimeLimit: elapsed steps reached max_episode_steps
+  std::array<double, 4> applied{};  ///< the action after clipping, as promoted to double
 };
 
 /// A Fetch environment. Not copyable; one per thread.
@@ -54,24 +54,23 @@ class FetchEnv {
   double ComputeReward(const std::array<double, 3>& achieved,
                        const std::array<double, 3>& desired) const;
   /// _is_success: distance < threshold.
-  bool IsSuccess(const std::array<double, 3>& achieved,
-                 const std::array<double, 3>& desired) const;
+  bool IsSuccess(const std::array<double, 3>& achieved, const std::array<double, 3>& desired) const;
 
   /// The current observation (no simulation work).
   Observation Observe() const;
 
-  const EnvSpec& spec() const { return spec_; }                 ///< the registered id
-  const AssetSource& assets() const { return assets_; }         ///< where the model came from
-  std::string model_path() const { return model_path_; }        ///< the MJCF file loaded
-  mjModel* model() const { return model_.get(); }               ///< the compiled model
-  mjData* data() const { return data_.get(); }                  ///< the live state
-  const std::array<double, 3>& goal() const { return goal_; }   ///< current goal, m
-  int elapsed_steps() const { return elapsed_steps_; }          ///< steps since reset
+  const EnvSpec& spec() const { return spec_; }                ///< the registered id
+  const AssetSource& assets() const { return assets_; }        ///< where the model came from
+  std::string model_path() const { return model_path_; }       ///< the MJCF file loaded
+  mjModel* model() const { return model_.get(); }              ///< the compiled model
+  mjData* data() const { return data_.get(); }                 ///< the live state
+  const std::array<double, 3>& goal() const { return goal_; }  ///< current goal, m
+  int elapsed_steps() const { return elapsed_steps_; }         ///< steps since reset
   double dt() const { return model_->opt.timestep * spec_.n_substeps; }  ///< s per env step
   const std::array<double, 3>& initial_gripper_xpos() const { return initial_gripper_xpos_; }
-  double height_offset() const { return height_offset_; }       ///< object z after settling
-  int grip_site() const { return grip_site_; }                  ///< site id of robot0:grip
-  int gripper_body() const { return gripper_body_; }            ///< body id of robot0:gripper_link
+  double height_offset() const { return height_offset_; }  ///< object z after settling
+  int grip_site() const { return grip_site_; }             ///< site id of robot0:grip
+  int gripper_body() const { return gripper_body_; }       ///< body id of robot0:gripper_link
 
  private:
   void Setup();

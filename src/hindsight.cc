@@ -23,7 +23,8 @@ HindsightEpisode SampleHindsight(
     const std::vector<std::array<double, 3>>& achieved, const std::array<double, 3>& desired,
     uint64_t seed, int k,
     const std::function<double(const std::array<double, 3>&, const std::array<double, 3>&)>& reward,
-    const std::function<bool(const std::array<double, 3>&, const std::array<double, 3>&)>& success) {
+    const std::function<bool(const std::array<double, 3>&, const std::array<double, 3>&)>&
+        success) {
   HindsightEpisode out;
   const int T = static_cast<int>(achieved.size()) - 1;
   if (T <= 0) return out;

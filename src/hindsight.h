@@ -15,10 +15,10 @@ inline constexpr int kHindsightK = 4;
 
 /// One relabelled goal of a transition.
 struct HindsightGoal {
-  int future = 0;                 ///< the step whose achieved goal it is, in [t + 1, T]
-  std::array<double, 3> goal{};   ///< achieved_goal at `future`
-  double reward = 0;              ///< compute_reward(achieved_goal_{t+1}, goal)
-  bool success = false;           ///< distance(achieved_goal_{t+1}, goal) < threshold
+  int future = 0;                ///< the step whose achieved goal it is, in [t + 1, T]
+  std::array<double, 3> goal{};  ///< achieved_goal at `future`
+  double reward = 0;             ///< compute_reward(achieved_goal_{t+1}, goal)
+  bool success = false;          ///< distance(achieved_goal_{t+1}, goal) < threshold
 };
 
 /// The relabelling of one episode.

@@ -1,13 +1,13 @@
 #include "src/policy.h"
 
+#include <map>
+
 #include "src/errors.h"
+#include "src/exec_policy.h"
 #include "src/replay_file.h"
 #include "src/rng.h"
 #include "src/scripted_policy.h"
-#include "src/exec_policy.h"
 #include "src/trajectory_replay.h"
-
-#include <map>
 
 namespace fetchscope {
 namespace {
@@ -84,7 +84,8 @@ std::string IndexList(const std::map<int, TrajectoryEpisode>& episodes) {
 }
 
 std::unique_ptr<Policy> MakeTrajectoryReplay(const std::string& spec, const std::string& path,
-                                             TrajectoryReplay replay, const PolicyContext& context) {
+                                             TrajectoryReplay replay,
+                                             const PolicyContext& context) {
   if (!context.replay_dtype.empty()) {
     for (const auto& [k, e] : replay.episodes) {
       if (e.dtype != "none" && e.dtype != context.replay_dtype) {
@@ -122,7 +123,8 @@ std::unique_ptr<Policy> MakeTrajectoryReplay(const std::string& spec, const std:
 
 // --replay-dtype on rows read from a file: float32 rounds CSV/JSON-lines values to float32;
 // a .npy carries its dtype.
-void ApplyReplayDtype(std::vector<Action>* rows, const std::string& dtype, const std::string& path) {
+void ApplyReplayDtype(std::vector<Action>* rows, const std::string& dtype,
+                      const std::string& path) {
   if (dtype.empty()) return;
   if (dtype != "float32" && dtype != "float64") {
     throw UsageError("--replay-dtype '" + dtype + "' is not known; accepted: float32, float64");
@@ -167,7 +169,8 @@ std::unique_ptr<Policy> MakePolicy(const std::string& spec, const EnvSpec& env,
                        "' is not known; accepted: float32, float64");
     }
     if (spec.rfind("replay:", 0) != 0) {
-      throw UsageError("--replay-dtype applies to --policy replay:FILE only, not to '" + spec + "'");
+      throw UsageError("--replay-dtype applies to --policy replay:FILE only, not to '" + spec +
+                       "'");
     }
   }
   if (spec == "random") return std::make_unique<RandomPolicy>(context.seed);
@@ -193,7 +196,8 @@ std::unique_ptr<Policy> MakePolicy(const std::string& spec, const EnvSpec& env,
   }
   if (spec.rfind("exec:", 0) == 0) {
     const std::string command = spec.substr(5);
-    if (command.empty()) throw UsageError("--policy exec: needs a command, e.g. exec:'python3 my_policy.py'");
+    if (command.empty())
+      throw UsageError("--policy exec: needs a command, e.g. exec:'python3 my_policy.py'");
     return MakeExecPolicy(command, context.exec_timeout_s, context.stop_requested);
   }
 

@@ -94,7 +94,8 @@ class ScriptedPush : public Policy {
         released_ = true;
         return Toward(grip, grip, 0.0);
       }
-      const double speed = std::clamp(std::sqrt(2 * kSlideFriction * 9.81 * dist) / (kStep / kDt) * 1.3, 0.3, 1.0);
+      const double speed =
+          std::clamp(std::sqrt(2 * kSlideFriction * 9.81 * dist) / (kStep / kDt) * 1.3, 0.3, 1.0);
       Action a;
       a.value = {dir[0] * speed, dir[1] * speed, (table_z - 0.01 - grip[2]) / kStep, 0.0};
       return a;
@@ -145,7 +146,8 @@ class ScriptedPickAndPlace : public Policy {
         [[fallthrough]];
       }
       case kClose:
-        if (close_steps_++ < 4) return Toward(grip, {object[0], object[1], object[2] - 0.005}, -1.0);
+        if (close_steps_++ < 4)
+          return Toward(grip, {object[0], object[1], object[2] - 0.005}, -1.0);
         phase_ = kCarry;
         [[fallthrough]];
       case kCarry: {

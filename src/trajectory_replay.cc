@@ -3,9 +3,8 @@
 #include <cctype>
 #include <cmath>
 #include <fstream>
-#include <sstream>
-
 #include <nlohmann/json.hpp>
+#include <sstream>
 
 #include "src/errors.h"
 
@@ -38,8 +37,10 @@ TrajectoryReplay ParseTrajectoryReplay(const std::string& text, const std::strin
     Bad(name, "", "not a trajectory JSON (an object with an \"episodes\" list)");
   }
   TrajectoryReplay replay;
-  if (j.contains("env_id") && j["env_id"].is_string()) replay.env_id = j["env_id"].get<std::string>();
-  if (j.contains("seed") && j["seed"].is_number_unsigned()) replay.seed = std::to_string(j["seed"].get<uint64_t>());
+  if (j.contains("env_id") && j["env_id"].is_string())
+    replay.env_id = j["env_id"].get<std::string>();
+  if (j.contains("seed") && j["seed"].is_number_unsigned())
+    replay.seed = std::to_string(j["seed"].get<uint64_t>());
   if (j["episodes"].empty()) Bad(name, "", "holds no episodes");
   for (size_t i = 0; i < j["episodes"].size(); ++i) {
     const nlohmann::json& e = j["episodes"][i];
@@ -61,20 +62,22 @@ TrajectoryReplay ParseTrajectoryReplay(const std::string& text, const std::strin
     const nlohmann::json& steps = e["steps"];
     for (size_t t = 1; t < steps.size(); ++t) {
       const std::string at = where + " step " + std::to_string(t);
-      const nlohmann::json* action = steps[t].is_object() && steps[t].contains("action")
-                                         ? &steps[t]["action"] : nullptr;
+      const nlohmann::json* action =
+          steps[t].is_object() && steps[t].contains("action") ? &steps[t]["action"] : nullptr;
       if (!action || !action->is_array() || action->size() != 4) {
         Bad(name, at, "has no \"action\" of 4 numbers");
       }
       Action a;
       a.is_float32 = episode.dtype == "float32";
       for (size_t c = 0; c < 4; ++c) {
-        if (!(*action)[c].is_number()) Bad(name, at, "action value " + (*action)[c].dump() + " is not a number");
+        if (!(*action)[c].is_number())
+          Bad(name, at, "action value " + (*action)[c].dump() + " is not a number");
         const double v = (*action)[c].get<double>();
         if (!std::isfinite(v)) Bad(name, at, "action value is not finite");
         if (a.is_float32 && static_cast<double>(static_cast<float>(v)) != v) {
-          Bad(name, at, "action value " + (*action)[c].dump() +
-                            " is not a float32 number although action_dtype is float32");
+          Bad(name, at,
+              "action value " + (*action)[c].dump() +
+                  " is not a float32 number although action_dtype is float32");
         }
         a.value[c] = v;
       }

@@ -1,11 +1,10 @@
 // AtomicFile: outputs appear whole on Commit() and never half-written.
 #include "src/atomic_file.h"
 
+#include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/resource.h>
 #include <unistd.h>
-
-#include <gtest/gtest.h>
 
 #include <cstdlib>
 #include <functional>

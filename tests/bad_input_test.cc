@@ -71,20 +71,19 @@ std::string Unprivileged() {
 }
 
 struct Case {
-  const char* name;   // test name suffix
-  std::string args;   // after the binary; {tmp}: the case's temp folder, {src}: the sources
-  int exit_code;      // 2 usage, 1 run time
-  std::string needle; // the message must name this (the bad value); {tmp} expanded
-  std::vector<std::string> absent = {};  // final names under {tmp} that must not exist
+  const char* name;    // test name suffix
+  std::string args;    // after the binary; {tmp}: the case's temp folder, {src}: the sources
+  int exit_code;       // 2 usage, 1 run time
+  std::string needle;  // the message must name this (the bad value); {tmp} expanded
+  std::vector<std::string> absent = {};             // final names under {tmp} that must not exist
   std::function<bool(const fs::path&)> setup = {};  // prepares {tmp}; false: skip (no assets)
-  std::string prefix = {};  // shell text before the binary (ulimit, setpriv)
+  std::string prefix = {};     // shell text before the binary (ulimit, setpriv)
   const char* skip = nullptr;  // non-null: a known bug in another engineer's file, see reason
 };
 
 std::string Expand(std::string s, const fs::path& tmp) {
-  const std::pair<std::string, std::string> vars[] = {
-      {"{tmp}", tmp.string()},
-      {"{src}", testing::SourceDir().string()}};
+  const std::pair<std::string, std::string> vars[] = {{"{tmp}", tmp.string()},
+                                                      {"{src}", testing::SourceDir().string()}};
   for (const auto& [key, value] : vars) {
     for (size_t p = s.find(key); p != std::string::npos; p = s.find(key, p + value.size())) {
       s.replace(p, key.size(), value);
@@ -95,14 +94,16 @@ std::string Expand(std::string s, const fs::path& tmp) {
 
 // Files a record run would write for episode 0.
 const std::vector<std::string> kRecordOutputs = {
-    "out/episode_000.mp4",  "out/episode_000.webm", "out/episode_000.gif",
-    "out/episode_000_sheet.png", "out/episode_000.json", "out/manifest.json",
+    "out/episode_000.mp4",  "out/episode_000.webm",
+    "out/episode_000.gif",  "out/episode_000_sheet.png",
+    "out/episode_000.json", "out/manifest.json",
     "out/index.html"};
 
 // A minimal record manifest for `report` and `compare` rows.
 std::string Manifest(const std::string& env, const std::string& episodes) {
   return R"({"env_id": ")" + env + R"(", "seed": 0, "steps_per_episode": 3, "episodes_requested": 1,
-             "episodes": )" + episodes + "}";
+             "episodes": )" +
+         episodes + "}";
 }
 
 const char kSmall[] = " --width 64 --height 48 --steps 3 ";
@@ -132,10 +133,11 @@ std::vector<Case> Matrix() {
   };
   const std::string rollout = "rollout --env-id FetchReach-v4 --steps 50 --json-out {tmp}/r.json ";
   const std::vector<std::string> rollout_out = {"r.json"};
-  const std::string record_long = "record --env-id FetchReach-v4 --quiet --width 64 --height 48 "
-                                  "--steps 10 --out {tmp}/out ";
-  const std::string record = std::string("record --env-id FetchReach-v4 --quiet") + kSmall +
-                             "--out {tmp}/out ";
+  const std::string record_long =
+      "record --env-id FetchReach-v4 --quiet --width 64 --height 48 "
+      "--steps 10 --out {tmp}/out ";
+  const std::string record =
+      std::string("record --env-id FetchReach-v4 --quiet") + kSmall + "--out {tmp}/out ";
   return {
       // ---- unknown subcommands, ids and names
       {"UnknownSubcommand", "frobnicate", 2, "frobnicate"},
@@ -150,18 +152,36 @@ std::vector<Case> Matrix() {
       {"MisspeltCommand", "reward-chek", 2, "did you mean 'reward-check'?"},
       {"DescribeMisspeltEnv", "describe --env-id FetchRech-v4", 2,
        "'FetchRech-v4' (did you mean 'FetchReach-v4'?)"},
-      {"RenderMisspeltCamera", "render --camera 'default, trak' -o {tmp}/f.png", 2,
-       "'trak' is not known (did you mean 'track'?)", {"f.png"}},
-      {"RenderMisspeltModelCamera", "render --camera head_camera_rbg -o {tmp}/f.png", 2,
-       "did you mean 'head_camera_rgb'?", {"f.png"}},
-      {"RenderMisspeltOverlay", "render --overlay 'goal, hdu' -o {tmp}/f.png", 2,
-       "'hdu' in 'goal, hdu' is not known (did you mean 'hud'?)", {"f.png"}},
-      {"RenderMisspeltLayer", "render --layers 'rgb, dpeth' -o {tmp}/f.png", 2,
-       "'dpeth' (did you mean 'depth'?)", {"f.png"}},
-      {"RenderEmptyOverlayItem", "render --overlay 'goal, ' -o {tmp}/f.png", 2, "overlay ''",
+      {"RenderMisspeltCamera",
+       "render --camera 'default, trak' -o {tmp}/f.png",
+       2,
+       "'trak' is not known (did you mean 'track'?)",
+       {"f.png"}},
+      {"RenderMisspeltModelCamera",
+       "render --camera head_camera_rbg -o {tmp}/f.png",
+       2,
+       "did you mean 'head_camera_rgb'?",
+       {"f.png"}},
+      {"RenderMisspeltOverlay",
+       "render --overlay 'goal, hdu' -o {tmp}/f.png",
+       2,
+       "'hdu' in 'goal, hdu' is not known (did you mean 'hud'?)",
+       {"f.png"}},
+      {"RenderMisspeltLayer",
+       "render --layers 'rgb, dpeth' -o {tmp}/f.png",
+       2,
+       "'dpeth' (did you mean 'depth'?)",
+       {"f.png"}},
+      {"RenderEmptyOverlayItem",
+       "render --overlay 'goal, ' -o {tmp}/f.png",
+       2,
+       "overlay ''",
        {"f.png"}},
       // ---- anatomy: bad input is refused before any file or folder appears
-      {"AnatomyUnknownEnv", "anatomy --env-id FetchFoo-v4 --out {tmp}/results", 2, "FetchFoo-v4",
+      {"AnatomyUnknownEnv",
+       "anatomy --env-id FetchFoo-v4 --out {tmp}/results",
+       2,
+       "FetchFoo-v4",
        {"results"}},
       {"AnatomyBadSeed", "anatomy --seed -1 --out {tmp}/results", 2, "-1", {"results"}},
       {"AnatomyBadMsaa", "anatomy --msaa 3 --out {tmp}/results", 2, "3", {"results"}},
@@ -170,17 +190,37 @@ std::vector<Case> Matrix() {
       {"RolloutEmptyExec", "rollout --policy exec:", 2, "exec"},
       {"RolloutEmptyReplay", "rollout --policy replay:", 2, "replay"},
       {"RenderUnknownBackend", "render --backend vulkan -o {tmp}/f.png", 2, "vulkan", {"f.png"}},
-      {"RenderUnknownCamera", "render --camera nosuchcam -o {tmp}/f.png", 2, "nosuchcam", {"f.png"}},
-      {"RenderFreeCameraBadNumber", "render --camera free:distance=abc -o {tmp}/f.png", 2, "abc",
+      {"RenderUnknownCamera",
+       "render --camera nosuchcam -o {tmp}/f.png",
+       2,
+       "nosuchcam",
        {"f.png"}},
-      {"RenderFreeCameraUnknownKey", "render --camera free:zoom=3 -o {tmp}/f.png", 2, "zoom",
+      {"RenderFreeCameraBadNumber",
+       "render --camera free:distance=abc -o {tmp}/f.png",
+       2,
+       "abc",
        {"f.png"}},
-      {"RenderFreeCameraShortLookat", "render --camera free:lookat=1,2 -o {tmp}/f.png", 2,
-       "lookat", {"f.png"}},
-      {"RenderFreeCameraNaN", "render --camera free:distance=nan -o {tmp}/f.png", 2, "nan",
+      {"RenderFreeCameraUnknownKey",
+       "render --camera free:zoom=3 -o {tmp}/f.png",
+       2,
+       "zoom",
+       {"f.png"}},
+      {"RenderFreeCameraShortLookat",
+       "render --camera free:lookat=1,2 -o {tmp}/f.png",
+       2,
+       "lookat",
+       {"f.png"}},
+      {"RenderFreeCameraNaN",
+       "render --camera free:distance=nan -o {tmp}/f.png",
+       2,
+       "nan",
        {"f.png"}},
       {"RenderEmptyCamera", "render --camera '' -o {tmp}/f.png", 2, "camera", {"f.png"}},
-      {"RenderUnknownOverlay", "render --overlay sparkles -o {tmp}/f.png", 2, "sparkles", {"f.png"}},
+      {"RenderUnknownOverlay",
+       "render --overlay sparkles -o {tmp}/f.png",
+       2,
+       "sparkles",
+       {"f.png"}},
       {"RenderUnknownLayer", "render --layers rgb,heat -o {tmp}/f.png", 2, "heat", {"f.png"}},
       {"RenderBadMsaa", "render --msaa 3 -o {tmp}/f.png", 2, "3", {"f.png"}},
       {"RenderNoOutput", "render", 2, "--output"},
@@ -195,8 +235,13 @@ std::vector<Case> Matrix() {
       {"RecordGifFpsText", record + "--format gif --gif-fps ten", 2, "ten", kRecordOutputs},
       {"RecordGifWidthTooSmall", record + "--format gif --gif-width 4", 2, "GIF width 4",
        kRecordOutputs},
-      {"RecordFontMissing", record, 1, "FETCHSCOPE_FONT='/nonexistent/fetchscope-font.ttf'",
-       kRecordOutputs, {}, "FETCHSCOPE_FONT=/nonexistent/fetchscope-font.ttf "},
+      {"RecordFontMissing",
+       record,
+       1,
+       "FETCHSCOPE_FONT='/nonexistent/fetchscope-font.ttf'",
+       kRecordOutputs,
+       {},
+       "FETCHSCOPE_FONT=/nonexistent/fetchscope-font.ttf "},
       {"RecordGifWidthTooLarge", record + "--format webm --gif-width 9000", 2, "GIF width 9000",
        kRecordOutputs},
       {"GoldenUnknownSubcommand", "golden frob", 2, "frob"},
@@ -205,42 +250,75 @@ std::vector<Case> Matrix() {
       {"GoldenUpdateMissingFolder", "golden update --golden-dir {tmp}/nowhere", 2, "{tmp}/nowhere"},
       {"GoldenUnknownScene",
        "golden check --golden-dir {src}/golden --only nosuchscene --out {tmp}/g", 2, "nosuchscene"},
-      {"GoldenMalformedManifest", "golden check --golden-dir {tmp}/gd --out {tmp}/g", 1,
-       "manifest.json", {}, file("gd/manifest.json", "{\"scenes\": [")},
+      {"GoldenMalformedManifest",
+       "golden check --golden-dir {tmp}/gd --out {tmp}/g",
+       1,
+       "manifest.json",
+       {},
+       file("gd/manifest.json", "{\"scenes\": [")},
       {"MergeNoFolder", "merge-manifests", 2, "DIR"},
       // ---- report and compare
       {"ReportNoFolder", "report", 2, "DIR"},
       {"ReportMissingFolder", "report {tmp}/nowhere", 2, "{tmp}/nowhere", {"nowhere/index.html"}},
       {"ReportNoManifest", "report {tmp}", 2, "manifest.json", {"index.html"}},
-      {"ReportShardManifestsOnly", "report {tmp}/m", 2, "merge-manifests", {"m/index.html"},
+      {"ReportShardManifestsOnly",
+       "report {tmp}/m",
+       2,
+       "merge-manifests",
+       {"m/index.html"},
        file("m/manifest_shard_0000_of_0002.json", "{}")},
-      {"ReportManifestNotJson", "report {tmp}/m", 2, "not JSON", {"m/index.html"},
+      {"ReportManifestNotJson",
+       "report {tmp}/m",
+       2,
+       "not JSON",
+       {"m/index.html"},
        file("m/manifest.json", "{\"env_id\": ")},
-      {"ReportManifestNotARecordManifest", "report {tmp}/m", 2, "not a record manifest",
-       {"m/index.html"}, file("m/manifest.json", "[1, 2, 3]")},
+      {"ReportManifestNotARecordManifest",
+       "report {tmp}/m",
+       2,
+       "not a record manifest",
+       {"m/index.html"},
+       file("m/manifest.json", "[1, 2, 3]")},
       {"CompareNoOut", "compare {tmp}/a {tmp}/b", 2, "--out"},
-      {"CompareMissingRun", "compare {tmp}/a {tmp}/b --out {tmp}/c", 2, "{tmp}/a",
+      {"CompareMissingRun",
+       "compare {tmp}/a {tmp}/b --out {tmp}/c",
+       2,
+       "{tmp}/a",
        {"c/index.html", "c/compare.json"}},
-      {"CompareNegativeTolerance", "compare {tmp}/a {tmp}/b --out {tmp}/c --tolerance -1", 2, "-1",
+      {"CompareNegativeTolerance",
+       "compare {tmp}/a {tmp}/b --out {tmp}/c --tolerance -1",
+       2,
+       "-1",
        {"c/index.html", "c/compare.json"}},
       {"ComparePixelToleranceOutOfRange",
-       "compare {tmp}/a {tmp}/b --out {tmp}/c --pixel-tolerance 300", 2, "300",
+       "compare {tmp}/a {tmp}/b --out {tmp}/c --pixel-tolerance 300",
+       2,
+       "300",
        {"c/index.html", "c/compare.json"}},
-      {"CompareDifferentEnvs", "compare {tmp}/a {tmp}/b --out {tmp}/c", 2, "FetchPush-v4",
+      {"CompareDifferentEnvs",
+       "compare {tmp}/a {tmp}/b --out {tmp}/c",
+       2,
+       "FetchPush-v4",
        {"c/index.html", "c/compare.json"},
        [](const fs::path& tmp) {
          WriteBytes(tmp / "a/manifest.json", Manifest("FetchReach-v4", R"([{"index": 0}])"));
          WriteBytes(tmp / "b/manifest.json", Manifest("FetchPush-v4", R"([{"index": 0}])"));
          return true;
        }},
-      {"CompareDifferentEpisodes", "compare {tmp}/a {tmp}/b --out {tmp}/c", 2, "different episodes",
+      {"CompareDifferentEpisodes",
+       "compare {tmp}/a {tmp}/b --out {tmp}/c",
+       2,
+       "different episodes",
        {"c/index.html", "c/compare.json"},
        [](const fs::path& tmp) {
          WriteBytes(tmp / "a/manifest.json", Manifest("FetchReach-v4", R"([{"index": 0}])"));
          WriteBytes(tmp / "b/manifest.json", Manifest("FetchReach-v4", R"([{"index": 1}])"));
          return true;
        }},
-      {"CompareMissingTrajectory", "compare {tmp}/a {tmp}/b --out {tmp}/c", 2, "episode_000.json",
+      {"CompareMissingTrajectory",
+       "compare {tmp}/a {tmp}/b --out {tmp}/c",
+       2,
+       "episode_000.json",
        {"c/index.html", "c/compare.json", "c/compare_episode_000.mp4"},
        [](const fs::path& tmp) {
          const std::string entry =
@@ -249,14 +327,25 @@ std::vector<Case> Matrix() {
          WriteBytes(tmp / "b/manifest.json", Manifest("FetchReach-v4", entry));
          return true;
        }},
-      {"MergeMissingFolder", "merge-manifests {tmp}/nowhere", 1, "{tmp}/nowhere",
+      {"MergeMissingFolder",
+       "merge-manifests {tmp}/nowhere",
+       1,
+       "{tmp}/nowhere",
        {"nowhere/manifest.json"}},
-      {"MergeMalformedShard", "merge-manifests {tmp}/m", 1, "manifest_shard_0_of_2.json",
-       {"m/manifest.json"}, file("m/manifest_shard_0_of_2.json", "{not json")},
+      {"MergeMalformedShard",
+       "merge-manifests {tmp}/m",
+       1,
+       "manifest_shard_0_of_2.json",
+       {"m/manifest.json"},
+       file("m/manifest_shard_0_of_2.json", "{not json")},
       {"RecordShardOutOfRange", record + "--shard 3/2", 2, "3/2", kRecordOutputs},
       {"RecordHudPositionUnknown", record + "--hud-position middle", 2, "middle", kRecordOutputs},
       {"RecordHudOpacityTooHigh", record + "--hud-opacity 1.5", 2, "1.5", kRecordOutputs},
-      {"RenderHudPositionUnknown", "render --hud-position centre -o {tmp}/f.png", 2, "centre", {"f.png"}},
+      {"RenderHudPositionUnknown",
+       "render --hud-position centre -o {tmp}/f.png",
+       2,
+       "centre",
+       {"f.png"}},
       {"RecordUnknownOverlayHindsightListed", record + "--overlay hindsigth", 2, "hindsight",
        kRecordOutputs},
       {"RecordFromMissing", "record --quiet --out {tmp}/out --from {tmp}/nothing", 2,
@@ -273,14 +362,22 @@ std::vector<Case> Matrix() {
       {"RecordShardZeroShards", record + "--shard 0/0", 2, "0/0", kRecordOutputs},
       {"RecordJobsNegative", record + "--jobs -1", 2, "-1", kRecordOutputs},
       {"BenchUnknownWhat", "bench --what everything --no-peers", 2, "everything"},
-      {"BenchUnknownBackend", "bench --what render --backends vulkan --no-peers --seconds 0.1", 2,
-       "vulkan", {}, {}, {}},
+      {"BenchUnknownBackend",
+       "bench --what render --backends vulkan --no-peers --seconds 0.1",
+       2,
+       "vulkan",
+       {},
+       {},
+       {}},
       // ---- malformed numbers, zero / negative / huge sizes and counts
       {"WidthZero", "render --width 0 -o {tmp}/f.png", 2, "0", {"f.png"}},
       {"WidthNegative", "render --width -5 -o {tmp}/f.png", 2, "-5", {"f.png"}},
       {"WidthHuge", "render --width 100000 -o {tmp}/f.png", 2, "100000", {"f.png"}},
-      {"WidthOverflow", "render --width 99999999999999999999 -o {tmp}/f.png", 2,
-       "99999999999999999999", {"f.png"}},
+      {"WidthOverflow",
+       "render --width 99999999999999999999 -o {tmp}/f.png",
+       2,
+       "99999999999999999999",
+       {"f.png"}},
       {"WidthNotANumber", "render --width wide -o {tmp}/f.png", 2, "wide", {"f.png"}},
       {"WidthFraction", "render --width 64.5 -o {tmp}/f.png", 2, "64.5", {"f.png"}},
       {"HeightZero", record + "--height 0", 2, "0", kRecordOutputs},
@@ -318,26 +415,53 @@ std::vector<Case> Matrix() {
       // ---- missing, unreadable and malformed assets
       {"AssetsMissingFolder", "describe --assets {tmp}/nowhere", 2, "{tmp}/nowhere"},
       {"AssetsIsAFile", "rollout --assets {tmp}/a.txt", 2, "{tmp}/a.txt", {}, file("a.txt", "x")},
-      {"AssetsEmptyFolder", "rollout --assets {tmp}/empty", 2, "{tmp}/empty", {},
+      {"AssetsEmptyFolder",
+       "rollout --assets {tmp}/empty",
+       2,
+       "{tmp}/empty",
+       {},
        [](const fs::path& tmp) { return fs::create_directory(tmp / "empty"); }},
-      {"AssetsTruncatedXml", "rollout --env-id FetchReach-v4 --assets {tmp}/assets", 1,
-       "reach.xml", {}, assets([&](const fs::path& a) { truncate(a / "fetch" / "reach.xml", 300); })},
+      {"AssetsTruncatedXml",
+       "rollout --env-id FetchReach-v4 --assets {tmp}/assets",
+       1,
+       "reach.xml",
+       {},
+       assets([&](const fs::path& a) { truncate(a / "fetch" / "reach.xml", 300); })},
       // MuJoCo's include error names the including model and line, not shared.xml itself
-      {"AssetsTruncatedSharedXml", "rollout --env-id FetchPush-v4 --assets {tmp}/assets", 1,
-       "push.xml", {}, assets([&](const fs::path& a) { truncate(a / "fetch" / "shared.xml", 500); })},
-      {"AssetsMissingMesh", "rollout --env-id FetchReach-v4 --assets {tmp}/assets", 1,
-       "gripper_link.stl", {},
+      {"AssetsTruncatedSharedXml",
+       "rollout --env-id FetchPush-v4 --assets {tmp}/assets",
+       1,
+       "push.xml",
+       {},
+       assets([&](const fs::path& a) { truncate(a / "fetch" / "shared.xml", 500); })},
+      {"AssetsMissingMesh",
+       "rollout --env-id FetchReach-v4 --assets {tmp}/assets",
+       1,
+       "gripper_link.stl",
+       {},
        assets([](const fs::path& a) { fs::remove(a / "stls" / "fetch" / "gripper_link.stl"); })},
-      {"AssetsTruncatedMesh", "rollout --env-id FetchReach-v4 --assets {tmp}/assets", 1,
-       "gripper_link.stl", {},
-       assets([&](const fs::path& a) { truncate(a / "stls" / "fetch" / "gripper_link.stl", 100); })},
+      {"AssetsTruncatedMesh",
+       "rollout --env-id FetchReach-v4 --assets {tmp}/assets",
+       1,
+       "gripper_link.stl",
+       {},
+       assets(
+           [&](const fs::path& a) { truncate(a / "stls" / "fetch" / "gripper_link.stl", 100); })},
       // MuJoCo names the texture, not its file
-      {"AssetsMissingTexture", "rollout --env-id FetchPush-v4 --assets {tmp}/assets", 1,
-       "texture_block", {}, assets([](const fs::path& a) { fs::remove(a / "textures" / "block.png"); })},
-      {"AssetsCorruptTexture", "rollout --env-id FetchPush-v4 --assets {tmp}/assets", 1,
-       "texture_block", {},
+      {"AssetsMissingTexture",
+       "rollout --env-id FetchPush-v4 --assets {tmp}/assets",
+       1,
+       "texture_block",
+       {},
+       assets([](const fs::path& a) { fs::remove(a / "textures" / "block.png"); })},
+      {"AssetsCorruptTexture",
+       "rollout --env-id FetchPush-v4 --assets {tmp}/assets",
+       1,
+       "texture_block",
+       {},
        assets([&](const fs::path& a) { truncate(a / "textures" / "block.png", 40); })},
-      {"AssetsBrokenRecord", record + "--assets {tmp}/assets", 1, "gripper_link.stl", kRecordOutputs,
+      {"AssetsBrokenRecord", record + "--assets {tmp}/assets", 1, "gripper_link.stl",
+       kRecordOutputs,
        assets([](const fs::path& a) { fs::remove(a / "stls" / "fetch" / "gripper_link.stl"); })},
       // ---- replay files: empty, binary, wrong width or shape, NaN/inf, too few rows
       {"ReplayMissingFile", rollout + "--policy replay:{tmp}/none.csv", 1, "{tmp}/none.csv",
@@ -355,7 +479,9 @@ std::vector<Case> Matrix() {
       {"ReplayEmptyJsonl", rollout + "--policy replay:{tmp}/e.jsonl", 1, "e.jsonl", rollout_out,
        file("e.jsonl", "")},
       {"ReplayBinaryCsv", rollout + "--policy replay:{tmp}/b.csv", 1, "b.csv", rollout_out,
-       file("b.csv", std::string("\x7f" "ELF\x02\x01\x01\0\0\0\xff\xfe,\x80\n", 16))},
+       file("b.csv", std::string("\x7f"
+                                 "ELF\x02\x01\x01\0\0\0\xff\xfe,\x80\n",
+                                 16))},
       {"ReplayBinaryJsonl", rollout + "--policy replay:{tmp}/b.jsonl", 1, "b.jsonl", rollout_out,
        file("b.jsonl", std::string("\x89PNG\r\n\x1a\n\0\0\0\rIHDR", 16))},
       {"ReplayNotNpy", rollout + "--policy replay:{tmp}/b.npy", 1, "b.npy", rollout_out,
@@ -414,32 +540,64 @@ std::vector<Case> Matrix() {
       {"ExecEndlessLine",
        rollout + "--policy \"exec:tr -d '\\n' </dev/zero 2>/dev/null | tr '\\0' 1 2>/dev/null\"", 1,
        "64 KiB", rollout_out},
-      {"ExecDiesMidEpisode", record_long +
-           "--policy \"exec:for i in 1 2 3 4 5; do read l; echo 0 0 0 0; done\"",
-       1, "step 5", kRecordOutputs},
+      {"ExecDiesMidEpisode",
+       record_long + "--policy \"exec:for i in 1 2 3 4 5; do read l; echo 0 0 0 0; done\"", 1,
+       "step 5", kRecordOutputs},
       {"ExecHangsInRecord", record_long + "--exec-timeout 0.3 --policy \"exec:sleep 30\"", 1, "0.3",
        kRecordOutputs},
       // ---- --out reuse, --replay-dtype (issue 13)
       {"RecordOverwriteAndResume", record + "--overwrite --resume", 2, "--resume", kRecordOutputs},
-      {"RecordOutHoldsARun", record, 2, "already holds a record run", {"out/episode_000.mp4"},
+      {"RecordOutHoldsARun",
+       record,
+       2,
+       "already holds a record run",
+       {"out/episode_000.mp4"},
        file("out/manifest.json", "{}")},
-      {"ReplayDtypeUnknown", rollout + "--policy replay:{src}/tests/data/replay/replay.csv "
-       "--replay-dtype float16", 2, "float16", rollout_out},
+      {"ReplayDtypeUnknown",
+       rollout + "--policy replay:{src}/tests/data/replay/replay.csv "
+                 "--replay-dtype float16",
+       2, "float16", rollout_out},
       {"ReplayDtypeNotReplay", rollout + "--replay-dtype float32", 2, "--replay-dtype",
        rollout_out},
-      {"ReplayDtypeNpyDisagrees", rollout + "--policy replay:{src}/tests/data/replay/replay_f64.npy "
-       "--replay-dtype float32", 2, "float64", rollout_out},
+      {"ReplayDtypeNpyDisagrees",
+       rollout + "--policy replay:{src}/tests/data/replay/replay_f64.npy "
+                 "--replay-dtype float32",
+       2, "float64", rollout_out},
       // ---- outputs that cannot be written, or a full disk (ulimit -f: writes fail with EFBIG)
-      {"JsonOutParentIsFile", "describe --json-out {tmp}/f/d.json", 1, "{tmp}/f", {"f/d.json"},
+      {"JsonOutParentIsFile",
+       "describe --json-out {tmp}/f/d.json",
+       1,
+       "{tmp}/f",
+       {"f/d.json"},
        file("f", "x")},
-      {"JsonOutFileInTheWayOfFolder", "rollout --json-out {tmp}/f/such/r.json", 1,
-       "{tmp}/f/such", {"f/such/r.json"}, file("f", "x")},
-      {"RenderOutputFileInTheWayOfFolder", "render -o {tmp}/f/new/x.png", 1, "{tmp}/f/new",
-       {"f/new/x.png"}, file("f", "x")},
-      {"RenderOutputParentIsFile", "render -o {tmp}/f/x.png", 1, "{tmp}/f", {"f/x.png"},
+      {"JsonOutFileInTheWayOfFolder",
+       "rollout --json-out {tmp}/f/such/r.json",
+       1,
+       "{tmp}/f/such",
+       {"f/such/r.json"},
        file("f", "x")},
-      {"RecordOutIsFile", "record --quiet --steps 3 --out {tmp}/f", 1, "{tmp}/f", {}, file("f", "x")},
-      {"RecordOutUnwritable", "record --quiet --steps 3 --out {tmp}/ro/out", 1, "{tmp}/ro",
+      {"RenderOutputFileInTheWayOfFolder",
+       "render -o {tmp}/f/new/x.png",
+       1,
+       "{tmp}/f/new",
+       {"f/new/x.png"},
+       file("f", "x")},
+      {"RenderOutputParentIsFile",
+       "render -o {tmp}/f/x.png",
+       1,
+       "{tmp}/f",
+       {"f/x.png"},
+       file("f", "x")},
+      {"RecordOutIsFile",
+       "record --quiet --steps 3 --out {tmp}/f",
+       1,
+       "{tmp}/f",
+       {},
+       file("f", "x")},
+      {"RecordOutUnwritable",
+       "record --quiet --steps 3 --out {tmp}/ro/out",
+       1,
+       "{tmp}/ro",
        {"ro/out/episode_000.mp4", "ro/out/manifest.json"},
        [](const fs::path& tmp) {
          fs::create_directory(tmp / "ro");
@@ -449,17 +607,42 @@ std::vector<Case> Matrix() {
          return true;
        },
        Unprivileged()},
-      {"JsonOutFileSizeLimit", "rollout --episodes 3 --json-out {tmp}/r.json", 1, "r.json",
-       {"r.json"}, {}, kUlimit},
-      {"DescribeFileSizeLimit", "describe --json-out {tmp}/d.json", 1, "d.json", {"d.json"}, {},
+      {"JsonOutFileSizeLimit",
+       "rollout --episodes 3 --json-out {tmp}/r.json",
+       1,
+       "r.json",
+       {"r.json"},
+       {},
+       kUlimit},
+      {"DescribeFileSizeLimit",
+       "describe --json-out {tmp}/d.json",
+       1,
+       "d.json",
+       {"d.json"},
+       {},
        "trap '' XFSZ; ulimit -f 1; "},
-      {"RenderFileSizeLimit", "render --width 256 --height 256 -o {tmp}/f.png", 1, "f.png",
-       {"f.png"}, {}, "trap '' XFSZ; ulimit -f 2; "},
-      {"RecordFileSizeLimit", "record --env-id FetchReach-v4 --quiet --width 320 --height 240 "
-                              "--steps 20 --out {tmp}/out",
-       1, "File too large", kRecordOutputs, {}, kUlimit},
-      {"RandomEpisodesFileSizeLimit", "random-episodes --n-episodes 5 --json-out {tmp}/m", 1,
-       "m_random_metrics.json", {"m_random_metrics.json"}, {}, "trap '' XFSZ; ulimit -f 1; "},
+      {"RenderFileSizeLimit",
+       "render --width 256 --height 256 -o {tmp}/f.png",
+       1,
+       "f.png",
+       {"f.png"},
+       {},
+       "trap '' XFSZ; ulimit -f 2; "},
+      {"RecordFileSizeLimit",
+       "record --env-id FetchReach-v4 --quiet --width 320 --height 240 "
+       "--steps 20 --out {tmp}/out",
+       1,
+       "File too large",
+       kRecordOutputs,
+       {},
+       kUlimit},
+      {"RandomEpisodesFileSizeLimit",
+       "random-episodes --n-episodes 5 --json-out {tmp}/m",
+       1,
+       "m_random_metrics.json",
+       {"m_random_metrics.json"},
+       {},
+       "trap '' XFSZ; ulimit -f 1; "},
   };
 }
 
@@ -543,8 +726,8 @@ TEST_P(FullDisk, FailsCleanly) {
   args.replace(args.find("{dir}"), 5, dir);
   // list what is left on the tmpfs before the namespace (and the tmpfs) goes away
   const CommandResult r = RunCommand(mount + " && " + FETCHSCOPE_BIN + " " + args +
-                                     " </dev/null; rc=$?; echo listing:; ls -A " + dir +
-                                     " " + dir + "/out 2>/dev/null; exit $rc'");
+                                     " </dev/null; rc=$?; echo listing:; ls -A " + dir + " " + dir +
+                                     "/out 2>/dev/null; exit $rc'");
   SCOPED_TRACE(r.output);
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.output.find(GetParam().needle), std::string::npos);

@@ -24,19 +24,19 @@ namespace fs = std::filesystem;
 
 // glibc's libraries and the GL vendor/driver ones: never in the bundle.
 const std::set<std::string> kNodeLibraries = {
-    "linux-vdso.so.1", "ld-linux-x86-64.so.2", "libc.so.6", "libm.so.6", "libmvec.so.1",
-    "libpthread.so.0", "libdl.so.2", "librt.so.1", "libresolv.so.2", "libutil.so.1",
-    "libEGL_mesa.so.0", "libGLX_mesa.so.0", "libOSMesa.so.8", "libEGL_nvidia.so.0",
-    "libGLX_nvidia.so.0", "libcuda.so.1"};
+    "linux-vdso.so.1", "ld-linux-x86-64.so.2", "libc.so.6",          "libm.so.6",
+    "libmvec.so.1",    "libpthread.so.0",      "libdl.so.2",         "librt.so.1",
+    "libresolv.so.2",  "libutil.so.1",         "libEGL_mesa.so.0",   "libGLX_mesa.so.0",
+    "libOSMesa.so.8",  "libEGL_nvidia.so.0",   "libGLX_nvidia.so.0", "libcuda.so.1"};
 
 class BundleTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     tmp_ = new TempDir;
     const fs::path build = fs::path(FETCHSCOPE_BIN).parent_path();
-    const CommandResult made = RunCommand("cd " + testing::SourceDir().string() +
-                                          " && DIST_DIR=" + tmp_->path().string() +
-                                          " XZ_LEVEL=0 tools/bundle.sh " + build.string());
+    const CommandResult made =
+        RunCommand("cd " + testing::SourceDir().string() + " && DIST_DIR=" + tmp_->path().string() +
+                   " XZ_LEVEL=0 tools/bundle.sh " + build.string());
     bundle_output_ = made.output;
     if (made.exit_code != 0) return;
     for (const auto& e : fs::directory_iterator(tmp_->path())) {
@@ -77,12 +77,11 @@ TEST_F(BundleTest, HoldsWhatANodeLacksAndNothingOfGlibcOrTheDriver) {
       if (e.is_regular_file()) libs.insert(e.path().filename());
     }
   }
-  for (const char* needed : {"libavcodec.so.59", "libavformat.so.59", "libswscale.so.6",
-                             "libmujoco.so.2.2.2", "libpng16.so.16", "libEGL.so.1",
-                             "libGLdispatch.so.0", "libOpenGL.so.0", "libGL.so.1",
-                             "libcjson.so.1", "libx264.so.164", "libavfilter.so.8",
-                             "libvpx.so.7", "libcrypto.so.3", "libfreetype.so.6",
-                             "libfontconfig.so.1"}) {
+  for (const char* needed :
+       {"libavcodec.so.59", "libavformat.so.59", "libswscale.so.6", "libmujoco.so.2.2.2",
+        "libpng16.so.16", "libEGL.so.1", "libGLdispatch.so.0", "libOpenGL.so.0", "libGL.so.1",
+        "libcjson.so.1", "libx264.so.164", "libavfilter.so.8", "libvpx.so.7", "libcrypto.so.3",
+        "libfreetype.so.6", "libfontconfig.so.1"}) {
     EXPECT_TRUE(libs.count(needed)) << needed;
   }
   // the C++ runtime sits apart, for the launcher to use only where the node's is too old
@@ -165,13 +164,15 @@ TEST_F(BundleTest, BundledBinaryRecordsAnEpisode) {
       " && env -u MUJOCO_GL ./fs record --env-id FetchPush-v4 --policy scripted --episodes 1 "
       "--steps 5 --width 64 --height 64 --quiet --format mp4,webm,gif --out run");
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  for (const auto& [file, expected] : std::vector<std::pair<std::string, std::string>>{
-           {"episode_000.mp4", "h264,6\n"}, {"episode_000.webm", "vp9,6\n"},
-           {"episode_000.gif", "gif,3\n"}}) {
+  for (const auto& [file, expected] :
+       std::vector<std::pair<std::string, std::string>>{{"episode_000.mp4", "h264,6\n"},
+                                                        {"episode_000.webm", "vp9,6\n"},
+                                                        {"episode_000.gif", "gif,3\n"}}) {
     const fs::path video = work.path() / "run" / file;
     const CommandResult probe = RunCommand(
         "ffprobe -v error -count_frames -select_streams v:0 -show_entries "
-        "stream=codec_name,nb_read_frames -of csv=p=0 " + video.string());
+        "stream=codec_name,nb_read_frames -of csv=p=0 " +
+        video.string());
     EXPECT_EQ(probe.output, expected) << file;
   }
   EXPECT_TRUE(fs::is_regular_file(work.path() / "run" / "episode_000_sheet.png"));

@@ -226,7 +226,8 @@ INSTANTIATE_TEST_SUITE_P(
                       OverlayCase{"goal", {true, false, false, false, false, false, false}},
                       OverlayCase{"hud,trail", {false, false, true, false, true, false, false}},
                       OverlayCase{"default,action", {true, true, true, true, false, true, false}},
-                      OverlayCase{"labels,hindsight", {false, false, false, false, false, true, true}},
+                      OverlayCase{"labels,hindsight",
+                                  {false, false, false, false, false, true, true}},
                       OverlayCase{"goal,achieved,hud,action,trail",
                                   {true, true, true, true, true, false, false}}));
 

@@ -6,9 +6,8 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
-#include <string>
-
 #include <nlohmann/json.hpp>
+#include <string>
 
 #include "render/png_io.h"
 #include "tests/test_util.h"
@@ -76,7 +75,8 @@ TEST(Chapter, ItsThreeCommandsVerbatimInAnEmptyFolder) {
             (std::vector<std::string>{"results", "results/ch01_env_describe.json",
                                       "results/ch01_random_metrics.json",
                                       "results/ch01_reward_check.json"}));
-  const auto describe = nlohmann::json::parse(ReadFile(tmp.path() / "results/ch01_env_describe.json"));
+  const auto describe =
+      nlohmann::json::parse(ReadFile(tmp.path() / "results/ch01_env_describe.json"));
   EXPECT_EQ(describe.at("env_id"), "FetchReachDense-v4");  // the chapter's default env
   ExpectChapterLayout(describe, 10);
   // what code written against the chapter reads

@@ -4,7 +4,6 @@
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
-
 #include <nlohmann/json.hpp>
 
 #include "tests/test_util.h"
@@ -18,9 +17,9 @@ using testing::RunFetchscope;
 using testing::TempDir;
 namespace fs = std::filesystem;
 
-const char* kIds[] = {"FetchReach-v4", "FetchReachDense-v4", "FetchPush-v4", "FetchPushDense-v4",
-                      "FetchPickAndPlace-v4", "FetchPickAndPlaceDense-v4", "FetchSlide-v4",
-                      "FetchSlideDense-v4"};
+const char* kIds[] = {"FetchReach-v4",     "FetchReachDense-v4",   "FetchPush-v4",
+                      "FetchPushDense-v4", "FetchPickAndPlace-v4", "FetchPickAndPlaceDense-v4",
+                      "FetchSlide-v4",     "FetchSlideDense-v4"};
 
 TEST(Cli, ListEnvsJsonHasTheEightIds) {
   auto r = RunFetchscope("list-envs --json");
@@ -79,8 +78,10 @@ TEST(Cli, RewardCheckPassesForEveryTaskBundledAndGenuine) {
   std::vector<std::string> assets = {"bundled"};
   if (!testing::GenuineAssetsDir().empty()) assets.push_back(testing::GenuineAssetsDir().string());
   for (const std::string& a : assets) {
-    for (const char* id : {"FetchReach-v4", "FetchPushDense-v4", "FetchPickAndPlace-v4", "FetchSlide-v4"}) {
-      auto r = RunFetchscope(std::string("reward-check --n-steps 500 --env-id ") + id + " --assets " + a);
+    for (const char* id :
+         {"FetchReach-v4", "FetchPushDense-v4", "FetchPickAndPlace-v4", "FetchSlide-v4"}) {
+      auto r = RunFetchscope(std::string("reward-check --n-steps 500 --env-id ") + id +
+                             " --assets " + a);
       EXPECT_EQ(r.exit_code, 0) << id << " " << a << "\n" << r.output;
       EXPECT_NE(r.output.find("PASS"), std::string::npos);
       EXPECT_NE(r.output.find("Dense-v4"), std::string::npos);  // both variants checked
@@ -91,7 +92,8 @@ TEST(Cli, RewardCheckPassesForEveryTaskBundledAndGenuine) {
 TEST(Cli, RandomEpisodesReachBaseline) {
   TempDir tmp;
   const std::string prefix = (tmp.path() / "m").string();
-  auto r = RunFetchscope("random-episodes --env-id FetchReachDense-v4 --n-episodes 20 --json-out " + prefix);
+  auto r = RunFetchscope("random-episodes --env-id FetchReachDense-v4 --n-episodes 20 --json-out " +
+                         prefix);
   ASSERT_EQ(r.exit_code, 0) << r.output;
   auto j = nlohmann::json::parse(ReadFile(prefix + "_random_metrics.json"));
   EXPECT_EQ(j["mean_episode_length"], 50.0);
@@ -108,7 +110,8 @@ TEST(Cli, RandomEpisodesReachBaseline) {
 TEST(Cli, SameSeedSameCommandGivesByteIdenticalJson) {
   TempDir tmp;
   const std::string a = (tmp.path() / "a.json").string(), b = (tmp.path() / "b.json").string();
-  const std::string cmd = "rollout --env-id FetchPickAndPlace-v4 --episodes 2 --seed 5 --policy random --json-out ";
+  const std::string cmd =
+      "rollout --env-id FetchPickAndPlace-v4 --episodes 2 --seed 5 --policy random --json-out ";
   ASSERT_EQ(RunFetchscope(cmd + a).exit_code, 0);
   ASSERT_EQ(RunFetchscope(cmd + b).exit_code, 0);
   EXPECT_EQ(ReadFile(a), ReadFile(b));
@@ -120,7 +123,8 @@ TEST(Cli, SameSeedSameCommandGivesByteIdenticalJson) {
   EXPECT_TRUE(j["episodes"][0]["steps"][0]["reward"].is_null());
   EXPECT_EQ(j["episodes"][0]["steps"][1]["observation"].size(), 25u);
   EXPECT_EQ(j["episodes"][0]["action_dtype"], "float32");
-  EXPECT_NE(j["episodes"][0]["steps"][0]["desired_goal"], j["episodes"][1]["steps"][0]["desired_goal"]);
+  EXPECT_NE(j["episodes"][0]["steps"][0]["desired_goal"],
+            j["episodes"][1]["steps"][0]["desired_goal"]);
 }
 
 TEST(Cli, ReplayReproducesFileActionsExactly) {
@@ -132,7 +136,8 @@ TEST(Cli, ReplayReproducesFileActionsExactly) {
     for (int t = 0; t < 10; ++t) out << 0.1 * t << "," << -0.123456789012345 << ",0.7,-1\n";
   }
   const std::string out = (tmp.path() / "t.json").string();
-  auto r = RunFetchscope("rollout --env-id FetchPickAndPlace-v4 --steps 10 --policy replay:" + csv.string() + " --json-out " + out);
+  auto r = RunFetchscope("rollout --env-id FetchPickAndPlace-v4 --steps 10 --policy replay:" +
+                         csv.string() + " --json-out " + out);
   ASSERT_EQ(r.exit_code, 0) << r.output;
   auto j = nlohmann::json::parse(ReadFile(out));
   const auto& steps = j["episodes"][0]["steps"];
@@ -151,7 +156,8 @@ TEST(Cli, ReplayReproducesFileActionsExactly) {
           "    print(repr(0.1 * t), -0.123456789012345, 0.7, -1, flush=True)\n";
   }
   const std::string out2 = (tmp.path() / "e.json").string();
-  r = RunFetchscope("rollout --env-id FetchPickAndPlace-v4 --steps 10 --policy 'exec:python3 " + script.string() + "' --json-out " + out2);
+  r = RunFetchscope("rollout --env-id FetchPickAndPlace-v4 --steps 10 --policy 'exec:python3 " +
+                    script.string() + "' --json-out " + out2);
   ASSERT_EQ(r.exit_code, 0) << r.output;
   auto e = nlohmann::json::parse(ReadFile(out2));
   EXPECT_EQ(e["episodes"][0]["steps"], j["episodes"][0]["steps"]);
@@ -200,10 +206,13 @@ TEST_P(BadInputTest, OneClearLineAndNoOutputFile) {
 INSTANTIATE_TEST_SUITE_P(
     Anatomy, BadInputTest,
     ::testing::Values(
-        BadInput{"describe --env-id FetchReach-v9", 2, "unknown env id 'FetchReach-v9' (did you mean 'FetchReach-v4'?): use one of FetchReach-v4"},
+        BadInput{"describe --env-id FetchReach-v9", 2,
+                 "unknown env id 'FetchReach-v9' (did you mean 'FetchReach-v4'?): use one of "
+                 "FetchReach-v4"},
         BadInput{"describe --assets TMP/missing", 2, "missing' does not exist: use bundled, auto"},
         BadInput{"describe --assets TMP", 2, "has no fetch/reach.xml"},
-        BadInput{"describe --env-id FetchReach-v4 --assets TMP/bad", 1, "bad/fetch/reach.xml': XML parse error"},
+        BadInput{"describe --env-id FetchReach-v4 --assets TMP/bad", 1,
+                 "bad/fetch/reach.xml': XML parse error"},
         BadInput{"random-episodes --seed -3", 2, "--seed '-3' is not valid"},
         BadInput{"random-episodes --seed 99999999999999999999999", 2, "is too large"},
         BadInput{"random-episodes --n-episodes 0", 2, "--n-episodes"},
@@ -215,8 +224,10 @@ INSTANTIATE_TEST_SUITE_P(
         BadInput{"rollout --steps 5 --policy replay:TMP/missing.csv", 1, "missing.csv"},
         BadInput{"rollout --steps 50 --policy replay:TMP/nan.csv", 1, "nan.csv"},
         BadInput{"rollout --steps 3 --policy 'exec:exit 3'", 1, "exited with status 3"},
-        BadInput{"rollout --steps 3 --policy 'exec:echo hello; cat >/dev/null'", 1, "answer 'hello'"},
-        BadInput{"rollout --steps 3 --exec-timeout 0.5 --policy 'exec:sleep 5'", 1, "no answer for step 0 within 0.5 s"},
+        BadInput{"rollout --steps 3 --policy 'exec:echo hello; cat >/dev/null'", 1,
+                 "answer 'hello'"},
+        BadInput{"rollout --steps 3 --exec-timeout 0.5 --policy 'exec:sleep 5'", 1,
+                 "no answer for step 0 within 0.5 s"},
         BadInput{"rollout --steps 51", 2, "--steps"}));
 
 TEST(Cli, UnwritableOutputIsARunError) {
@@ -230,7 +241,8 @@ TEST(Cli, ScriptedPolicySolvesTheTasks) {
     const char* id;
     int min_successes;  // of 20 (PRODUCT: Reach 95%, Push 80%, PickAndPlace 70%)
   };
-  for (Case c : {Case{"FetchReach-v4", 19}, Case{"FetchPush-v4", 16}, Case{"FetchPickAndPlace-v4", 14}}) {
+  for (Case c :
+       {Case{"FetchReach-v4", 19}, Case{"FetchPush-v4", 16}, Case{"FetchPickAndPlace-v4", 14}}) {
     auto r = RunFetchscope(std::string("rollout --episodes 20 --policy scripted --env-id ") + c.id);
     ASSERT_EQ(r.exit_code, 0);
     auto j = nlohmann::json::parse(r.output);

@@ -11,12 +11,11 @@
 #include <cerrno>
 #include <chrono>
 #include <filesystem>
+#include <nlohmann/json.hpp>
 #include <random>
 #include <string>
 #include <thread>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "tests/test_util.h"
 
@@ -33,8 +32,7 @@ std::string PolicyScript() {
 
 // Starts `fetchscope ARGS` as a terminal starts a foreground job: in a process group of its
 // own (whose id is the returned pid), with `env` added to the environment.
-pid_t SpawnJob(const std::string& args, const fs::path& log,
-               const std::vector<std::string>& env) {
+pid_t SpawnJob(const std::string& args, const fs::path& log, const std::vector<std::string>& env) {
   const std::string command =
       "exec " + std::string(FETCHSCOPE_BIN) + " " + args + " </dev/null >" + log.string() + " 2>&1";
   const pid_t pid = fork();
@@ -102,7 +100,8 @@ TEST(ExecInterrupt, CtrlCAlwaysEndsAsAnInterruptionWithAManifest) {
     if (run % 2 == 1) {
       // the child dies of the same signal anyway (as if it had been in the group)
       std::this_thread::sleep_for(std::chrono::milliseconds(random() % 5));
-      for (const nlohmann::json& child : PolicyChildren(pids)) kill(child["pid"].get<int>(), SIGINT);
+      for (const nlohmann::json& child : PolicyChildren(pids))
+        kill(child["pid"].get<int>(), SIGINT);
     }
     const int code = WaitExit(pid);
     const std::string log = ReadFile(tmp.path() / "log");
@@ -146,10 +145,10 @@ TEST(ExecInterrupt, ChildGetsTheCallersLibraryPath) {
     const fs::path pids = tmp.path() / "pids";
     fs::create_directories(pids);
     const testing::CommandResult r = testing::RunCommand(
-        "FETCHSCOPE_TEST_PID_DIR=" + pids.string() + " FETCHSCOPE_CALLER_LD_LIBRARY_PATH=" +
-        caller + " LD_LIBRARY_PATH=/bundle/lib " + FETCHSCOPE_BIN +
-        " record --env-id FetchReach-v4 --policy \"exec:python3 " + PolicyScript() +
-        "\" --episodes 1 --steps 2 --width 16 --height 16 -q --out " +
+        "FETCHSCOPE_TEST_PID_DIR=" + pids.string() +
+        " FETCHSCOPE_CALLER_LD_LIBRARY_PATH=" + caller + " LD_LIBRARY_PATH=/bundle/lib " +
+        FETCHSCOPE_BIN + " record --env-id FetchReach-v4 --policy \"exec:python3 " +
+        PolicyScript() + "\" --episodes 1 --steps 2 --width 16 --height 16 -q --out " +
         (tmp.path() / "run").string());
     ASSERT_EQ(r.exit_code, 0) << r.output;
     const std::vector<nlohmann::json> children = PolicyChildren(pids);

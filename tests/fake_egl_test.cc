@@ -9,11 +9,10 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <set>
 #include <sstream>
 #include <string>
-
-#include <nlohmann/json.hpp>
 
 #include "tests/test_util.h"
 
@@ -39,9 +38,10 @@ class FakeEglTest : public ::testing::Test {
   // FAKE_EGL_DEVICES ("-" leaves it unset); `extra_env` more VAR=value words.
   CommandResult Run(const std::string& devices, const std::string& args,
                     const std::string& extra_env = "") {
-    std::string env = "env -u MUJOCO_GL -u MUJOCO_EGL_DEVICE_ID -u CUDA_VISIBLE_DEVICES "
-                      "-u DISPLAY LD_LIBRARY_PATH=" FAKE_EGL_DIR " FAKE_EGL_REAL=" REAL_LIBEGL
-                      " FAKE_EGL_LOG=" + log_.string() + " ";
+    std::string env =
+        "env -u MUJOCO_GL -u MUJOCO_EGL_DEVICE_ID -u CUDA_VISIBLE_DEVICES "
+        "-u DISPLAY LD_LIBRARY_PATH=" FAKE_EGL_DIR " FAKE_EGL_REAL=" REAL_LIBEGL " FAKE_EGL_LOG=" +
+        log_.string() + " ";
     if (devices != "-") env += "FAKE_EGL_DEVICES='" + devices + "' ";
     return RunCommand(env + extra_env + " " + FETCHSCOPE_BIN + " " + args);
   }
@@ -97,8 +97,9 @@ TEST_F(FakeEglTest, NvidiaStringsEnumerateDevicesWithCudaOrdinals) {
 // --gpu N and MUJOCO_EGL_DEVICE_ID name EGL devices: these failed on NVIDIA before.
 TEST_F(FakeEglTest, EglIndexAndMujocoEglDeviceIdSelectThatDevice) {
   const fs::path png = tmp_.path() / "f.png";
-  CommandResult r = Run("cuda=2,cuda=0,cuda=1",
-                        "render --backend egl --gpu 2 --width 32 --height 32 --verbose -o " + png.string());
+  CommandResult r =
+      Run("cuda=2,cuda=0,cuda=1",
+          "render --backend egl --gpu 2 --width 32 --height 32 --verbose -o " + png.string());
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("EGL device 2 (CUDA 1)"), std::string::npos) << r.output;
   EXPECT_EQ(InitialisedDevices(), std::multiset<std::string>{"2"});
@@ -121,8 +122,8 @@ TEST_F(FakeEglTest, CudaNumberingMapsThroughEglCudaDeviceNv) {
   const nlohmann::json out = ListGpus("cuda=2,cuda=0,cuda=1", "", "cuda:2,1");
   EXPECT_EQ(out["resolved"]["devices"], nlohmann::json({0, 2}));
   // a CUDA ordinal no device has: usage error listing the ones there are
-  const CommandResult bad = Run("cuda=2,cuda=0,cuda=1",
-                                "render --backend egl --gpu cuda:5 -o " + png.string());
+  const CommandResult bad =
+      Run("cuda=2,cuda=0,cuda=1", "render --backend egl --gpu cuda:5 -o " + png.string());
   EXPECT_EQ(bad.exit_code, 2) << bad.output;
   EXPECT_NE(bad.output.find("cuda:5 is not a CUDA device here; accepted CUDA ordinals: 0 (EGL 1), "
                             "1 (EGL 2), 2 (EGL 0)"),
@@ -168,7 +169,8 @@ TEST_F(FakeEglTest, DeviceThatFailsToInitialise) {
   const fs::path out = tmp_.path() / "run";
   r = Run("cuda=0:fail,cuda=1,cuda=2",
           "record --backend egl --gpu all --jobs 2 --episodes 2 --steps 2 --width 32 --height 32 "
-          "--out " + out.string());
+          "--out " +
+              out.string());
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("warning: EGL device 0 skipped"), std::string::npos) << r.output;
   const nlohmann::json manifest = nlohmann::json::parse(ReadFile(out / "manifest.json"));
@@ -184,7 +186,8 @@ TEST_F(FakeEglTest, NoDevices) {
   EXPECT_TRUE(out["egl"]["enumerable"].get<bool>());
   EXPECT_TRUE(out["devices"].empty());
   const fs::path png = tmp_.path() / "f.png";
-  CommandResult r = Run("", "render --backend egl --width 32 --height 32 --verbose -o " + png.string());
+  CommandResult r =
+      Run("", "render --backend egl --width 32 --height 32 --verbose -o " + png.string());
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("surfaceless"), std::string::npos) << r.output;
   for (const char* gpu : {"0", "all", "cuda:0"}) {
@@ -206,7 +209,8 @@ TEST_F(FakeEglTest, WorkersSpreadRoundRobinOverTheChosenDevices) {
   const fs::path out = tmp_.path() / "run";
   const CommandResult r = Run("cuda=2,cuda=0,cuda=1",
                               "record --backend egl --gpu cuda:0,1 --jobs 3 --episodes 3 --steps 2 "
-                              "--width 32 --height 32 --quiet --out " + out.string());
+                              "--width 32 --height 32 --quiet --out " +
+                                  out.string());
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const nlohmann::json manifest = nlohmann::json::parse(ReadFile(out / "manifest.json"));
   ASSERT_EQ(manifest["workers"].size(), 3u);

@@ -16,8 +16,8 @@ AssetSource Genuine() {
   return dir.empty() ? AssetSource{} : ResolveAssets(dir.string());
 }
 
-#define REQUIRE_GENUINE()                                                  \
-  if (testing::GenuineAssetsDir().empty()) {                               \
+#define REQUIRE_GENUINE()                                                   \
+  if (testing::GenuineAssetsDir().empty()) {                                \
     GTEST_SKIP() << "genuine Gymnasium-Robotics assets absent (../shared)"; \
   }
 
@@ -53,7 +53,8 @@ TEST(FetchEnvGenuine, SeededGoalsMatchReference) {
   EXPECT_NEAR(p.observation[3], 1.210497825, 1e-8);  // object x after two placement attempts
   EXPECT_NEAR(p.observation[4], 0.6039071326, 1e-8);
   FetchEnv pick(FindEnvSpec("FetchPickAndPlace-v4"), g);
-  ExpectVec(pick.Reset(1).desired_goal, {1.235202906, 0.88369533, 0.7971659167}, 1e-8);  // coin < 0.5: in the air
+  ExpectVec(pick.Reset(1).desired_goal, {1.235202906, 0.88369533, 0.7971659167},
+            1e-8);  // coin < 0.5: in the air
   FetchEnv slide(FindEnvSpec("FetchSlide-v4"), g);
   ExpectVec(slide.Reset(0).desired_goal, {1.584081973, 0.9965592137, 0.4140189435}, 1e-8);
 }
@@ -65,7 +66,8 @@ TEST_P(EveryTask, ObservationLayoutAndGoals) {
   const Observation obs = env.Reset(3);
   const bool object = env.spec().has_object;
   ASSERT_EQ(obs.observation.size(), object ? 25u : 10u);
-  for (int i = 0; i < 3; ++i) EXPECT_EQ(obs.observation[i], env.data()->site_xpos[3 * env.grip_site() + i]);
+  for (int i = 0; i < 3; ++i)
+    EXPECT_EQ(obs.observation[i], env.data()->site_xpos[3 * env.grip_site() + i]);
   if (object) {
     for (int i = 0; i < 3; ++i) {
       EXPECT_EQ(obs.achieved_goal[i], obs.observation[3 + i]);
@@ -77,7 +79,8 @@ TEST_P(EveryTask, ObservationLayoutAndGoals) {
     }
     // the object starts at least 0.1 m from the gripper in xy
     EXPECT_GE(std::hypot(obs.observation[3] - env.initial_gripper_xpos()[0],
-                         obs.observation[4] - env.initial_gripper_xpos()[1]), 0.1);
+                         obs.observation[4] - env.initial_gripper_xpos()[1]),
+              0.1);
   } else {
     for (int i = 0; i < 3; ++i) EXPECT_EQ(obs.achieved_goal[i], obs.observation[i]);
   }
@@ -93,7 +96,7 @@ TEST_P(EveryTask, SameSeedSameEpisodeAndUnseededResetContinues) {
   act.value = {0.3, -0.2, 0.1, 0.5};
   for (int t = 0; t < 5; ++t) EXPECT_EQ(a.Step(act).obs.observation, b.Step(act).obs.observation);
   const Observation a1 = a.Reset();
-  EXPECT_NE(a1.desired_goal, a0.desired_goal);  // the generator went on
+  EXPECT_NE(a1.desired_goal, a0.desired_goal);        // the generator went on
   EXPECT_EQ(a.Reset(7).observation, a0.observation);  // reseeding restores everything
 }
 
@@ -110,10 +113,11 @@ INSTANTIATE_TEST_SUITE_P(Fetch, EveryTask,
 TEST(FetchEnv, SparseRewardUsesStrictGreaterAndSuccessStrictLess) {
   FetchEnv sparse(FindEnvSpec("FetchReach-v4"), ResolveAssets("bundled"));
   FetchEnv dense(FindEnvSpec("FetchReachDense-v4"), ResolveAssets("bundled"));
-  const std::array<double, 3> a{0, 0, 0}, at{0.05, 0, 0}, beyond{0.0500001, 0, 0}, inside{0.03, 0.03, 0};
+  const std::array<double, 3> a{0, 0, 0}, at{0.05, 0, 0}, beyond{0.0500001, 0, 0},
+      inside{0.03, 0.03, 0};
   EXPECT_EQ(sparse.ComputeReward(a, at), 0.0);
   EXPECT_TRUE(std::signbit(sparse.ComputeReward(a, at)));  // -0.0, as numpy gives
-  EXPECT_FALSE(sparse.IsSuccess(a, at));                    // d == threshold: no success
+  EXPECT_FALSE(sparse.IsSuccess(a, at));                   // d == threshold: no success
   EXPECT_EQ(sparse.ComputeReward(a, beyond), -1.0);
   EXPECT_TRUE(sparse.IsSuccess(a, inside));
   EXPECT_DOUBLE_EQ(dense.ComputeReward(a, {0.03, 0.04, 0}), -0.05);
@@ -126,7 +130,8 @@ TEST(FetchEnv, Float32ActionsAreScaledInFloat32) {
   const int body = env.gripper_body();
   // a component whose float32 product differs from the double one
   float x = 0.3f;
-  while (static_cast<double>(x * 0.05f) == static_cast<double>(x) * 0.05) x = std::nextafter(x, 1.0f);
+  while (static_cast<double>(x * 0.05f) == static_cast<double>(x) * 0.05)
+    x = std::nextafter(x, 1.0f);
   for (bool f32 : {true, false}) {
     const double anchor = d->xpos[3 * body];
     Action act;
@@ -134,7 +139,8 @@ TEST(FetchEnv, Float32ActionsAreScaledInFloat32) {
     act.value = {static_cast<double>(x), 0, 0, 0};
     env.Step(act);
     const double expected = f32 ? static_cast<double>(x * 0.05f) : static_cast<double>(x) * 0.05;
-    EXPECT_EQ(d->mocap_pos[0] - anchor, (anchor + expected) - anchor) << (f32 ? "float32" : "float64");
+    EXPECT_EQ(d->mocap_pos[0] - anchor, (anchor + expected) - anchor)
+        << (f32 ? "float32" : "float64");
   }
 }
 

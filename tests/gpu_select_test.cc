@@ -1,13 +1,14 @@
 // --gpu as a user writes it, matched against device lists as the drivers report them: NVIDIA's
 // (CUDA ordinals through EGL_NV_device_cuda, in an order of its own) and Mesa's (no CUDA
 // ordinals, a software device). No EGL is loaded: the lists are built here.
+#include "render/gpu_select.h"
+
 #include <gtest/gtest.h>
 
 #include <map>
 #include <string>
 #include <vector>
 
-#include "render/gpu_select.h"
 #include "src/errors.h"
 
 namespace fetchscope {
@@ -71,8 +72,8 @@ TEST(GpuSpec, ParsesEveryAcceptedForm) {
 }
 
 TEST(GpuSpec, BadValuesAreNamedWithTheAcceptedForms) {
-  for (const std::string bad : {"-7", "cuda:", "cuda:x", "gpu0", "0,,1", "1,1", "cuda:0,0", "1.5",
-                                "99999", "ALL"}) {
+  for (const std::string bad :
+       {"-7", "cuda:", "cuda:x", "gpu0", "0,,1", "1,1", "cuda:0,0", "1.5", "99999", "ALL"}) {
     const std::string message = UsageMessage(bad);
     ASSERT_FALSE(message.empty()) << "accepted '" << bad << "'";
     EXPECT_NE(message.find("--gpu '" + bad + "'"), std::string::npos) << message;

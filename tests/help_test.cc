@@ -17,9 +17,8 @@ using testing::RunFetchscope;
 // The subcommands listed under "Subcommands:" of `fetchscope [SUB] --help`.
 std::vector<std::string> Subcommands(const std::string& help) {
   std::vector<std::string> names;
-  std::istringstream in(help.substr(help.find("Subcommands:") == std::string::npos
-                                        ? help.size()
-                                        : help.find("Subcommands:")));
+  std::istringstream in(help.substr(
+      help.find("Subcommands:") == std::string::npos ? help.size() : help.find("Subcommands:")));
   std::string line;
   std::getline(in, line);
   while (std::getline(in, line)) {

@@ -7,9 +7,9 @@
 #include <map>
 #include <set>
 
+#include "src/assets.h"
 #include "src/env_spec.h"
 #include "src/fetch_env.h"
-#include "src/assets.h"
 
 namespace fetchscope {
 namespace {
@@ -128,8 +128,8 @@ TEST(Hindsight, EmptyEpisodeHasNoTransitions) {
 
 TEST(Hindsight, FetchRewardsMatchComputeReward) {
   FetchEnv env(FindEnvSpec("FetchPush-v4"), ResolveAssets("bundled"));
-  const std::vector<std::array<double, 3>> achieved = {{1.3, 0.7, 0.42}, {1.31, 0.7, 0.42},
-                                                       {1.4, 0.7, 0.42}};
+  const std::vector<std::array<double, 3>> achieved = {
+      {1.3, 0.7, 0.42}, {1.31, 0.7, 0.42}, {1.4, 0.7, 0.42}};
   const HindsightEpisode h = SampleHindsight(
       achieved, {0, 0, 0}, 5, kHindsightK,
       [&](const auto& a, const auto& g) { return env.ComputeReward(a, g); },

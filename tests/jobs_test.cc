@@ -38,7 +38,6 @@ bool HasBackend(const std::string& backend) {
   }
 }
 
-
 class JobsTest : public ::testing::TestWithParam<const char*> {
  protected:
   void SetUp() override {
@@ -98,16 +97,17 @@ TEST_P(JobsTest, ParallelWorkersWriteTheFilesOfOneJob) {
 TEST_P(JobsTest, VideoBytesDoNotDependOnWhatTheHeapHeldBefore) {
   if (!HasBackend(GetParam())) GTEST_SKIP() << GetParam() << " is not available here";
   TempDir tmp;
-  const std::string run = std::string("record --quiet --env-id FetchReach-v4 --policy random --seed 2 ") +
-                          "--episodes 3 --steps 15 --width 160 --height 160 --overlay goal,achieved --backend " +
-                          GetParam();
+  const std::string run =
+      std::string("record --quiet --env-id FetchReach-v4 --policy random --seed 2 ") +
+      "--episodes 3 --steps 15 --width 160 --height 160 --overlay goal,achieved --backend " +
+      GetParam();
   std::map<std::string, std::map<std::string, std::string>> files;
   for (const char* perturb : {"77", "165"}) {
     for (int jobs : {1, 3}) {
       const std::string name = std::string("p") + perturb + "j" + std::to_string(jobs);
       const fs::path out = tmp.path() / name;
-      auto r = RunCommand(std::string("MALLOC_PERTURB_=") + perturb + " " + FETCHSCOPE_BIN + " " + run +
-                          " --jobs " + std::to_string(jobs) + " --out " + out.string());
+      auto r = RunCommand(std::string("MALLOC_PERTURB_=") + perturb + " " + FETCHSCOPE_BIN + " " +
+                          run + " --jobs " + std::to_string(jobs) + " --out " + out.string());
       ASSERT_EQ(r.exit_code, 0) << r.output;
       files[name] = EpisodeFiles(out);
     }

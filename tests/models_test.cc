@@ -92,7 +92,7 @@ struct Settled {
   int robot_contacts_at_start;  // robot-robot contacts after the two setup forwards
   int robot_contacts_settled;   // robot-robot contacts after a forward at the settled state
   std::vector<std::string> table_touchers;  // names of robot geoms touching table0 when settled
-  int data_warnings;            // mjData warning counters summed
+  int data_warnings;                        // mjData warning counters summed
 };
 
 /// Runs the environment's one-time setup on m (which it modifies, like Python does) and
@@ -147,7 +147,8 @@ Settled Settle(mjModel* m, const std::string& task) {
 // ---- comparison helpers ------------------------------------------------------------------------
 
 template <typename T>
-void ExpectNearArray(const T* bundled, const T* genuine, int n, double tol, const std::string& what) {
+void ExpectNearArray(const T* bundled, const T* genuine, int n, double tol,
+                     const std::string& what) {
   for (int i = 0; i < n; ++i) {
     EXPECT_NEAR(bundled[i], genuine[i], tol) << what << "[" << i << "]";
   }
@@ -172,7 +173,8 @@ void ExpectSameNames(const mjModel* b, const mjModel* g, mjtObj type, int n, con
 std::array<float, 4> DrawnRgba(const mjModel* m, int geom) {
   const float* rgba = m->geom_rgba + 4 * geom;
   const int mat = m->geom_matid[geom];
-  const bool default_rgba = rgba[0] == 0.5f && rgba[1] == 0.5f && rgba[2] == 0.5f && rgba[3] == 1.0f;
+  const bool default_rgba =
+      rgba[0] == 0.5f && rgba[1] == 0.5f && rgba[2] == 0.5f && rgba[3] == 1.0f;
   if (mat >= 0 && default_rgba) rgba = m->mat_rgba + 4 * mat;
   return {rgba[0], rgba[1], rgba[2], rgba[3]};
 }
@@ -185,20 +187,26 @@ void ExpectSameGeom(const mjModel* b, int bg, const mjModel* g, int gg, const st
   EXPECT_EQ(b->geom_contype[bg], g->geom_contype[gg]) << what;
   EXPECT_EQ(b->geom_conaffinity[bg], g->geom_conaffinity[gg]) << what;
   EXPECT_EQ(b->geom_condim[bg], g->geom_condim[gg]) << what;
-  EXPECT_EQ(Name(b, mjOBJ_BODY, b->geom_bodyid[bg]), Name(g, mjOBJ_BODY, g->geom_bodyid[gg])) << what;
+  EXPECT_EQ(Name(b, mjOBJ_BODY, b->geom_bodyid[bg]), Name(g, mjOBJ_BODY, g->geom_bodyid[gg]))
+      << what;
   ExpectNearArray(b->geom_size + 3 * bg, g->geom_size + 3 * gg, 3, kTol, what + " size");
   ExpectNearArray(b->geom_pos + 3 * bg, g->geom_pos + 3 * gg, 3, kTol, what + " pos");
   ExpectNearArray(b->geom_quat + 4 * bg, g->geom_quat + 4 * gg, 4, kTol, what + " quat");
-  ExpectNearArray(b->geom_friction + 3 * bg, g->geom_friction + 3 * gg, 3, kTol, what + " friction");
-  ExpectNearArray(b->geom_solref + mjNREF * bg, g->geom_solref + mjNREF * gg, mjNREF, kTol, what + " solref");
-  ExpectNearArray(b->geom_solimp + mjNIMP * bg, g->geom_solimp + mjNIMP * gg, mjNIMP, kTol, what + " solimp");
+  ExpectNearArray(b->geom_friction + 3 * bg, g->geom_friction + 3 * gg, 3, kTol,
+                  what + " friction");
+  ExpectNearArray(b->geom_solref + mjNREF * bg, g->geom_solref + mjNREF * gg, mjNREF, kTol,
+                  what + " solref");
+  ExpectNearArray(b->geom_solimp + mjNIMP * bg, g->geom_solimp + mjNIMP * gg, mjNIMP, kTol,
+                  what + " solimp");
   EXPECT_NEAR(b->geom_margin[bg], g->geom_margin[gg], kTol) << what;
   EXPECT_NEAR(b->geom_gap[bg], g->geom_gap[gg], kTol) << what;
   EXPECT_EQ(DrawnRgba(b, bg), DrawnRgba(g, gg)) << what << " colour";
   ExpectEqualArray(b->geom_rgba + 4 * bg, g->geom_rgba + 4 * gg, 4, what + " rgba");
   EXPECT_EQ(b->geom_matid[bg] >= 0, g->geom_matid[gg] >= 0) << what << " material";
   if (b->geom_matid[bg] >= 0 && g->geom_matid[gg] >= 0) {
-    EXPECT_EQ(Name(b, mjOBJ_MATERIAL, b->geom_matid[bg]), Name(g, mjOBJ_MATERIAL, g->geom_matid[gg])) << what;
+    EXPECT_EQ(Name(b, mjOBJ_MATERIAL, b->geom_matid[bg]),
+              Name(g, mjOBJ_MATERIAL, g->geom_matid[gg]))
+        << what;
   }
 }
 
@@ -248,7 +256,8 @@ TEST_P(ModelsTest, BundledCompilesWithoutWarnings) {
   ASSERT_TRUE(m) << message;
   EXPECT_EQ(message, "");
   EXPECT_TRUE(WarningCapture::Messages().empty())
-      << WarningCapture::Messages().size() << " warning(s), first: " << WarningCapture::Messages()[0];
+      << WarningCapture::Messages().size()
+      << " warning(s), first: " << WarningCapture::Messages()[0];
   EXPECT_EQ(m->nmesh, 0) << "the bundled models are primitives only";
   EXPECT_EQ(Name(m.get(), mjOBJ_SITE, 0), "target0") << "the target marker must be site 0";
 }
@@ -373,10 +382,14 @@ TEST_P(ModelsTest, CompiledModelMatchesGenuine) {
   ExpectEqualArray(b->actuator_gaintype, g->actuator_gaintype, g->nu, "actuator_gaintype");
   ExpectEqualArray(b->actuator_biastype, g->actuator_biastype, g->nu, "actuator_biastype");
   ExpectEqualArray(b->actuator_ctrllimited, g->actuator_ctrllimited, g->nu, "actuator_ctrllimited");
-  ExpectEqualArray(b->actuator_forcelimited, g->actuator_forcelimited, g->nu, "actuator_forcelimited");
-  ExpectNearArray(b->actuator_gainprm, g->actuator_gainprm, mjNGAIN * g->nu, kTol, "actuator_gainprm");
-  ExpectNearArray(b->actuator_biasprm, g->actuator_biasprm, mjNBIAS * g->nu, kTol, "actuator_biasprm");
-  ExpectNearArray(b->actuator_ctrlrange, g->actuator_ctrlrange, 2 * g->nu, kTol, "actuator_ctrlrange");
+  ExpectEqualArray(b->actuator_forcelimited, g->actuator_forcelimited, g->nu,
+                   "actuator_forcelimited");
+  ExpectNearArray(b->actuator_gainprm, g->actuator_gainprm, mjNGAIN * g->nu, kTol,
+                  "actuator_gainprm");
+  ExpectNearArray(b->actuator_biasprm, g->actuator_biasprm, mjNBIAS * g->nu, kTol,
+                  "actuator_biasprm");
+  ExpectNearArray(b->actuator_ctrlrange, g->actuator_ctrlrange, 2 * g->nu, kTol,
+                  "actuator_ctrlrange");
   ExpectNearArray(b->actuator_gear, g->actuator_gear, 6 * g->nu, kTol, "actuator_gear");
 
   // Options and statistics.
@@ -402,13 +415,16 @@ TEST_P(ModelsTest, CompiledModelMatchesGenuine) {
   EXPECT_EQ(b->vis.map.zfar, g->vis.map.zfar);
 
   // Scene items: floor, table, object, finger boxes, mocap cross, light, materials, sky.
-  ExpectSameGeom(b, mj_name2id(b, mjOBJ_GEOM, "floor0"), g, mj_name2id(g, mjOBJ_GEOM, "floor0"), "floor0");
+  ExpectSameGeom(b, mj_name2id(b, mjOBJ_GEOM, "floor0"), g, mj_name2id(g, mjOBJ_GEOM, "floor0"),
+                 "floor0");
   ExpectSameGeom(b, FirstGeomOfBody(b, "table0"), g, FirstGeomOfBody(g, "table0"), "table geom");
   if (GetParam() != "reach") {
-    ExpectSameGeom(b, mj_name2id(b, mjOBJ_GEOM, "object0"), g, mj_name2id(g, mjOBJ_GEOM, "object0"), "object0");
+    ExpectSameGeom(b, mj_name2id(b, mjOBJ_GEOM, "object0"), g, mj_name2id(g, mjOBJ_GEOM, "object0"),
+                   "object0");
   }
   for (const char* finger : {"robot0:r_gripper_finger_link", "robot0:l_gripper_finger_link"}) {
-    ExpectSameGeom(b, mj_name2id(b, mjOBJ_GEOM, finger), g, mj_name2id(g, mjOBJ_GEOM, finger), finger);
+    ExpectSameGeom(b, mj_name2id(b, mjOBJ_GEOM, finger), g, mj_name2id(g, mjOBJ_GEOM, finger),
+                   finger);
   }
   const int mocap_body = mj_name2id(g, mjOBJ_BODY, "robot0:mocap");
   ASSERT_EQ(b->body_geomnum[mocap_body], g->body_geomnum[mocap_body]);
@@ -453,10 +469,15 @@ TEST_P(ModelsTest, CompiledModelMatchesGenuine) {
       EXPECT_EQ(b->geom_conaffinity[bg], g->geom_conaffinity[gg]) << what;
       EXPECT_EQ(b->geom_condim[bg], g->geom_condim[gg]) << what;
       EXPECT_NEAR(b->geom_margin[bg], g->geom_margin[gg], kTol) << what;
-      ExpectNearArray(b->geom_friction + 3 * bg, g->geom_friction + 3 * gg, 3, kTol, what + " friction");
-      ExpectNearArray(b->geom_solref + mjNREF * bg, g->geom_solref + mjNREF * gg, mjNREF, kTol, what + " solref");
-      ExpectNearArray(b->geom_solimp + mjNIMP * bg, g->geom_solimp + mjNIMP * gg, mjNIMP, kTol, what + " solimp");
-      EXPECT_EQ(Name(b, mjOBJ_MATERIAL, b->geom_matid[bg]), Name(g, mjOBJ_MATERIAL, g->geom_matid[gg])) << what;
+      ExpectNearArray(b->geom_friction + 3 * bg, g->geom_friction + 3 * gg, 3, kTol,
+                      what + " friction");
+      ExpectNearArray(b->geom_solref + mjNREF * bg, g->geom_solref + mjNREF * gg, mjNREF, kTol,
+                      what + " solref");
+      ExpectNearArray(b->geom_solimp + mjNIMP * bg, g->geom_solimp + mjNIMP * gg, mjNIMP, kTol,
+                      what + " solimp");
+      EXPECT_EQ(Name(b, mjOBJ_MATERIAL, b->geom_matid[bg]),
+                Name(g, mjOBJ_MATERIAL, g->geom_matid[gg]))
+          << what;
     }
   }
 }
@@ -485,7 +506,9 @@ TEST_P(ModelsTest, SettledGripMatchesGenuine) {
 
 INSTANTIATE_TEST_SUITE_P(Tasks, ModelsTest,
                          ::testing::Values("reach", "push", "pick_and_place", "slide"),
-                         [](const ::testing::TestParamInfo<std::string>& info) { return info.param; });
+                         [](const ::testing::TestParamInfo<std::string>& info) {
+                           return info.param;
+                         });
 
 }  // namespace
 }  // namespace fetchscope

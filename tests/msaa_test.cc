@@ -82,7 +82,8 @@ class MsaaTest : public ::testing::Test {
   }
 
   // Renders the reset state with `msaa_samples` (no HUD: text is not anti-aliased anyway).
-  std::vector<uint8_t> RenderWith(int msaa_samples, int* used = nullptr, std::string* reason = nullptr) {
+  std::vector<uint8_t> RenderWith(int msaa_samples, int* used = nullptr,
+                                  std::string* reason = nullptr) {
     RenderOptions options;
     options.width = kWidth;
     options.height = kHeight;
@@ -158,14 +159,16 @@ TEST_F(MsaaTest, ZeroAndFourDifferAlongEdgesOnly) {
   for (int y = 1; y < kHeight - 1; ++y) {
     for (int x = 1; x < kWidth - 1; ++x) {
       bool differs = false;
-      for (int c = 0; c < 3; ++c) differs |= std::abs(at(aliased, x, y, c) - at(smooth, x, y, c)) > 2;
+      for (int c = 0; c < 3; ++c)
+        differs |= std::abs(at(aliased, x, y, c) - at(smooth, x, y, c)) > 2;
       if (!differs) continue;
       ++differing;
       int contrast = 0;
       for (int dy = -1; dy <= 1; ++dy) {
         for (int dx = -1; dx <= 1; ++dx) {
           for (int c = 0; c < 3; ++c) {
-            contrast = std::max(contrast, std::abs(at(aliased, x + dx, y + dy, c) - at(aliased, x, y, c)));
+            contrast =
+                std::max(contrast, std::abs(at(aliased, x + dx, y + dy, c) - at(aliased, x, y, c)));
           }
         }
       }
@@ -173,7 +176,8 @@ TEST_F(MsaaTest, ZeroAndFourDifferAlongEdgesOnly) {
     }
   }
   const long pixels = static_cast<long>(kWidth) * kHeight;
-  std::cout << differing << " of " << pixels << " pixels differ, " << at_edges << " of them at edges\n";
+  std::cout << differing << " of " << pixels << " pixels differ, " << at_edges
+            << " of them at edges\n";
   EXPECT_GT(differing, pixels / 200);  // the robot, table and object outlines
   EXPECT_LT(differing, pixels / 4);    // but not the flat areas
   EXPECT_GE(at_edges, differing * 9 / 10);
@@ -185,7 +189,8 @@ TEST_F(MsaaTest, RendererRefusesOtherCounts) {
       RenderWith(bad);
       ADD_FAILURE() << "accepted " << bad;
     } catch (const UsageError& e) {
-      EXPECT_NE(std::string(e.what()).find("msaa " + std::to_string(bad)), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("msaa " + std::to_string(bad)), std::string::npos)
+          << e.what();
     }
   }
 }
@@ -199,7 +204,8 @@ TEST_F(MsaaTest, ProfilingKeepsPixelsAndPrintsPhases) {
   const std::string printed = ::testing::internal::GetCapturedStderr();
   unsetenv("FETCHSCOPE_PROFILE");
   EXPECT_EQ(profiled, plain);
-  EXPECT_NE(printed.find("fetchscope profile: 1 frames 160x120 msaa 4"), std::string::npos) << printed;
+  EXPECT_NE(printed.find("fetchscope profile: 1 frames 160x120 msaa 4"), std::string::npos)
+      << printed;
   EXPECT_NE(printed.find("raster"), std::string::npos) << printed;
 }
 

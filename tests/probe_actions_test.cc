@@ -6,12 +6,11 @@
 #include <cstdlib>
 #include <filesystem>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <string>
 
-#include <nlohmann/json.hpp>
-
-#include "render/png_io.h"
 #include "render/contact_sheet.h"
+#include "render/png_io.h"
 #include "tests/test_util.h"
 
 namespace fetchscope {
@@ -34,7 +33,8 @@ struct Report {
 Report Probe(const std::string& env_id, const std::string& extra = "") {
   TempDir tmp;
   const fs::path out = tmp.path() / "report.json";
-  auto r = RunFetchscope("probe-actions --env-id " + env_id + " --json-out " + out.string() + " " + extra);
+  auto r = RunFetchscope("probe-actions --env-id " + env_id + " --json-out " + out.string() + " " +
+                         extra);
   EXPECT_EQ(r.exit_code, 0) << r.output;
   Report report;
   report.table = r.output;
@@ -116,7 +116,8 @@ TEST(ProbeActionsTest, ReachAndPushBlockTheGripper) {
     EXPECT_EQ(s["gripper_blocked"], true);
     EXPECT_EQ(s["opening_sign"], nullptr);
     EXPECT_NE(s["gripper"].get<std::string>().find("blocked"), std::string::npos);
-    EXPECT_EQ(r.full["finger_indices"], std::string(env) == "FetchReach-v4" ? json({3, 4}) : json({9, 10}));
+    EXPECT_EQ(r.full["finger_indices"],
+              std::string(env) == "FetchReach-v4" ? json({3, 4}) : json({9, 10}));
   }
 }
 
@@ -141,9 +142,10 @@ TEST(ProbeActionsTest, MagnitudeSweepSaturatesAboveOne) {
 TEST(ProbeActionsTest, OutWritesReportAndSheet) {
   TempDir tmp;
   const fs::path out = tmp.path() / "probe";
-  auto r = RunFetchscope("probe-actions --env-id FetchPickAndPlace-v4 --steps 4 --magnitudes 1,2 "
-                         "--width 96 --height 96 --msaa 0 --out " + out.string() + " --json-out " +
-                         (tmp.path() / "copy").string());
+  auto r = RunFetchscope(
+      "probe-actions --env-id FetchPickAndPlace-v4 --steps 4 --magnitudes 1,2 "
+      "--width 96 --height 96 --msaa 0 --out " +
+      out.string() + " --json-out " + (tmp.path() / "copy").string());
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const std::string report = ReadFile(out / "probe_actions.json");
   ASSERT_FALSE(report.empty());
@@ -185,7 +187,8 @@ TEST(ProbeActionsTest, JsonOutNamingAndNoFilesWithoutOut) {
 
 TEST(ProbeActionsTest, SameSeedSameReport) {
   TempDir tmp;
-  const std::string args = "probe-actions --env-id FetchPush-v4 --seed 3 --steps 3 --magnitudes 2 --json-out ";
+  const std::string args =
+      "probe-actions --env-id FetchPush-v4 --seed 3 --steps 3 --magnitudes 2 --json-out ";
   ASSERT_EQ(RunFetchscope(args + (tmp.path() / "a.json").string()).exit_code, 0);
   ASSERT_EQ(RunFetchscope(args + (tmp.path() / "b.json").string()).exit_code, 0);
   EXPECT_EQ(ReadFile(tmp.path() / "a.json"), ReadFile(tmp.path() / "b.json"));
@@ -197,11 +200,16 @@ TEST(ProbeActionsTest, BadInputIsAUsageError) {
     std::string mention;
   };
   const Case cases[] = {
-      {"--steps 0", "--steps"},          {"--steps 51", "--steps"},
-      {"--magnitudes ''", "--magnitudes"}, {"--magnitudes abc", "--magnitudes"},
-      {"--magnitudes nan", "--magnitudes"}, {"--magnitudes 0", "--magnitudes"},
-      {"--magnitudes 1,-2", "--magnitudes"}, {"--magnitudes 1,,2", "--magnitudes"},
-      {"--magnitudes 1,", "--magnitudes"}, {"--magnitudes inf", "--magnitudes"},
+      {"--steps 0", "--steps"},
+      {"--steps 51", "--steps"},
+      {"--magnitudes ''", "--magnitudes"},
+      {"--magnitudes abc", "--magnitudes"},
+      {"--magnitudes nan", "--magnitudes"},
+      {"--magnitudes 0", "--magnitudes"},
+      {"--magnitudes 1,-2", "--magnitudes"},
+      {"--magnitudes 1,,2", "--magnitudes"},
+      {"--magnitudes 1,", "--magnitudes"},
+      {"--magnitudes inf", "--magnitudes"},
       {"--env-id FetchNope-v4", "FetchNope"},
   };
   for (const Case& c : cases) {

@@ -63,7 +63,8 @@ TEST_F(RecordFromTest, SameEpisodesFromThreeCameras) {
   r = RunFetchscope("record --quiet --width 96 --height 96 --overlay none --crf 8 --from " +
                     run.string() + " --out " + same.string());
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  EXPECT_TRUE(EpisodeFiles(same) == EpisodeFiles(run)) << "re-rendering the same view changed a file";
+  EXPECT_TRUE(EpisodeFiles(same) == EpisodeFiles(run))
+      << "re-rendering the same view changed a file";
   const auto manifest = nlohmann::json::parse(ReadFile(same / "manifest.json"));
   EXPECT_EQ(manifest["from"], run.string());
   EXPECT_EQ(manifest["env_id"], "FetchPickAndPlace-v4");
@@ -74,8 +75,9 @@ TEST_F(RecordFromTest, SameEpisodesFromThreeCameras) {
   std::vector<std::string> first_frames = {FirstFrame(run / "episode_001.mp4")};
   for (const char* camera : {"external_camera_0", "track", "head_camera_rgb"}) {
     const fs::path out = tmp.path() / camera;
-    r = RunFetchscope(std::string("record --quiet --width 96 --height 96 --overlay default --camera ") +
-                      camera + " --from " + run.string() + " --out " + out.string());
+    r = RunFetchscope(
+        std::string("record --quiet --width 96 --height 96 --overlay default --camera ") + camera +
+        " --from " + run.string() + " --out " + out.string());
     ASSERT_EQ(r.exit_code, 0) << camera << ": " << r.output;
     for (const char* name : {"episode_000.json", "episode_001.json"}) {
       EXPECT_EQ(ReadFile(out / name), ReadFile(run / name)) << camera << " " << name;
@@ -88,8 +90,9 @@ TEST_F(RecordFromTest, SameEpisodesFromThreeCameras) {
 
   // tiled: two cameras side by side, each 96 wide
   const fs::path tiled = tmp.path() / "tiled";
-  r = RunFetchscope("record --quiet --width 96 --height 96 --camera default,external_camera_0 --from " +
-                    (run / "episode_001.json").string() + " --out " + tiled.string());
+  r = RunFetchscope(
+      "record --quiet --width 96 --height 96 --camera default,external_camera_0 --from " +
+      (run / "episode_001.json").string() + " --out " + tiled.string());
   ASSERT_EQ(r.exit_code, 0) << r.output;
   auto probe = RunCommand("ffprobe -v error -show_entries stream=width,height -of json " +
                           (tiled / "episode_001.mp4").string());
@@ -124,10 +127,10 @@ TEST_F(RecordFromTest, TamperedTrajectoryIsCaughtAtTheRightStep) {
          steps[5]["observation"][3] = steps[5]["observation"][3].get<double>() + 1e-12;
        },
        "observation[3]"},
-      {"an achieved goal", 9,
-       [](nlohmann::json& steps) { steps[9]["achieved_goal"][2] = 0.5; }, "achieved_goal[2]"},
-      {"the reset", 0,
-       [](nlohmann::json& steps) { steps[0]["desired_goal"][0] = 1.0; }, "desired_goal[0]"},
+      {"an achieved goal", 9, [](nlohmann::json& steps) { steps[9]["achieved_goal"][2] = 0.5; },
+       "achieved_goal[2]"},
+      {"the reset", 0, [](nlohmann::json& steps) { steps[0]["desired_goal"][0] = 1.0; },
+       "desired_goal[0]"},
   };
   for (const Change& c : changes) {
     const fs::path file = tmp.path() / "tampered.json";
@@ -199,8 +202,8 @@ TEST_F(RecordFromTest, ReRenderWithLayersIsProbedAndTheSameWithJobs) {
     r = RunFetchscope(
         "record --quiet --width 96 --height 72 --layers rgb,segmentation,depth "
         "--crf 0 --format mp4,gif --jobs " +
-        std::to_string(jobs) + (jobs == 2 ? " --readback async" : " --readback sync") +
-        " --from " + run.string() + " --out " + out.string());
+        std::to_string(jobs) + (jobs == 2 ? " --readback async" : " --readback sync") + " --from " +
+        run.string() + " --out " + out.string());
     ASSERT_EQ(r.exit_code, 0) << r.output;
     files[jobs] = EpisodeFiles(out);
   }
@@ -361,13 +364,14 @@ TEST_F(RecordFromTest, HindsightOverlayKeepsTrajectoriesAndIsTheSameWithAnyJobs)
     EXPECT_EQ(ReadFile(one / (name + ".json")), ReadFile(plain / (name + ".json")));
     // the markers show on every frame after the reset (each ends a transition), not on the
     // reset frame
-    const std::string with = Frames(one / (name + ".mp4")), without = Frames(plain / (name + ".mp4"));
+    const std::string with = Frames(one / (name + ".mp4")),
+                      without = Frames(plain / (name + ".mp4"));
     constexpr size_t kFrameBytes = 160 * 160 * 3;
     ASSERT_EQ(with.size(), 16 * kFrameBytes);
     ASSERT_EQ(without.size(), with.size());
     for (size_t t = 0; t < 16; ++t) {
-      const bool same = with.compare(t * kFrameBytes, kFrameBytes, without, t * kFrameBytes,
-                                     kFrameBytes) == 0;
+      const bool same =
+          with.compare(t * kFrameBytes, kFrameBytes, without, t * kFrameBytes, kFrameBytes) == 0;
       EXPECT_EQ(same, t == 0) << name << " frame " << t;
     }
     const auto& h = m1["episodes"][k]["hindsight"];

@@ -93,8 +93,8 @@ TEST_F(RecordTest, VideoFrameKIsTheStateAfterStepK) {
       " --env-id FetchPickAndPlace-v4 --policy random --seed 3 --overlay none --width 128 --height "
       "128 --backend osmesa";
   const std::string video = " --crf 8";
-  ASSERT_EQ(RunFetchscope("record --quiet --steps " + std::to_string(steps) + common + video + " --out " +
-                          tmp.path().string())
+  ASSERT_EQ(RunFetchscope("record --quiet --steps " + std::to_string(steps) + common + video +
+                          " --out " + tmp.path().string())
                 .exit_code,
             0);
   const fs::path raw = tmp.path() / "frames.rgb";

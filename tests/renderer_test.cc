@@ -18,17 +18,17 @@
 #include <string>
 #include <vector>
 
-#include "render/gl_context.h"
 #include "cli/render_common.h"
+#include "render/gl_context.h"
 #include "render/png_io.h"
 #include "src/assets.h"
 #include "src/env_spec.h"
 #include "src/episode.h"
+#include "src/errors.h"
 #include "src/fetch_env.h"
 #include "src/hindsight.h"
-#include "src/policy.h"
-#include "src/errors.h"
 #include "src/mj_handles.h"
+#include "src/policy.h"
 #include "tests/test_util.h"
 
 namespace fetchscope {
@@ -144,14 +144,17 @@ double Ciede2000(const std::array<uint8_t, 3>& rgb1, const std::array<uint8_t, 3
     const double x = (0.4124564 * lin[0] + 0.3575761 * lin[1] + 0.1804375 * lin[2]) / 0.95047;
     const double y = 0.2126729 * lin[0] + 0.7151522 * lin[1] + 0.0721750 * lin[2];
     const double z = (0.0193339 * lin[0] + 0.1191920 * lin[1] + 0.9503041 * lin[2]) / 1.08883;
-    auto f = [](double t) { return t > 216.0 / 24389 ? std::cbrt(t) : (24389.0 / 27 * t + 16) / 116; };
+    auto f = [](double t) {
+      return t > 216.0 / 24389 ? std::cbrt(t) : (24389.0 / 27 * t + 16) / 116;
+    };
     return std::array<double, 3>{116 * f(y) - 16, 500 * (f(x) - f(y)), 200 * (f(y) - f(z))};
   };
   const auto [l1, a1, b1] = lab(rgb1);
   const auto [l2, a2, b2] = lab(rgb2);
   const double deg = M_PI / 180;
   const double cbar = (std::hypot(a1, b1) + std::hypot(a2, b2)) / 2;
-  const double g = 0.5 * (1 - std::sqrt(std::pow(cbar, 7) / (std::pow(cbar, 7) + std::pow(25.0, 7))));
+  const double g =
+      0.5 * (1 - std::sqrt(std::pow(cbar, 7) / (std::pow(cbar, 7) + std::pow(25.0, 7))));
   const double a1p = (1 + g) * a1, a2p = (1 + g) * a2;
   const double c1p = std::hypot(a1p, b1), c2p = std::hypot(a2p, b2);
   auto hue = [&](double b, double ap) {
@@ -469,7 +472,8 @@ TEST_P(RendererTest, AsyncReadbackGivesTheSamePixelsFrameForFrame) {
       std::vector<std::vector<uint8_t>> expected(frames, std::vector<uint8_t>(bytes));
       std::vector<std::vector<uint8_t>> got(frames, std::vector<uint8_t>(bytes, 0x5A));
       std::vector<uint8_t*> order;
-      const double x0 = data_->qpos[model_->jnt_qposadr[mj_name2id(model_.get(), mjOBJ_JOINT, "robot0:slide0")]];
+      const double x0 =
+          data_->qpos[model_->jnt_qposadr[mj_name2id(model_.get(), mjOBJ_JOINT, "robot0:slide0")]];
       for (int k = 0; k < frames; ++k) {
         SetJoint("robot0:slide0", {x0 + 0.05 * k});
         mj_forward(model_.get(), data_.get());
@@ -486,7 +490,8 @@ TEST_P(RendererTest, AsyncReadbackGivesTheSamePixelsFrameForFrame) {
         EXPECT_EQ(order[k], got[k].data()) << "frames come back in submission order";
         EXPECT_TRUE(got[k] == expected[k]) << backend << " msaa " << msaa << " frame " << k;
       }
-      EXPECT_NE(expected[0], expected[frames - 1]) << "the frames differ: the test can see a mix-up";
+      EXPECT_NE(expected[0], expected[frames - 1])
+          << "the frames differ: the test can see a mix-up";
       SetJoint("robot0:slide0", {x0});
       mj_forward(model_.get(), data_.get());
     }
@@ -501,7 +506,8 @@ TEST_P(RendererTest, AutoReadbackIsSyncOnSoftwareRasterizers) {
     EXPECT_TRUE(renderer.async_readback()) << renderer.readback_reason();
   } else {
     EXPECT_FALSE(renderer.async_readback());
-    EXPECT_NE(renderer.readback_reason().find("software"), std::string::npos) << renderer.readback_reason();
+    EXPECT_NE(renderer.readback_reason().find("software"), std::string::npos)
+        << renderer.readback_reason();
     EXPECT_EQ(renderer.pipeline_depth(), 1);
   }
 }
@@ -766,15 +772,18 @@ TEST_P(RendererTest, HudScalesWithTheFrameAndIsDroppedWhenTooSmall) {
                    RenderWith(*gl, Options("hud", side, side)), side);
   };
   const Difference small = hud_box(480), large = hud_box(960);
-  const double h_small = small.max_row - small.min_row + 1, h_large = large.max_row - large.min_row + 1;
-  const double w_small = small.max_col - small.min_col + 1, w_large = large.max_col - large.min_col + 1;
+  const double h_small = small.max_row - small.min_row + 1,
+               h_large = large.max_row - large.min_row + 1;
+  const double w_small = small.max_col - small.min_col + 1,
+               w_large = large.max_col - large.min_col + 1;
   EXPECT_NEAR(h_large / h_small, 2.0, 0.15);
   EXPECT_NEAR(w_large / w_small, 2.0, 0.15);
   // the same share of the frame
   EXPECT_NEAR(small.fraction, large.fraction, 0.25 * small.fraction);
   // too small to read: no HUD at all, the frame is as without it
   for (int side : {64, 120}) {
-    EXPECT_EQ(RenderWith(*gl, Options("none", side, side)), RenderWith(*gl, Options("hud", side, side)))
+    EXPECT_EQ(RenderWith(*gl, Options("none", side, side)),
+              RenderWith(*gl, Options("hud", side, side)))
         << side;
   }
 }
@@ -834,9 +843,16 @@ TEST(HudEpisode, OnEveryFrameOrOnNoneInOneBoxWithinItsShare) {
     std::optional<Difference> first_box;
   };
   std::vector<View> views;
-  for (auto [w, h] : std::vector<std::pair<int, int>>{{144, 144}, {150, 150}, {160, 160}, {219, 219},
-                                                     {240, 240}, {319, 319}, {320, 239}, {320, 240},
-                                                     {336, 336}, {480, 270}}) {
+  for (auto [w, h] : std::vector<std::pair<int, int>>{{144, 144},
+                                                      {150, 150},
+                                                      {160, 160},
+                                                      {219, 219},
+                                                      {240, 240},
+                                                      {319, 319},
+                                                      {320, 239},
+                                                      {320, 240},
+                                                      {336, 336},
+                                                      {480, 270}}) {
     View v;
     v.w = w;
     v.h = h;
@@ -919,7 +935,8 @@ TEST(HindsightOverlay, PinsShowInTheRewardColoursWhereTheyProject) {
   RunPush(env, "random", kSeed, kSteps, [&](const StepRecord& record, const StepResult*) {
     if (record.t == 0) return true;
     FrameInfo info = cli::MakeFrameInfo(env, record);
-    for (const HindsightGoal& g : her.transitions[record.t - 1]) info.relabelled.push_back({g.goal, g.success});
+    for (const HindsightGoal& g : her.transitions[record.t - 1])
+      info.relabelled.push_back({g.goal, g.success});
     std::vector<uint8_t> a(kSize * kSize * 3), b(a.size()), depth;
     pins.Render(env.data(), info, a.data());
     plain.Render(env.data(), info, b.data());
@@ -939,7 +956,8 @@ TEST(HindsightOverlay, PinsShowInTheRewardColoursWhereTheyProject) {
       // or by a bead of the other colour in front of it
       for (const HindsightPin& other : all) {
         const Pixel q = Project(cam, other.head, kSize, kSize, fovy);
-        if (other.success != pin.success && std::hypot(q.col - p.col, q.row - p.row) < 2 * bead_px &&
+        if (other.success != pin.success &&
+            std::hypot(q.col - p.col, q.row - p.row) < 2 * bead_px &&
             ViewDepth(cam, other.head) < ViewDepth(cam, pin.head)) {
           covered = true;
         }
@@ -1019,12 +1037,15 @@ TEST(RenderCommand, WritesTheLegendWhereTheHelpSays) {
   EXPECT_EQ(flat.find("NAME_legend.json"), std::string::npos);
   testing::TempDir tmp;
   const std::string common = "render --env-id FetchPush-v4 --width 96 --height 96 ";
-  auto r = testing::RunFetchscope(common + "--layers rgb,segmentation -o " + (tmp.path() / "both.png").string());
+  auto r = testing::RunFetchscope(common + "--layers rgb,segmentation -o " +
+                                  (tmp.path() / "both.png").string());
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  r = testing::RunFetchscope(common + "--layers segmentation -o " + (tmp.path() / "alone.png").string());
+  r = testing::RunFetchscope(common + "--layers segmentation -o " +
+                             (tmp.path() / "alone.png").string());
   ASSERT_EQ(r.exit_code, 0) << r.output;
   std::set<std::string> files;
-  for (const auto& entry : fs::directory_iterator(tmp.path())) files.insert(entry.path().filename());
+  for (const auto& entry : fs::directory_iterator(tmp.path()))
+    files.insert(entry.path().filename());
   EXPECT_EQ(files, (std::set<std::string>{"both.png", "both_segmentation.png",
                                           "both_segmentation_legend.json", "alone.png",
                                           "alone_segmentation_legend.json"}));
@@ -1103,8 +1124,8 @@ TEST(HudPlacement, TheTileAloneDecidesAndTheBoxKeepsItsShareOnEveryFrame) {
   FrameInfo reset;  // the same run's reset frame: narrow values, no action, no transition
   reset.title = LargestHudFrame().title;
   const HudText first = FormatHud(reset, all);
-  const std::vector<int> sides = {1,   64,  120, 150, 160, 200, 219, 220, 239, 240, 241, 300,
-                                  319, 320, 321, 360, 400, 480, 512, 640, 720, 960, 1080, 1920, 4096};
+  const std::vector<int> sides = {1,   64,  120, 150, 160, 200, 219, 220, 239, 240,  241,  300, 319,
+                                  320, 321, 360, 400, 480, 512, 640, 720, 960, 1080, 1920, 4096};
   int drawn = 0;
   for (int w : sides) {
     for (int h : sides) {
@@ -1155,7 +1176,6 @@ TEST(HudPlacement, TextNeverLeavesTheBox) {
   }
   EXPECT_GT(changed, 500);
 }
-
 
 }  // namespace
 }  // namespace fetchscope

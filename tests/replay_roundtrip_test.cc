@@ -7,9 +7,8 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
-#include <string>
-
 #include <nlohmann/json.hpp>
+#include <string>
 
 #include "tests/test_util.h"
 
@@ -32,8 +31,8 @@ class ReplayRoundTrip : public ::testing::Test {
 void ExpectRecordReplayRoundTrip(const std::string& env, const std::string& policy,
                                  const std::string& dtype) {
   TempDir tmp;
-  const std::string common = "record --quiet --env-id " + env +
-                             " --width 32 --height 32 --steps 12 --seed 3 ";
+  const std::string common =
+      "record --quiet --env-id " + env + " --width 32 --height 32 --steps 12 --seed 3 ";
   const fs::path first = tmp.path() / "first";
   auto r = RunFetchscope(common + "--episodes 3 --policy " + policy + " --out " + first.string());
   ASSERT_EQ(r.exit_code, 0) << r.output;
@@ -53,7 +52,8 @@ void ExpectRecordReplayRoundTrip(const std::string& env, const std::string& poli
     // which differs: replay:FILE here)
     auto packets = [](const fs::path& mp4) {
       return testing::RunCommand("ffmpeg -v error -i " + mp4.string() +
-                                 " -map 0:v:0 -c copy -f framemd5 -").output;
+                                 " -map 0:v:0 -c copy -f framemd5 -")
+          .output;
     };
     const std::string a = packets(again / (name + ".mp4")), b = packets(first / (name + ".mp4"));
     EXPECT_NE(a.find(", "), std::string::npos) << a;  // packets were listed
@@ -78,7 +78,8 @@ TEST_F(ReplayRoundTrip, RolloutTrajectoryReplaysAllItsEpisodes) {
   r = RunFetchscope(common + "--policy replay:" + (tmp.path() / "a.json").string() +
                     " --json-out " + (tmp.path() / "b.json").string());
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  EXPECT_EQ(ReadJson(tmp.path() / "b.json")["episodes"], ReadJson(tmp.path() / "a.json")["episodes"]);
+  EXPECT_EQ(ReadJson(tmp.path() / "b.json")["episodes"],
+            ReadJson(tmp.path() / "a.json")["episodes"]);
 }
 
 // record's per-episode trajectory (episode_002.json holds episode 2 alone) replays through
@@ -88,9 +89,11 @@ TEST_F(ReplayRoundTrip, RolloutTrajectoryReplaysAllItsEpisodes) {
 TEST_F(ReplayRoundTrip, RolloutAndRenderReplayOneEpisodeOfARecordRun) {
   TempDir tmp;
   const fs::path run = tmp.path() / "run";
-  auto r = RunFetchscope("record --quiet --no-report --env-id FetchPush-v4 --policy random "
-                         "--seed 9 --episodes 3 --steps 6 --width 48 --height 48 --sheet-every 1 "
-                         "--overlay none --out " + run.string());
+  auto r = RunFetchscope(
+      "record --quiet --no-report --env-id FetchPush-v4 --policy random "
+      "--seed 9 --episodes 3 --steps 6 --width 48 --height 48 --sheet-every 1 "
+      "--overlay none --out " +
+      run.string());
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const std::string file = (run / "episode_002.json").string();
   const std::string common = "--env-id FetchPush-v4 --seed 9 --policy replay:" + file;
@@ -113,8 +116,10 @@ TEST_F(ReplayRoundTrip, RolloutAndRenderReplayOneEpisodeOfARecordRun) {
   r = RunFetchscope("render --steps 4 --width 48 --height 48 --overlay none " + common + " -o " +
                     (tmp.path() / "frame.png").string());
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  r = RunFetchscope("render --steps 4 --width 48 --height 48 --overlay none --env-id FetchPush-v4 "
-                    "--seed 9 --policy random -o " + (tmp.path() / "episode0.png").string());
+  r = RunFetchscope(
+      "render --steps 4 --width 48 --height 48 --overlay none --env-id FetchPush-v4 "
+      "--seed 9 --policy random -o " +
+      (tmp.path() / "episode0.png").string());
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(ReadFile(tmp.path() / "frame.png"), ReadFile(tmp.path() / "episode0.png"))
       << "render played episode 0, not the file's episode 2";
@@ -140,13 +145,15 @@ TEST_F(ReplayRoundTrip, CsvWithReplayDtypeFloat32ReproducesARandomRun) {
   std::ofstream(tmp.path() / "a.jsonl") << jsonl;
   for (const char* file : {"a.csv", "a.jsonl"}) {
     SCOPED_TRACE(file);
-    r = RunFetchscope(common + "--replay-dtype float32 --policy replay:" +
-                      (tmp.path() / file).string() + " --json-out " + (tmp.path() / "b.json").string());
+    r = RunFetchscope(common +
+                      "--replay-dtype float32 --policy replay:" + (tmp.path() / file).string() +
+                      " --json-out " + (tmp.path() / "b.json").string());
     ASSERT_EQ(r.exit_code, 0) << r.output;
     const nlohmann::json b = ReadJson(tmp.path() / "b.json");
     EXPECT_EQ(b["episodes"], a["episodes"]);
-    r = RunFetchscope(common + "--replay-dtype float64 --policy replay:" +
-                      (tmp.path() / file).string() + " --json-out " + (tmp.path() / "c.json").string());
+    r = RunFetchscope(common +
+                      "--replay-dtype float64 --policy replay:" + (tmp.path() / file).string() +
+                      " --json-out " + (tmp.path() / "c.json").string());
     ASSERT_EQ(r.exit_code, 0) << r.output;
     const nlohmann::json c = ReadJson(tmp.path() / "c.json");
     EXPECT_EQ(c["episodes"][0]["action_dtype"], "float64");

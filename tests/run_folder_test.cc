@@ -1,6 +1,8 @@
 // record's --out folder holds one run: a folder with another run's files is refused (exit 2),
 // --overwrite replaces that run wholly, --resume continues an interrupted run with the bytes of
 // an uninterrupted one, and a run that fails leaves nothing that was not there before.
+#include "cli/run_folder.h"
+
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/wait.h>
@@ -11,15 +13,13 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <set>
 #include <string>
 #include <thread>
 #include <tuple>
 #include <vector>
 
-#include <nlohmann/json.hpp>
-
-#include "cli/run_folder.h"
 #include "tests/test_util.h"
 
 namespace fetchscope {
@@ -266,8 +266,9 @@ TEST_F(RunFolderTest, ResumeWithNothingToResumeSaysSo) {
 // the resumed run must position it as if the run had never stopped.
 TEST_F(RunFolderTest, ResumeAfterSigintGivesTheBytesOfAnUninterruptedRun) {
   TempDir tmp;
-  const std::string run = "record --quiet --env-id FetchPickAndPlace-v4 --width 32 --height 32 "
-                          "--policy random --seed 7 --episodes 12 ";
+  const std::string run =
+      "record --quiet --env-id FetchPickAndPlace-v4 --width 32 --height 32 "
+      "--policy random --seed 7 --episodes 12 ";
   const fs::path whole = tmp.path() / "whole", out = tmp.path() / "run";
   auto r = RunFetchscope(run + "--out " + whole.string());
   ASSERT_EQ(r.exit_code, 0) << r.output;
@@ -318,8 +319,8 @@ TEST_F(RunFolderTest, MergeManifestsTreatsIncompleteEpisodesAsMissing) {
   EXPECT_EQ(m["episodes"][1]["complete"], true);
   m["episodes"][1]["complete"] = false;
   WriteText(out / "manifest.json", m.dump());
-  r = RunFetchscope("merge-manifests --quiet --out " + (tmp.path() / "merged.json").string() +
-                    " " + out.string());
+  r = RunFetchscope("merge-manifests --quiet --out " + (tmp.path() / "merged.json").string() + " " +
+                    out.string());
   EXPECT_EQ(r.exit_code, 1) << r.output;
   EXPECT_NE(r.output.find("lacks episodes 1"), std::string::npos) << r.output;
 }
@@ -328,8 +329,9 @@ TEST_F(RunFolderTest, MergeManifestsTreatsIncompleteEpisodesAsMissing) {
 // leave nothing: neither the folders this run made nor files in a folder that was there.
 TEST_F(RunFolderTest, AFailedRunLeavesNothingBehind) {
   TempDir tmp;
-  const std::string exec_run = "record --quiet --env-id FetchReach-v4 --width 32 --height 32 "
-                               "--steps 5 --episodes 3 ";
+  const std::string exec_run =
+      "record --quiet --env-id FetchReach-v4 --width 32 --height 32 "
+      "--steps 5 --episodes 3 ";
   for (const std::string& failing :
        {std::string("--policy \"exec:read l; echo 0 0 0 0; read l; exit 3\""),
         std::string("--exec-timeout 0.3 --policy \"exec:sleep 30\""),

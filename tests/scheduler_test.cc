@@ -3,15 +3,13 @@
 // --jobs 0 and the encoder budget count the cores this process may use (affinity mask, cgroup
 // quota), not the machine's; record's manifest says which encoder it used and why.
 #include <gtest/gtest.h>
-
 #include <sched.h>
 
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <set>
 #include <string>
-
-#include <nlohmann/json.hpp>
 
 #include "cli/common.h"
 #include "tests/test_util.h"
@@ -52,8 +50,9 @@ TEST(Scheduler, RolloutJsonIsTheSameWithAnyJobs) {
   EXPECT_EQ(JsonOf(tmp, "j3", run + " --jobs 3"), one);
   EXPECT_EQ(JsonOf(tmp, "t3", run + " --jobs 3 --worker-mode thread"), one);
   // a different seed must give different JSON, or the comparisons above prove nothing
-  EXPECT_NE(JsonOf(tmp, "other", "rollout --env-id FetchPickAndPlace-v4 --policy random --seed 12 "
-                                 "--episodes 5 --steps 6 --jobs 2"),
+  EXPECT_NE(JsonOf(tmp, "other",
+                   "rollout --env-id FetchPickAndPlace-v4 --policy random --seed 12 "
+                   "--episodes 5 --steps 6 --jobs 2"),
             one);
 }
 
@@ -72,8 +71,9 @@ TEST(Scheduler, RandomEpisodesJsonIsTheSameWithAnyJobs) {
 TEST(Scheduler, JobsZeroAndTheEncoderBudgetCountTheAffinityMask) {
   if (RunCommand("taskset -c 0 true").exit_code != 0) GTEST_SKIP() << "no taskset here";
   TempDir tmp;
-  const std::string run = " record --quiet --no-report --env-id FetchReach-v4 --episodes 3 "
-                          "--steps 2 --width 48 --height 48 --jobs 0 --out ";
+  const std::string run =
+      " record --quiet --no-report --env-id FetchReach-v4 --episodes 3 "
+      "--steps 2 --width 48 --height 48 --jobs 0 --out ";
   auto r = RunCommand("taskset -c 0 " + std::string(FETCHSCOPE_BIN) + run +
                       (tmp.path() / "one").string());
   ASSERT_EQ(r.exit_code, 0) << r.output;
@@ -130,9 +130,10 @@ TEST(Scheduler, CgroupQuotaIsReadFromTheProcessesCgroupAndItsAncestors) {
 // why, and every episode's video is made with it.
 TEST(Scheduler, ManifestSaysWhichEncoderAndWhy) {
   TempDir tmp;
-  const auto r = RunFetchscope("record --quiet --no-report --env-id FetchReach-v4 --episodes 2 "
-                               "--steps 2 --width 48 --height 48 --jobs 2 --codec auto --out " +
-                               (tmp.path() / "run").string());
+  const auto r = RunFetchscope(
+      "record --quiet --no-report --env-id FetchReach-v4 --episodes 2 "
+      "--steps 2 --width 48 --height 48 --jobs 2 --codec auto --out " +
+      (tmp.path() / "run").string());
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const nlohmann::json m = nlohmann::json::parse(ReadFile(tmp.path() / "run" / "manifest.json"));
   const nlohmann::json& video = m["video"];
@@ -145,9 +146,10 @@ TEST(Scheduler, ManifestSaysWhichEncoderAndWhy) {
     EXPECT_NE(reason.find("no NVIDIA GPU"), std::string::npos) << reason;
   }
   for (const char* name : {"episode_000.mp4", "episode_001.mp4"}) {
-    const auto probe = RunCommand("ffprobe -v error -select_streams v:0 -show_entries "
-                                  "stream=codec_name -of csv=p=0 " +
-                                  (tmp.path() / "run" / name).string());
+    const auto probe = RunCommand(
+        "ffprobe -v error -select_streams v:0 -show_entries "
+        "stream=codec_name -of csv=p=0 " +
+        (tmp.path() / "run" / name).string());
     ASSERT_EQ(probe.exit_code, 0) << probe.output;
     EXPECT_EQ(probe.output, "h264\n");  // libx264 and h264_nvenc both write H.264
   }
@@ -158,8 +160,10 @@ TEST(Scheduler, ManifestSaysWhichEncoderAndWhy) {
 // core, as processes and as threads, each with the encoder it used.
 TEST(Scheduler, BenchNodeReportsCoresEncoderRenderAndRecordRows) {
   TempDir tmp;
-  const auto r = RunFetchscope("bench --what node --backends egl --seconds 0.4 --width 48 "
-                               "--height 48 --json-out " + (tmp.path() / "b.json").string());
+  const auto r = RunFetchscope(
+      "bench --what node --backends egl --seconds 0.4 --width 48 "
+      "--height 48 --json-out " +
+      (tmp.path() / "b.json").string());
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const nlohmann::json node = nlohmann::json::parse(ReadFile(tmp.path() / "b.json"))["node"];
   const int cores = node["cores"];

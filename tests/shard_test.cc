@@ -177,7 +177,6 @@ std::string Record(int episodes = 7, int seed = 11) {
 }
 const std::string kRun = Record();
 
-
 class ShardRunTest : public ::testing::Test {
  protected:
   void SetUp() override { ClearShardEnvironment(); }

@@ -10,11 +10,10 @@
 #include <chrono>
 #include <cstdlib>
 #include <filesystem>
+#include <nlohmann/json.hpp>
 #include <set>
 #include <string>
 #include <thread>
-
-#include <nlohmann/json.hpp>
 
 #include "render/png_io.h"
 #include "tests/test_util.h"
@@ -59,8 +58,10 @@ int WaitExit(pid_t pid) {
 
 // Frames ffprobe decodes from `mp4`, or -1 if it does not play.
 int DecodedFrames(const fs::path& mp4) {
-  auto r = RunCommand("ffprobe -v error -count_frames -select_streams v:0 -show_entries "
-                      "stream=nb_read_frames -of csv=p=0 " + mp4.string());
+  auto r = RunCommand(
+      "ffprobe -v error -count_frames -select_streams v:0 -show_entries "
+      "stream=nb_read_frames -of csv=p=0 " +
+      mp4.string());
   if (r.exit_code != 0 || r.output.empty()) return -1;
   return std::atoi(r.output.c_str());
 }
@@ -123,8 +124,8 @@ TEST_P(SignalsTest, RecordStopsCleanlyAndSaysInterrupted) {
   }
   // and nothing else is there: the episode in progress was finalized (and listed) or removed
   for (const auto& f : fs::directory_iterator(out)) {
-    EXPECT_TRUE(listed.count(f.path().filename().string())) << "unlisted or temporary file "
-                                                            << f.path();
+    EXPECT_TRUE(listed.count(f.path().filename().string()))
+        << "unlisted or temporary file " << f.path();
   }
   ExpectFinalFilesWhole(out);
 }
@@ -233,7 +234,8 @@ bool AllGone(const std::set<pid_t>& pids) {
 // final name is whole.
 void ExpectListedEpisodesPlay(const nlohmann::json& m, const fs::path& out) {
   for (const auto& e : m["episodes"]) {
-    EXPECT_EQ(DecodedFrames(out / e["video"].get<std::string>()), e["frames"].get<int>()) << e.dump();
+    EXPECT_EQ(DecodedFrames(out / e["video"].get<std::string>()), e["frames"].get<int>())
+        << e.dump();
   }
   ExpectFinalFilesWhole(out);
 }
@@ -279,7 +281,8 @@ TEST_P(SignalsTest, WorkerProcessesStopCleanlyWithNoOrphans) {
   EXPECT_LT(m["episodes"].size(), 60u);
   std::set<long> manifest_pids;
   for (const auto& w : m["workers"]) manifest_pids.insert(w["pid"].get<long>());
-  for (pid_t w : workers) EXPECT_TRUE(manifest_pids.count(w)) << "worker " << w << " not in the manifest";
+  for (pid_t w : workers)
+    EXPECT_TRUE(manifest_pids.count(w)) << "worker " << w << " not in the manifest";
   ExpectListedEpisodesPlay(m, out);
 }
 

@@ -1,5 +1,5 @@
-// Soak: one `record` of 10,000 frames (197 episodes x 51 frames = 10,047) with flat memory. Minutes long,
-// so it carries the ctest label `soak` and is built only with -DFETCHSCOPE_SOAK=ON:
+// Soak: one `record` of 10,000 frames (197 episodes x 51 frames = 10,047) with flat memory. Minutes
+// long, so it carries the ctest label `soak` and is built only with -DFETCHSCOPE_SOAK=ON:
 //   cmake -S . -B build -DFETCHSCOPE_SOAK=ON && cmake --build build -j2 --target soak_test
 //   ctest --test-dir build -L soak --output-on-failure
 #include <gtest/gtest.h>
@@ -12,11 +12,10 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <thread>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "tests/test_util.h"
 
@@ -50,8 +49,9 @@ TEST(Soak, RecordTenThousandFramesWithFlatMemory) {
   const std::string command =
       "exec " + std::string(FETCHSCOPE_BIN) +
       " record --quiet --env-id FetchPickAndPlace-v4 --policy scripted --width 160 --height 120 "
-      "--episodes " + std::to_string(kEpisodes) + " --out " + out.string() + " >" +
-      (tmp.path() / "log").string() + " 2>&1";
+      "--episodes " +
+      std::to_string(kEpisodes) + " --out " + out.string() + " >" + (tmp.path() / "log").string() +
+      " 2>&1";
   const pid_t pid = fork();
   if (pid == 0) {
     execl("/bin/sh", "sh", "-c", command.c_str(), static_cast<char*>(nullptr));

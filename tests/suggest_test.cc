@@ -63,13 +63,15 @@ TEST(SuggestTest, ParsersAcceptSpacesAndSuggestNames) {
   ASSERT_EQ(free.size(), 2u);
   EXPECT_EQ(free[0].free.lookat[1], 0.7);
   EXPECT_EQ(free[0].free.distance, 2.0);
-  EXPECT_NE(UsageMessage([] { ParseCameraList("defualt", nullptr); }).find("did you mean 'default'?"),
-            std::string::npos);
+  EXPECT_NE(
+      UsageMessage([] { ParseCameraList("defualt", nullptr); }).find("did you mean 'default'?"),
+      std::string::npos);
 
   EXPECT_NE(UsageMessage([] { FindEnvSpec("FetchPsuh-v4"); }).find("did you mean 'FetchPush-v4'?"),
             std::string::npos);
-  EXPECT_NE(UsageMessage([] { FindEnvSpec("fetchreach-v4"); }).find("did you mean 'FetchReach-v4'?"),
-            std::string::npos);
+  EXPECT_NE(
+      UsageMessage([] { FindEnvSpec("fetchreach-v4"); }).find("did you mean 'FetchReach-v4'?"),
+      std::string::npos);
 }
 
 }  // namespace

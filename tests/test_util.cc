@@ -51,7 +51,8 @@ TempDir::~TempDir() {
 }
 
 std::filesystem::path GenuineAssetsDir() {
-  std::filesystem::path p = std::filesystem::path(FETCHSCOPE_SHARED_DIR) / "gymnasium-robotics-assets";
+  std::filesystem::path p =
+      std::filesystem::path(FETCHSCOPE_SHARED_DIR) / "gymnasium-robotics-assets";
   if (std::filesystem::exists(p / "fetch" / "reach.xml")) return std::filesystem::canonical(p);
   return {};
 }

@@ -130,8 +130,8 @@ static int visible_ordinal(int physical) {
 static EGLDisplay make_display(int device) {
   struct FakeDisplay* fake = &g_displays[device < 0 ? MAX_DEVICES : device];
   if (fake->real == EGL_NO_DISPLAY) {
-    PFNEGLGETPLATFORMDISPLAYEXTPROC get = (PFNEGLGETPLATFORMDISPLAYEXTPROC)REAL(
-        eglGetProcAddress)("eglGetPlatformDisplayEXT");
+    PFNEGLGETPLATFORMDISPLAYEXTPROC get =
+        (PFNEGLGETPLATFORMDISPLAYEXTPROC)REAL(eglGetProcAddress)("eglGetPlatformDisplayEXT");
     fake->real = get(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY, NULL);
     fake->device = device;
   }
@@ -259,9 +259,7 @@ EGLBoolean eglInitialize(EGLDisplay display, EGLint* major, EGLint* minor) {
   return REAL(eglInitialize)(real_display(display), major, minor);
 }
 
-EGLBoolean eglTerminate(EGLDisplay display) {
-  return REAL(eglTerminate)(real_display(display));
-}
+EGLBoolean eglTerminate(EGLDisplay display) { return REAL(eglTerminate)(real_display(display)); }
 
 EGLBoolean eglBindAPI(EGLenum api) { return REAL(eglBindAPI)(api); }
 
@@ -279,8 +277,7 @@ EGLBoolean eglDestroyContext(EGLDisplay display, EGLContext context) {
   return REAL(eglDestroyContext)(real_display(display), context);
 }
 
-EGLSurface eglCreatePbufferSurface(EGLDisplay display, EGLConfig config,
-                                   const EGLint* attributes) {
+EGLSurface eglCreatePbufferSurface(EGLDisplay display, EGLConfig config, const EGLint* attributes) {
   return REAL(eglCreatePbufferSurface)(real_display(display), config, attributes);
 }
 
