@@ -21,16 +21,17 @@
 #include <utility>
 #include <vector>
 
+#include "base/errors.h"
+#include "base/json_util.h"
 #include "cli/chapter.h"
+#include "cli/command.h"
 #include "cli/common.h"
 #include "cli/render_common.h"
-#include "render/png_io.h"
+#include "encode/png_io.h"
 #include "render/projection.h"
 #include "render/renderer.h"
 #include "render/text.h"
 #include "src/episode.h"
-#include "src/errors.h"
-#include "src/json_util.h"
 #include "src/policy.h"
 
 namespace fetchscope::cli {
@@ -1214,13 +1215,16 @@ struct AnatomyOptions {
   bool no_card = false;
 };
 
-void RunAnatomy(AnatomyOptions o) {
+int RunAnatomy(AnatomyOptions o) {
   const EnvSpec& spec = FindEnvSpec(o.env.env_id);  // bad input fails before any file
   ParseSeed(o.env.seed);
   ParseMsaa(o.card.view.msaa);
   const std::string prefix = (std::filesystem::path(o.out) / "ch01").string();
   std::printf("D1 (describe, %s)\n", spec.id.c_str());
-  RunDescribe(o.env, prefix + "_env");
+  DescribeOptions describe;
+  describe.env = o.env;
+  describe.json_out = prefix + "_env";
+  RunDescribe(describe);
   std::printf("\nD2 (reward-check)\n");
   RewardCheckOptions check;
   check.env = o.env;
@@ -1230,8 +1234,7 @@ void RunAnatomy(AnatomyOptions o) {
   RandomEpisodesOptions random;
   random.env = o.env;
   random.json_out = prefix;
-  RunRandomEpisodes(random);
-  if (ExitStatus() != 0) return;  // interrupted
+  if (const int status = RunRandomEpisodes(random); status != 0) return status;  // interrupted
 
   std::printf("\nD4 answers (%s)\n", spec.id.c_str());
   FetchEnv fetch(spec, ResolveAssets(o.env.assets));
@@ -1247,13 +1250,14 @@ void RunAnatomy(AnatomyOptions o) {
   }
   if (!pass) {
     std::printf("\nD2 FAILED: see %s_reward_check.json\n", prefix.c_str());
-    ExitStatus() = 1;
+    return 1;
   }
+  return 0;
 }
 
 }  // namespace
 
-void RegisterAnatomy(CLI::App& app) {
+Command AddAnatomy(CLI::App& app) {
   auto o = std::make_shared<AnatomyOptions>();
   o->card.view.width = 720;
   o->card.view.height = 540;
@@ -1282,7 +1286,7 @@ void RegisterAnatomy(CLI::App& app) {
   sub->add_option("--msaa", o->card.view.msaa, "Anti-aliasing samples of the card, as render's")
       ->capture_default_str();
   sub->add_flag("--no-card", o->no_card, "Skip the anatomy card (no rendering, no GL needed)");
-  sub->callback([o]() { RunAnatomy(*o); });
+  return {sub, [o] { return RunAnatomy(*o); }};
 }
 
 }  // namespace fetchscope::cli

@@ -8,10 +8,11 @@
 #include <sstream>
 #include <string>
 
+#include "base/json_util.h"
+#include "cli/command.h"
 #include "cli/common.h"
 #include "src/episode.h"
 #include "src/fetch_env.h"
-#include "src/json_util.h"
 
 namespace fetchscope::cli {
 namespace {
@@ -87,20 +88,52 @@ nlohmann::json BenchSim(const AssetSource& assets, double budget_s) {
   return rows;
 }
 
-void RegisterBench(CLI::App& app) {
-  auto what = std::make_shared<std::string>("all");
-  auto json_out = std::make_shared<std::string>();
-  auto assets = std::make_shared<std::string>("bundled");
-  auto seconds = std::make_shared<double>(3.0);
-  auto backends = std::make_shared<std::string>("egl,osmesa");
-  auto peers = std::make_shared<bool>(true);
+namespace {
+
+struct BenchOptions {
+  std::string what = "all";
+  std::string json_out;
+  std::string assets = "bundled";
+  double seconds = 3.0;
+  std::string backends = "egl,osmesa";
+  bool peers = true;
+  int soak_frames = 10000;
+  int node_width = 480;
+  int node_height = 480;
+};
+
+int RunBench(const BenchOptions& o) {
+  const AssetSource source = ResolveAssets(o.assets);
+  nlohmann::json j;
+  j["machine"] = MachineJson();
+  j["versions"] = VersionsJson();
+  j["assets"] = AssetsJson(source);
+  const bool all = o.what == "all";
+  if (all || o.what == "sim") j["sim"] = BenchSim(source, o.seconds);
+  if (all || o.what == "render") j["render"] = BenchRender(source, o.backends, o.seconds, o.peers);
+  if (all || o.what == "encode") j["encode"] = BenchEncode(o.seconds);
+  if (all || o.what == "record") j["record"] = BenchRecord(source, o.backends, o.seconds, o.peers);
+  if (o.what == "node")
+    j["node"] = BenchNode(source, o.backends, o.seconds, o.node_width, o.node_height);
+  if (o.what == "soak") j["soak"] = BenchSoak(source, o.backends, o.soak_frames, 1.0);
+  j["peak_rss_mib"] = PeakRssMiB();
+  std::printf("peak RSS %.1f MiB\n", PeakRssMiB());
+  if (!o.json_out.empty()) {
+    const std::string path = JsonOutPath(o.json_out, "bench");
+    WriteJson(path, j);
+    std::printf("wrote %s\n", path.c_str());
+  }
+  return 0;
+}
+
+}  // namespace
+
+Command AddBench(CLI::App& app) {
+  auto o = std::make_shared<BenchOptions>();
   CLI::App* sub =
       app.add_subcommand("bench", "Measure simulation, rendering, encoding and record throughput");
-  auto soak_frames = std::make_shared<int>(10000);
-  auto node_width = std::make_shared<int>(480);
-  auto node_height = std::make_shared<int>(480);
   sub->add_option(
-         "--what", *what,
+         "--what", o->what,
          "sim, render, encode, record, all (those four); node: what sizes a job on this "
          "machine (render frames/s of one context, sync and async readback; record "
          "frames/s at --jobs 1, cores/2 and cores as processes and as threads; the encoder); "
@@ -108,21 +141,23 @@ void RegisterBench(CLI::App& app) {
          "every second. node and soak are not part of all")
       ->capture_default_str()
       ->check(CLI::IsMember({"sim", "render", "encode", "record", "all", "node", "soak"}));
-  sub->add_option("--soak-frames", *soak_frames, "Frames of the soak run (whole 51-frame episodes)")
+  sub->add_option("--soak-frames", o->soak_frames,
+                  "Frames of the soak run (whole 51-frame episodes)")
       ->capture_default_str()
       ->check(CLI::Range(51, 1000000));
-  sub->add_option("--width", *node_width, "--what node: frame width, the size your jobs record at")
+  sub->add_option("--width", o->node_width,
+                  "--what node: frame width, the size your jobs record at")
       ->capture_default_str()
       ->check(CLI::Range(16, 4096));
-  sub->add_option("--height", *node_height, "--what node: frame height")
+  sub->add_option("--height", o->node_height, "--what node: frame height")
       ->capture_default_str()
       ->check(CLI::Range(16, 4096));
-  sub->add_option("--assets", *assets, "bundled, auto or a Gymnasium-Robotics assets folder")
+  sub->add_option("--assets", o->assets, "bundled, auto or a Gymnasium-Robotics assets folder")
       ->capture_default_str();
-  sub->add_option("--seconds", *seconds, "Time budget per measurement group")
+  sub->add_option("--seconds", o->seconds, "Time budget per measurement group")
       ->capture_default_str()
       ->check(CLI::Range(0.1, 600.0));
-  sub->add_option("--backends", *backends,
+  sub->add_option("--backends", o->backends,
                   "Render backends to measure: a comma list of egl, osmesa")
       ->capture_default_str()
       ->check(
@@ -137,30 +172,9 @@ void RegisterBench(CLI::App& app) {
             return "";
           },
           "egl,osmesa");
-  sub->add_flag("!--no-peers", *peers, "Skip the peer measurements (mujoco-record, ffmpeg)");
-  sub->add_option("--json-out", *json_out, "Write the results as JSON (P.json or P_bench.json)");
-  sub->callback([=]() {
-    const AssetSource source = ResolveAssets(*assets);
-    nlohmann::json j;
-    j["machine"] = MachineJson();
-    j["versions"] = VersionsJson();
-    j["assets"] = AssetsJson(source);
-    const bool all = *what == "all";
-    if (all || *what == "sim") j["sim"] = BenchSim(source, *seconds);
-    if (all || *what == "render") j["render"] = BenchRender(source, *backends, *seconds, *peers);
-    if (all || *what == "encode") j["encode"] = BenchEncode(*seconds);
-    if (all || *what == "record") j["record"] = BenchRecord(source, *backends, *seconds, *peers);
-    if (*what == "node")
-      j["node"] = BenchNode(source, *backends, *seconds, *node_width, *node_height);
-    if (*what == "soak") j["soak"] = BenchSoak(source, *backends, *soak_frames, 1.0);
-    j["peak_rss_mib"] = PeakRssMiB();
-    std::printf("peak RSS %.1f MiB\n", PeakRssMiB());
-    if (!json_out->empty()) {
-      const std::string path = JsonOutPath(*json_out, "bench");
-      WriteJson(path, j);
-      std::printf("wrote %s\n", path.c_str());
-    }
-  });
+  sub->add_flag("!--no-peers", o->peers, "Skip the peer measurements (mujoco-record, ffmpeg)");
+  sub->add_option("--json-out", o->json_out, "Write the results as JSON (P.json or P_bench.json)");
+  return {sub, [o] { return RunBench(*o); }};
 }
 
 }  // namespace fetchscope::cli

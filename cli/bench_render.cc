@@ -14,14 +14,15 @@
 #include <memory>
 #include <sstream>
 
+#include "base/errors.h"
 #include "cli/bench.h"
 #include "cli/common.h"
 #include "cli/render_common.h"
+#include "encode/video_writer.h"
+#include "fetchscope/paths.h"
 #include "render/gpu_select.h"
 #include "render/renderer.h"
-#include "render/video_writer.h"
 #include "src/episode.h"
-#include "src/errors.h"
 #include "src/fetch_env.h"
 #include "src/policy.h"
 

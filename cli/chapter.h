@@ -29,8 +29,14 @@ std::string ObservationSlice(bool has_object, const std::string& slice);
 /// element) plus our labels, formulas, timing, assets and the D4 answers.
 nlohmann::json DescribeJson(const FetchEnv& env);
 
-/// `describe`: D1 to stdout, or to JsonOutPath(json_out, "describe").
-void RunDescribe(const EnvOptions& env, const std::string& json_out);
+/// What describe runs.
+struct DescribeOptions {
+  EnvOptions env;
+  std::string json_out;  ///< empty: the JSON goes to stdout
+};
+
+/// D1, `describe`: to stdout, or to JsonOutPath(json_out, "describe"). Returns the exit status.
+int RunDescribe(const DescribeOptions& options);
 
 /// What reward-check runs.
 struct RewardCheckOptions {
@@ -52,7 +58,8 @@ struct RandomEpisodesOptions {
 };
 
 /// D3, `random-episodes`: the random-policy baseline, to stdout or JsonOutPath(json_out,
-/// "random_metrics") (then a one-line summary goes to stdout).
-void RunRandomEpisodes(const RandomEpisodesOptions& options);
+/// "random_metrics") (then a one-line summary goes to stdout). Returns the exit status
+/// (128 + signal when interrupted).
+int RunRandomEpisodes(const RandomEpisodesOptions& options);
 
 }  // namespace fetchscope::cli

@@ -13,9 +13,9 @@
 #include <cstdlib>
 #include <fstream>
 
-#include "src/atomic_file.h"
-#include "src/errors.h"
-#include "src/json_util.h"
+#include "base/atomic_file.h"
+#include "base/errors.h"
+#include "base/json_util.h"
 #include "src/policy.h"
 
 namespace fetchscope::cli {
@@ -61,54 +61,6 @@ void WriteJson(const std::string& path, const nlohmann::json& json) {
   WriteFileAtomically(path, DumpJson(json) + "\n");
 }
 
-double CgroupCpuQuota(const std::string& proc_self_cgroup, const std::string& cgroup_root) {
-  double best = 0;
-  auto consider = [&](double quota, double period) {
-    if (quota > 0 && period > 0 && (best == 0 || quota / period < best)) best = quota / period;
-  };
-  std::string v2_path;
-  std::ifstream cgroups(proc_self_cgroup);
-  for (std::string line; std::getline(cgroups, line);) {
-    if (line.rfind("0::", 0) == 0) v2_path = line.substr(3);
-  }
-  if (!v2_path.empty()) {
-    // this cgroup and each ancestor: a limit anywhere above applies too
-    for (std::string dir = v2_path;; dir = dir.substr(0, dir.rfind('/'))) {
-      if (dir == "/") dir.clear();
-      std::ifstream max(cgroup_root + dir + "/cpu.max");
-      std::string quota;
-      double period = 0;
-      if (max >> quota >> period && quota != "max") consider(std::atof(quota.c_str()), period);
-      if (dir.empty()) break;
-    }
-  }
-  std::ifstream v1_quota(cgroup_root + "/cpu/cpu.cfs_quota_us");
-  std::ifstream v1_period(cgroup_root + "/cpu/cpu.cfs_period_us");
-  double quota = 0, period = 0;
-  if (v1_quota >> quota >> std::ws && v1_period >> period) consider(quota, period);
-  return best;
-}
-
-Cores UsableCores() {
-  Cores cores;
-  cores.online = static_cast<int>(std::max(1L, sysconf(_SC_NPROCESSORS_ONLN)));
-  cores.usable = cores.online;
-  cores.source = "online";
-  cpu_set_t set;
-  CPU_ZERO(&set);
-  if (sched_getaffinity(0, sizeof(set), &set) == 0 && CPU_COUNT(&set) > 0 &&
-      CPU_COUNT(&set) < cores.usable) {
-    cores.usable = CPU_COUNT(&set);
-    cores.source = "affinity";
-  }
-  const double quota = CgroupCpuQuota("/proc/self/cgroup", "/sys/fs/cgroup");
-  if (quota > 0 && static_cast<int>(std::ceil(quota)) < cores.usable) {
-    cores.usable = std::max(1, static_cast<int>(std::ceil(quota)));
-    cores.source = "cgroup quota";
-  }
-  return cores;
-}
-
 std::optional<std::vector<int>> ReplayedEpisodes(const std::string& policy, int episodes,
                                                  const std::string& env_id, uint64_t seed,
                                                  bool quiet) {
@@ -137,27 +89,6 @@ nlohmann::json VersionsJson() {
 std::string& CommandLine() {
   static std::string line;
   return line;
-}
-
-namespace {
-std::atomic<int> g_stop_signal{0};
-void OnStopSignal(int sig) { g_stop_signal.store(sig); }
-}  // namespace
-
-void InstallStopSignals() {
-  g_stop_signal.store(0);
-  struct sigaction sa {};
-  sa.sa_handler = OnStopSignal;
-  sigemptyset(&sa.sa_mask);
-  sigaction(SIGINT, &sa, nullptr);
-  sigaction(SIGTERM, &sa, nullptr);
-}
-
-int StopSignal() { return g_stop_signal.load(); }
-
-int& ExitStatus() {
-  static int status = 0;
-  return status;
 }
 
 }  // namespace fetchscope::cli

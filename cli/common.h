@@ -8,6 +8,9 @@
 #include <string>
 #include <vector>
 
+#include "base/cores.h"
+#include "base/stop_signal.h"
+
 namespace fetchscope::cli {
 
 /// --env-id, --assets, --seed as every env-driven subcommand takes them.
@@ -32,22 +35,6 @@ void WriteJson(const std::string& path, const nlohmann::json& json);
 /// Versions of fetchscope and MuJoCo, for every output.
 nlohmann::json VersionsJson();
 
-/// The cores this process may use, and why that many.
-struct Cores {
-  int usable = 1;      ///< what --jobs 0 and the encoder budget count
-  int online = 1;      ///< the machine's online CPUs
-  std::string source;  ///< "online", "affinity" (taskset, Slurm, cpusets) or "cgroup quota"
-};
-
-/// The cores this process may use: the CPUs in its affinity mask (Slurm's and Kubernetes'
-/// cpusets, taskset), capped by a cgroup CPU quota (cgroup v2 cpu.max, v1 cfs_quota_us) rounded
-/// up, as containers with CPU limits have. Never below 1.
-Cores UsableCores();
-
-/// The cgroup CPU quota in cores (quota / period; the smallest along the cgroup's ancestors), or
-/// 0 when there is none: `proc_self_cgroup` is /proc/self/cgroup, `cgroup_root` /sys/fs/cgroup.
-double CgroupCpuQuota(const std::string& proc_self_cgroup, const std::string& cgroup_root);
-
 /// For `--policy replay:FILE.json` holding fetchscope's trajectory JSON: the file's episode
 /// indices, ascending, which a run replaying it plays (each under its own index, so with its own
 /// reset); nullopt for any other policy. `episodes` is --episodes when the user gave it
@@ -57,16 +44,6 @@ std::optional<std::vector<int>> ReplayedEpisodes(const std::string& policy, int 
                                                  const std::string& env_id, uint64_t seed,
                                                  bool quiet);
 
-/// Exit status a subcommand asks for (0 unless it set one).
-int& ExitStatus();
-
-/// Makes SIGINT and SIGTERM request a stop instead of killing the process, so long commands
-/// (record, golden update) can finish the file in progress; clears any earlier request.
-void InstallStopSignals();
-
-/// The signal that requested a stop (SIGINT or SIGTERM), or 0. Safe from any thread.
-int StopSignal();
-
 /// The command line as typed (set by main), recorded in manifests.
 std::string& CommandLine();
 
@@ -75,23 +52,5 @@ std::string& CommandLine();
 /// "{false}" after negated flags. Set on the app before the subcommands are added (they inherit
 /// it).
 std::shared_ptr<CLI::Formatter> MakeHelpFormatter();
-
-/// Registration of each subcommand (one file each).
-void RegisterListEnvs(CLI::App& app);
-void RegisterDescribe(CLI::App& app);
-void RegisterRewardCheck(CLI::App& app);
-void RegisterRandomEpisodes(CLI::App& app);
-void RegisterRollout(CLI::App& app);
-void RegisterRender(CLI::App& app);
-void RegisterListCameras(CLI::App& app);
-void RegisterRecord(CLI::App& app);
-void RegisterBench(CLI::App& app);
-void RegisterProbeActions(CLI::App& app);
-void RegisterMergeManifests(CLI::App& app);
-void RegisterGolden(CLI::App& app);
-void RegisterListGpus(CLI::App& app);
-void RegisterAnatomy(CLI::App& app);
-void RegisterReport(CLI::App& app);
-void RegisterCompare(CLI::App& app);
 
 }  // namespace fetchscope::cli

@@ -9,15 +9,16 @@
 #include <filesystem>
 #include <optional>
 
+#include "base/atomic_file.h"
+#include "base/errors.h"
+#include "base/json_util.h"
+#include "cli/command.h"
 #include "cli/common.h"
-#include "cli/html_page.h"
-#include "cli/report.h"
+#include "encode/video_reader.h"
+#include "encode/video_writer.h"
+#include "inspect/html_page.h"
+#include "inspect/report.h"
 #include "render/text.h"
-#include "render/video_reader.h"
-#include "render/video_writer.h"
-#include "src/atomic_file.h"
-#include "src/errors.h"
-#include "src/json_util.h"
 
 namespace fetchscope::cli {
 namespace {
@@ -324,7 +325,7 @@ json ReportLink(const RecordedRun& run, const std::string& out) {
       .string();
 }
 
-void RunCompare(const CompareOptions& o) {
+int RunCompare(const CompareOptions& o) {
   const RecordedRun a = ReadRunFolder(o.run_a);
   const RecordedRun b = ReadRunFolder(o.run_b);
   for (const char* key : kSameRun) {
@@ -432,12 +433,12 @@ void RunCompare(const CompareOptions& o) {
         same ? "same" : "different", differing, rows.size(), o.tolerance, o.pixel_tolerance,
         html.string().c_str());
   }
-  ExitStatus() = same ? 0 : 1;
+  return same ? 0 : 1;
 }
 
 }  // namespace
 
-void RegisterCompare(CLI::App& app) {
+Command AddCompare(CLI::App& app) {
   auto o = std::make_shared<CompareOptions>();
   CLI::App* sub = app.add_subcommand(
       "compare",
@@ -462,16 +463,16 @@ void RegisterCompare(CLI::App& app) {
   sub->add_flag("--states-only", o->states_only,
                 "Compare the trajectories only: no videos decoded or written (faster, for CI)");
   sub->add_flag("-q,--quiet", o->quiet, "No table on stdout");
-  sub->callback([o]() {
-    try {
-      RunCompare(*o);
-    } catch (const UsageError&) {
-      throw;
-    } catch (const std::exception& e) {
-      // exit 1 means "different": a comparison that could not be made is exit 2
-      throw UsageError(e.what());
-    }
-  });
+  return {sub, [o] {
+            try {
+              return RunCompare(*o);
+            } catch (const UsageError&) {
+              throw;
+            } catch (const std::exception& e) {
+              // exit 1 means "different": a comparison that could not be made is exit 2
+              throw UsageError(e.what());
+            }
+          }};
 }
 
 }  // namespace fetchscope::cli

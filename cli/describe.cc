@@ -1,11 +1,13 @@
 // fetchscope describe: Gymnasium-style spaces plus what every index means.
 #include <cstdio>
 
+#include "base/json_util.h"
 #include "cli/chapter.h"
+#include "cli/command.h"
 #include "cli/common.h"
+#include "cli/resolve.h"
 #include "src/episode.h"
 #include "src/fetch_env.h"
-#include "src/json_util.h"
 
 namespace fetchscope::cli {
 namespace {
@@ -179,29 +181,29 @@ nlohmann::json DescribeJson(const FetchEnv& env) {
   return j;
 }
 
-void RunDescribe(const EnvOptions& env, const std::string& json_out) {
-  const EnvSpec& spec = FindEnvSpec(env.env_id);
-  FetchEnv fetch(spec, ResolveAssets(env.assets));
+int RunDescribe(const DescribeOptions& o) {
+  const ResolvedEnv env = ResolveEnv(o.env, /*with_seed=*/false);
+  FetchEnv fetch(*env.spec, env.assets);
   const nlohmann::json j = DescribeJson(fetch);
-  if (json_out.empty()) {
+  if (o.json_out.empty()) {
     std::printf("%s\n", DumpJson(j).c_str());
   } else {
-    const std::string path = JsonOutPath(json_out, "describe");
+    const std::string path = JsonOutPath(o.json_out, "describe");
     WriteJson(path, j);
     std::printf("wrote %s\n", path.c_str());
   }
+  return 0;
 }
 
-void RegisterDescribe(CLI::App& app) {
-  auto env = std::make_shared<EnvOptions>();
-  auto json_out = std::make_shared<std::string>();
+Command AddDescribe(CLI::App& app) {
+  auto o = std::make_shared<DescribeOptions>();
   CLI::App* sub = app.add_subcommand(
       "describe", "Observation/action schema with a label per index, reward formulas, timing");
-  AddEnvOptions(sub, env.get(), false);
-  sub->add_option("--json-out", *json_out,
+  AddEnvOptions(sub, &o->env, false);
+  sub->add_option("--json-out", o->json_out,
                   "Write P (if it ends in .json) else P_describe.json; "
                   "without it the JSON goes to stdout");
-  sub->callback([env, json_out]() { RunDescribe(*env, *json_out); });
+  return {sub, [o] { return RunDescribe(*o); }};
 }
 
 }  // namespace fetchscope::cli

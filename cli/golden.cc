@@ -16,12 +16,13 @@
 #include <string>
 #include <vector>
 
+#include "base/errors.h"
+#include "cli/command.h"
 #include "cli/common.h"
-#include "cli/golden_scene.h"
+#include "encode/png_io.h"
+#include "inspect/golden_scene.h"
+#include "inspect/image_diff.h"
 #include "render/gl_context.h"
-#include "render/image_diff.h"
-#include "render/png_io.h"
-#include "src/errors.h"
 
 namespace fs = std::filesystem;
 
@@ -131,14 +132,14 @@ nlohmann::json ReadState(const std::string& path) {
   }
 }
 
-// Signals end the run after the scene in progress: 130 for SIGINT, 143 for SIGTERM.
-bool Interrupted(const char* command, size_t done, size_t total) {
+// Signals end the run after the scene in progress: the exit status 130 for SIGINT, 143 for
+// SIGTERM; 0 when no signal came.
+int Interrupted(const char* command, size_t done, size_t total) {
   const int sig = StopSignal();
-  if (sig == 0) return false;
+  if (sig == 0) return 0;
   std::fprintf(stderr, "golden %s: interrupted by %s after %zu of %zu scenes\n", command,
                sig == SIGINT ? "SIGINT" : "SIGTERM", done, total);
-  ExitStatus() = 128 + sig;
-  return true;
+  return 128 + sig;
 }
 
 /// One scene's outcome in `golden check`.
@@ -258,20 +259,20 @@ void PrintTable(const std::vector<CheckRow>& rows) {
   }
 }
 
-void RunCheck(const GoldenOptions& o) {
+int RunCheck(const GoldenOptions& o) {
   const GoldenManifest manifest = ReadGoldenManifest(o.golden_dir);
   std::string genuine;
   const std::vector<const GoldenScene*> scenes = RunnableScenes(manifest, o, &genuine);
   if (scenes.empty()) {
     std::printf("golden check: no scene to check\n");
-    return;
+    return 0;
   }
   auto gl = CreateGlContext(o.backend, o.gpu);
   InstallStopSignals();  // finish the scene in progress, then stop
   std::vector<CheckRow> rows;
   for (const GoldenScene* s : scenes) {
     rows.push_back(CheckScene(*gl, manifest, *s, genuine, o.out));
-    if (Interrupted("check", rows.size(), scenes.size())) return;
+    if (const int status = Interrupted("check", rows.size(), scenes.size())) return status;
   }
   std::stable_sort(rows.begin(), rows.end(), [](const CheckRow& a, const CheckRow& b) {
     if (a.pass != b.pass) return !a.pass;
@@ -291,19 +292,19 @@ void RunCheck(const GoldenOptions& o) {
         "golden check: %zu of %zu scene(s) FAILED; actual, diff and side-by-side images "
         "in %s\n",
         failed, rows.size(), o.out.c_str());
-    ExitStatus() = 1;
-  } else {
-    std::printf("golden check: all %zu scene(s) pass\n", rows.size());
+    return 1;
   }
+  std::printf("golden check: all %zu scene(s) pass\n", rows.size());
+  return 0;
 }
 
-void RunUpdate(const GoldenOptions& o) {
+int RunUpdate(const GoldenOptions& o) {
   const GoldenManifest manifest = ReadGoldenManifest(o.golden_dir);
   std::string genuine;
   const std::vector<const GoldenScene*> scenes = RunnableScenes(manifest, o, &genuine);
   if (scenes.empty()) {
     std::printf("golden update: no scene to render\n");
-    return;
+    return 0;
   }
   auto gl = CreateGlContext(o.backend, o.gpu);
   InstallStopSignals();  // finish the scene in progress, then stop
@@ -333,16 +334,17 @@ void RunUpdate(const GoldenOptions& o) {
     std::printf("wrote %s and %s_state.json (%s)\n", png.c_str(), s->name.c_str(), change.c_str());
     std::fflush(stdout);  // progress shows in CI logs as it happens
     ++done;
-    if (Interrupted("update", done, scenes.size())) return;
+    if (const int status = Interrupted("update", done, scenes.size())) return status;
   }
   const GlInfo& gi = gl->info();
   std::printf("golden update: %zu scene(s) rendered on %s via %s\n", done, gi.renderer.c_str(),
               gi.backend.c_str());
+  return 0;
 }
 
 }  // namespace
 
-void RegisterGolden(CLI::App& app) {
+Command AddGolden(CLI::App& app) {
   auto options = std::make_shared<GoldenOptions>();
   CLI::App* golden = app.add_subcommand(
       "golden",
@@ -356,11 +358,11 @@ void RegisterGolden(CLI::App& app) {
   AddOptions(check, options.get());
   check->add_option("--out", options->out, "Folder for the images of failed scenes")
       ->capture_default_str();
-  check->callback([options]() { RunCheck(*options); });
   CLI::App* update = golden->add_subcommand(
       "update", "Render every scene and write its goldens (NAME.png, NAME_state.json)");
   AddOptions(update, options.get());
-  update->callback([options]() { RunUpdate(*options); });
+  return {golden,
+          [options, check] { return check->parsed() ? RunCheck(*options) : RunUpdate(*options); }};
 }
 
 }  // namespace fetchscope::cli

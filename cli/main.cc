@@ -3,11 +3,13 @@
 #include <cstdio>
 #include <exception>
 #include <string>
+#include <vector>
 
+#include "base/errors.h"
+#include "base/suggest.h"
+#include "cli/command.h"
 #include "cli/common.h"
-#include "src/errors.h"
 #include "src/fetch_env.h"
-#include "src/suggest.h"
 
 int main(int argc, char** argv) {
   using namespace fetchscope;
@@ -20,24 +22,14 @@ int main(int argc, char** argv) {
   app.formatter(cli::MakeHelpFormatter());  // before the subcommands: they inherit it
   app.set_version_flag("--version", FETCHSCOPE_VERSION);
   app.require_subcommand(1);
-  cli::RegisterListEnvs(app);
-  cli::RegisterDescribe(app);
-  cli::RegisterRewardCheck(app);
-  cli::RegisterRandomEpisodes(app);
-  cli::RegisterAnatomy(app);
-  cli::RegisterRollout(app);
-  cli::RegisterRender(app);
-  cli::RegisterListCameras(app);
-  cli::RegisterRecord(app);
-  cli::RegisterBench(app);
-  cli::RegisterProbeActions(app);
-  cli::RegisterMergeManifests(app);
-  cli::RegisterGolden(app);
-  cli::RegisterListGpus(app);
-  cli::RegisterReport(app);
-  cli::RegisterCompare(app);
+  std::vector<cli::Command> commands;
+  for (cli::AddCommandFn add : cli::kCommands) commands.push_back(add(app));
   try {
     app.parse(argc, argv);
+    for (const cli::Command& command : commands) {
+      if (command.app->parsed()) return command.run();
+    }
+    return 2;  // unreachable: require_subcommand(1) made the parse fail
   } catch (const CLI::CallForHelp& e) {
     return app.exit(e);
   } catch (const CLI::CallForAllHelp& e) {
@@ -79,5 +71,4 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "fetchscope: error: %s\n", e.what());
     return 1;
   }
-  return cli::ExitStatus();
 }

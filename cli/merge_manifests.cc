@@ -12,11 +12,12 @@
 #include <string>
 #include <vector>
 
+#include "base/errors.h"
+#include "base/json_util.h"
+#include "cli/command.h"
 #include "cli/common.h"
-#include "cli/report.h"
-#include "cli/shard.h"
-#include "src/errors.h"
-#include "src/json_util.h"
+#include "inspect/report.h"
+#include "run/shard.h"
 
 namespace fetchscope::cli {
 namespace {
@@ -127,7 +128,7 @@ void RebaseFiles(json* j, const fs::path& folder, const fs::path& out_dir) {
   }
 }
 
-void Merge(const std::vector<std::string>& dirs, std::string out, bool quiet, bool report) {
+int Merge(const std::vector<std::string>& dirs, std::string out, bool quiet, bool report) {
   std::vector<ShardManifest> manifests;
   for (const std::string& dir : dirs) {
     for (ShardManifest& m : ReadManifests(dir)) manifests.push_back(std::move(m));
@@ -281,11 +282,12 @@ void Merge(const std::vector<std::string>& dirs, std::string out, bool quiet, bo
                 by_shard.size(), count, episodes, successes, episodes, out.c_str());
   }
   if (report) WriteRunReportOrWarn(out, quiet);
+  return 0;
 }
 
 }  // namespace
 
-void RegisterMergeManifests(CLI::App& app) {
+Command AddMergeManifests(CLI::App& app) {
   auto dirs = std::make_shared<std::vector<std::string>>();
   auto out = std::make_shared<std::string>();
   auto quiet = std::make_shared<bool>(false);
@@ -301,7 +303,7 @@ void RegisterMergeManifests(CLI::App& app) {
   sub->add_flag("-q,--quiet", *quiet, "No summary on stdout");
   sub->add_flag("--no-report", *no_report,
                 "Do not write the run's HTML report (index.html beside the merged manifest)");
-  sub->callback([=]() { Merge(*dirs, *out, *quiet, !*no_report); });
+  return {sub, [=] { return Merge(*dirs, *out, *quiet, !*no_report); }};
 }
 
 }  // namespace fetchscope::cli

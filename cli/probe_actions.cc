@@ -14,14 +14,15 @@
 #include <string>
 #include <vector>
 
+#include "base/errors.h"
+#include "base/json_util.h"
+#include "cli/command.h"
 #include "cli/common.h"
 #include "cli/render_common.h"
-#include "render/contact_sheet.h"
-#include "render/png_io.h"
+#include "encode/contact_sheet.h"
+#include "encode/png_io.h"
 #include "render/renderer.h"
 #include "src/episode.h"
-#include "src/errors.h"
-#include "src/json_util.h"
 
 namespace fetchscope::cli {
 namespace {
@@ -357,7 +358,7 @@ void PrintTable(const EnvSpec& spec, uint64_t seed, int steps, const std::vector
   std::printf("clip:    %s\n", summary["saturation_above_one"].get<std::string>().c_str());
 }
 
-void RunProbeActions(const ProbeOptions& o) {
+int RunProbeActions(const ProbeOptions& o) {
   if (o.steps < 1 || o.steps > 50) {
     throw UsageError("--steps " + std::to_string(o.steps) +
                      " is out of range: use 1 to 50 (the episode limit)");
@@ -430,11 +431,12 @@ void RunProbeActions(const ProbeOptions& o) {
     WriteJson(path, report);
     std::printf("wrote %s\n", path.c_str());
   }
+  return 0;
 }
 
 }  // namespace
 
-void RegisterProbeActions(CLI::App& app) {
+Command AddProbeActions(CLI::App& app) {
   auto o = std::make_shared<ProbeOptions>();
   // Small frames and a closer view than Gymnasium's: the probes move the gripper centimetres.
   o->view.width = 240;
@@ -456,7 +458,7 @@ void RegisterProbeActions(CLI::App& app) {
                   "but --json-out)");
   sub->add_option("--json-out", o->json_out,
                   "Write the report to P (if it ends in .json) or P_probe_actions.json");
-  sub->callback([o]() { RunProbeActions(*o); });
+  return {sub, [o] { return RunProbeActions(*o); }};
 }
 
 }  // namespace fetchscope::cli

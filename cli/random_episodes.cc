@@ -5,13 +5,15 @@
 #include <cmath>
 #include <cstdio>
 
+#include "base/errors.h"
+#include "base/json_util.h"
 #include "cli/chapter.h"
+#include "cli/command.h"
 #include "cli/common.h"
-#include "cli/episode_scheduler.h"
+#include "cli/resolve.h"
+#include "run/episode_scheduler.h"
 #include "src/episode.h"
-#include "src/errors.h"
 #include "src/fetch_env.h"
-#include "src/json_util.h"
 
 namespace fetchscope::cli {
 namespace {
@@ -40,11 +42,12 @@ class RandomEpisodeRunner : public EpisodeRunner {
 
 }  // namespace
 
-void RunRandomEpisodes(const RandomEpisodesOptions& o) {
-  const EnvSpec& spec = FindEnvSpec(o.env.env_id);
-  const uint64_t seed = ParseSeed(o.env.seed);
+int RunRandomEpisodes(const RandomEpisodesOptions& o) {
+  const ResolvedEnv env = ResolveEnv(o.env);
+  const EnvSpec& spec = *env.spec;
+  const uint64_t seed = env.seed;
+  const AssetSource& assets = env.assets;
   const WorkerMode mode = ParseWorkerMode(o.worker_mode);
-  const AssetSource assets = ResolveAssets(o.env.assets);
   FetchEnv fetch(spec, assets);  // bad assets fail here, before any worker starts
   PolicyContext context;
   context.seed = seed;
@@ -61,8 +64,7 @@ void RunRandomEpisodes(const RandomEpisodesOptions& o) {
   if (result.signal) {
     std::fprintf(stderr, "random-episodes: interrupted (%s); nothing written\n",
                  result.signal == SIGINT ? "SIGINT" : "SIGTERM");
-    ExitStatus() = 128 + result.signal;
-    return;
+    return 128 + result.signal;
   }
   nlohmann::json rows = nlohmann::json::array();
   std::vector<double> returns, finals;
@@ -96,7 +98,7 @@ void RunRandomEpisodes(const RandomEpisodesOptions& o) {
                       {"versions", VersionsJson()}};
   if (o.json_out.empty()) {
     std::printf("%s\n", DumpJson(j).c_str());
-    return;
+    return 0;
   }
   const std::string path = JsonOutPath(o.json_out, "random_metrics");
   WriteJson(path, j);
@@ -105,9 +107,10 @@ void RunRandomEpisodes(const RandomEpisodesOptions& o) {
       "mean length %.1f, mean final distance %.4f m\nwrote %s\n",
       spec.id.c_str(), o.n_episodes, o.env.seed.c_str(), successes / n, mean, std::sqrt(var),
       total_length / n, mean_final, path.c_str());
+  return 0;
 }
 
-void RegisterRandomEpisodes(CLI::App& app) {
+Command AddRandomEpisodes(CLI::App& app) {
   auto o = std::make_shared<RandomEpisodesOptions>();
   CLI::App* sub = app.add_subcommand(
       "random-episodes",
@@ -120,7 +123,7 @@ void RegisterRandomEpisodes(CLI::App& app) {
   sub->add_option("--json-out", o->json_out,
                   "Write P (.json) or P_random_metrics.json; without it JSON goes to stdout");
   AddJobsOptions(sub, &o->jobs, &o->worker_mode);
-  sub->callback([o]() { RunRandomEpisodes(*o); });
+  return {sub, [o] { return RunRandomEpisodes(*o); }};
 }
 
 }  // namespace fetchscope::cli

@@ -24,23 +24,24 @@
 #include <set>
 #include <thread>
 
+#include "base/errors.h"
+#include "base/json_util.h"
+#include "base/suggest.h"
+#include "cli/command.h"
 #include "cli/common.h"
-#include "cli/episode_scheduler.h"
-#include "cli/node_probe.h"
-#include "cli/progress.h"
 #include "cli/record_from.h"
 #include "cli/render_common.h"
-#include "cli/report.h"
-#include "cli/run_folder.h"
-#include "cli/shard.h"
-#include "render/contact_sheet.h"
-#include "render/png_io.h"
+#include "encode/contact_sheet.h"
+#include "encode/png_io.h"
+#include "encode/video_writer.h"
+#include "inspect/report.h"
 #include "render/renderer.h"
-#include "render/video_writer.h"
-#include "src/errors.h"
+#include "run/episode_scheduler.h"
+#include "run/node_probe.h"
+#include "run/progress.h"
+#include "run/run_folder.h"
+#include "run/shard.h"
 #include "src/hindsight.h"
-#include "src/json_util.h"
-#include "src/suggest.h"
 
 namespace fetchscope::cli {
 namespace {
@@ -802,16 +803,16 @@ std::vector<int> FromEpisodes(const TrajectorySource& from) {
   return out;
 }
 
-void RunRecord(const RecordOptions& o, const std::string& command_line,
-               const TrajectorySource* from = nullptr);
+int RunRecord(const RecordOptions& o, const std::string& command_line,
+              const TrajectorySource* from = nullptr);
 
 // record --from: the trajectory sets env, seed, policy, steps and episodes; then as record.
-void RunRecordFrom(RecordOptions o, const CLI::App& sub, const std::string& command_line) {
+int RunRecordFrom(RecordOptions o, const CLI::App& sub, const std::string& command_line) {
   CheckFromFlags(sub, o.from);
   const TrajectorySource source = LoadTrajectorySource(o.from);
   ApplyFromSource(source, sub, &o.env.env_id, &o.env.seed, &o.policy, &o.steps, &o.episodes,
                   &o.env.assets);
-  RunRecord(o, command_line, &source);
+  return RunRecord(o, command_line, &source);
 }
 
 // Starting an exec: child is the only full check of it, and the workers do that; every other
@@ -896,8 +897,8 @@ std::vector<int> RecordEpisodeList(RecordOptions* o, const Shard& shard, const R
   return mine;
 }
 
-void RunRecord(const RecordOptions& options, const std::string& command_line,
-               const TrajectorySource* from) {
+int RunRecord(const RecordOptions& options, const std::string& command_line,
+              const TrajectorySource* from) {
   const auto wall_start = Clock::now();
   RecordOptions o = options;  // a trajectory replay sets the episodes
   RecordPlan plan;
@@ -995,8 +996,7 @@ void RunRecord(const RecordOptions& options, const std::string& command_line,
                    "run in %s is kept as it was\n",
                    o.out.c_str());
     }
-    ExitStatus() = 128 + result.signal;
-    return;  // `folder` removes this run's files and puts the earlier run back
+    return 128 + result.signal;  // `folder` removes this run's files, puts the earlier run back
   }
 
   const double wall = Since(wall_start);
@@ -1142,19 +1142,17 @@ void RunRecord(const RecordOptions& options, const std::string& command_line,
   progress.Done(summary);
   // a shard's episodes are only part of the run: merge-manifests writes the run's report
   if (!o.no_report && !shard.sharded()) WriteRunReportOrWarn(manifest_path, o.quiet);
-  if (sig) {
-    ExitStatus() = 128 + sig;
-    return;
-  }
+  if (sig) return 128 + sig;
   if (!result.failures.empty()) {
     throw RunError(DescribeFailures(result) + "; the manifest lists the missing episodes (" +
                    std::to_string(result.missing.size()) + "): --resume records them");
   }
+  return 0;
 }
 
 }  // namespace
 
-void RegisterRecord(CLI::App& app) {
+Command AddRecord(CLI::App& app) {
   auto o = std::make_shared<RecordOptions>();
   CLI::App* sub = app.add_subcommand(
       "record",
@@ -1230,11 +1228,11 @@ void RegisterRecord(CLI::App& app) {
   sub->add_flag("--no-report", o->no_report,
                 "Do not write the run's HTML report (index.html; see `fetchscope report`)");
   AddFromOption(sub, &o->from);
-  sub->callback([o, sub]() {
-    o->episodes_given = sub->count("--episodes") > 0;
-    if (!o->from.empty()) return RunRecordFrom(*o, *sub, CommandLine());
-    RunRecord(*o, CommandLine());
-  });
+  return {sub, [o, sub] {
+            o->episodes_given = sub->count("--episodes") > 0;
+            if (!o->from.empty()) return RunRecordFrom(*o, *sub, CommandLine());
+            return RunRecord(*o, CommandLine());
+          }};
 }
 
 }  // namespace fetchscope::cli

@@ -8,7 +8,7 @@
 #include <regex>
 #include <sstream>
 
-#include "src/errors.h"
+#include "base/errors.h"
 
 namespace fetchscope::cli {
 namespace {

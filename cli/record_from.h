@@ -11,8 +11,8 @@
 #include <string>
 #include <vector>
 
+#include "base/errors.h"
 #include "src/episode.h"
-#include "src/errors.h"
 #include "src/fetch_env.h"
 
 namespace fetchscope::cli {

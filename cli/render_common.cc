@@ -7,8 +7,8 @@
 #include <set>
 #include <vector>
 
-#include "src/errors.h"
-#include "src/suggest.h"
+#include "base/errors.h"
+#include "base/suggest.h"
 
 namespace fetchscope::cli {
 

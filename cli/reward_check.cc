@@ -3,11 +3,13 @@
 #include <cmath>
 #include <cstdio>
 
+#include "base/json_util.h"
 #include "cli/chapter.h"
+#include "cli/command.h"
 #include "cli/common.h"
+#include "cli/resolve.h"
 #include "src/episode.h"
 #include "src/fetch_env.h"
-#include "src/json_util.h"
 #include "src/rng.h"
 
 namespace fetchscope::cli {
@@ -34,9 +36,10 @@ struct Mismatch {
 }  // namespace
 
 bool RunRewardCheck(const RewardCheckOptions& options) {
-  const EnvSpec& chosen = FindEnvSpec(options.env.env_id);
-  const uint64_t seed = ParseSeed(options.env.seed);
-  const AssetSource assets = ResolveAssets(options.env.assets);
+  const ResolvedEnv env = ResolveEnv(options.env);
+  const EnvSpec& chosen = *env.spec;
+  const uint64_t seed = env.seed;
+  const AssetSource& assets = env.assets;
   std::vector<Mismatch> mismatches;
   nlohmann::json variants = nlohmann::json::array();
   for (const EnvSpec& spec : AllEnvSpecs()) {
@@ -137,7 +140,7 @@ bool RunRewardCheck(const RewardCheckOptions& options) {
   return pass;
 }
 
-void RegisterRewardCheck(CLI::App& app) {
+Command AddRewardCheck(CLI::App& app) {
   auto o = std::make_shared<RewardCheckOptions>();
   CLI::App* sub = app.add_subcommand(
       "reward-check",
@@ -149,9 +152,7 @@ void RegisterRewardCheck(CLI::App& app) {
   sub->add_option("--json-out", o->json_out,
                   "Write P (.json) or P_reward_check.json; without it only the table is "
                   "printed");
-  sub->callback([o]() {
-    if (!RunRewardCheck(*o)) ExitStatus() = 1;
-  });
+  return {sub, [o] { return RunRewardCheck(*o) ? 0 : 1; }};
 }
 
 }  // namespace fetchscope::cli

@@ -4,12 +4,14 @@
 
 #include <cstdio>
 
+#include "base/errors.h"
+#include "base/json_util.h"
+#include "cli/command.h"
 #include "cli/common.h"
-#include "cli/episode_scheduler.h"
+#include "cli/resolve.h"
+#include "run/episode_scheduler.h"
 #include "src/episode.h"
-#include "src/errors.h"
 #include "src/fetch_env.h"
-#include "src/json_util.h"
 
 namespace fetchscope::cli {
 namespace {
@@ -45,27 +47,22 @@ class RolloutRunner : public EpisodeRunner {
   EpisodeSequence sequence_;
 };
 
-void RunRollout(const RolloutOptions& o) {
-  const EnvSpec& spec = FindEnvSpec(o.env.env_id);
-  const uint64_t seed = ParseSeed(o.env.seed);
+int RunRollout(const RolloutOptions& o) {
+  EpisodeRequest request;
+  request.policy = o.policy;
+  request.episodes = o.episodes;
+  request.episodes_given = o.episodes_given;
+  request.steps = o.steps;
+  request.exec_timeout_s = o.exec_timeout;
+  request.replay_dtype = o.replay_dtype;
   const WorkerMode mode = ParseWorkerMode(o.worker_mode);
-  const AssetSource assets = ResolveAssets(o.env.assets);
   // a trajectory JSON replays its own episodes, each under its own index (as record does)
-  std::vector<int> indices;
-  if (auto replayed = ReplayedEpisodes(o.policy, o.episodes_given ? o.episodes : 0, spec.id, seed,
-                                       /*quiet=*/false)) {
-    indices = *replayed;
-  } else {
-    for (int k = 0; k < o.episodes; ++k) indices.push_back(k);
-  }
-  PolicyContext context;
-  context.seed = seed;
-  context.steps_per_episode = o.steps;
-  context.episodes = indices.back() + 1;
-  context.episode_indices = indices;
-  context.exec_timeout_s = o.exec_timeout;
-  context.stop_requested = [] { return StopSignal() != 0; };
-  context.replay_dtype = o.replay_dtype;
+  const ResolvedRun run = ResolveRun(o.env, request);
+  const EnvSpec& spec = *run.env.spec;
+  const uint64_t seed = run.env.seed;
+  const AssetSource& assets = run.env.assets;
+  const std::vector<int>& indices = run.episodes;
+  const PolicyContext& context = run.policy_context;
   { FetchEnv check(spec, assets); }  // bad assets fail here, before any worker starts
   ScheduleOptions schedule;
   schedule.episodes = indices;
@@ -82,8 +79,7 @@ void RunRollout(const RolloutOptions& o) {
   if (result.signal) {
     std::fprintf(stderr, "rollout: interrupted (%s); nothing written\n",
                  result.signal == SIGINT ? "SIGINT" : "SIGTERM");
-    ExitStatus() = 128 + result.signal;
-    return;
+    return 128 + result.signal;
   }
   nlohmann::json episodes = nlohmann::json::array();
   int successes = 0;
@@ -94,7 +90,7 @@ void RunRollout(const RolloutOptions& o) {
   const nlohmann::json j = TrajectoryJson(spec, assets, seed, o.policy, std::move(episodes));
   if (o.json_out.empty()) {
     std::printf("%s\n", DumpJson(j).c_str());
-    return;
+    return 0;
   }
   const std::string path = JsonOutPath(o.json_out, "rollout");
   WriteJson(path, j);
@@ -102,11 +98,12 @@ void RunRollout(const RolloutOptions& o) {
       "%s: %d episode(s) of %d steps, policy %s, seed %s: success %d/%d (%.0f%%)\nwrote %s\n",
       spec.id.c_str(), count, o.steps, o.policy.c_str(), o.env.seed.c_str(), successes, count,
       100.0 * successes / count, path.c_str());
+  return 0;
 }
 
 }  // namespace
 
-void RegisterRollout(CLI::App& app) {
+Command AddRollout(CLI::App& app) {
   auto o = std::make_shared<RolloutOptions>();
   CLI::App* sub =
       app.add_subcommand("rollout", "Run episodes without rendering and write the trajectory JSON");
@@ -126,10 +123,10 @@ void RegisterRollout(CLI::App& app) {
   sub->add_option("--json-out", o->json_out,
                   "Write F (.json) or F_rollout.json; without it JSON goes to stdout");
   AddJobsOptions(sub, &o->jobs, &o->worker_mode);
-  sub->callback([o, sub]() {
-    o->episodes_given = sub->count("--episodes") > 0;
-    RunRollout(*o);
-  });
+  return {sub, [o, sub] {
+            o->episodes_given = sub->count("--episodes") > 0;
+            return RunRollout(*o);
+          }};
 }
 
 }  // namespace fetchscope::cli

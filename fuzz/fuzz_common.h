@@ -5,7 +5,7 @@
 #include <cstdint>
 #include <string>
 
-#include "src/errors.h"
+#include "base/errors.h"
 
 namespace fetchscope::fuzz {
 

@@ -5,8 +5,8 @@
 #include <string>
 #include <vector>
 
-#include "src/errors.h"
-#include "src/suggest.h"
+#include "base/errors.h"
+#include "base/suggest.h"
 
 namespace fetchscope {
 namespace {

@@ -12,9 +12,9 @@
 #include <string>
 #include <vector>
 
+#include "base/errors.h"
 #include "render/gl_context.h"
 #include "render/gpu_select.h"
-#include "src/errors.h"
 
 namespace fetchscope {
 namespace {

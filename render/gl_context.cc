@@ -6,7 +6,7 @@
 #include <mutex>
 #include <string>
 
-#include "src/errors.h"
+#include "base/errors.h"
 
 namespace fetchscope {
 

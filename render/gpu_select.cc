@@ -4,7 +4,7 @@
 #include <cerrno>
 #include <cstdlib>
 
-#include "src/errors.h"
+#include "base/errors.h"
 
 namespace fetchscope {
 namespace {

@@ -6,8 +6,8 @@
 #include <string>
 #include <vector>
 
+#include "base/errors.h"
 #include "render/gl_context.h"
-#include "src/errors.h"
 
 namespace fetchscope {
 namespace {

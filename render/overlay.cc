@@ -6,9 +6,9 @@
 #include <string>
 #include <vector>
 
+#include "base/errors.h"
+#include "base/suggest.h"
 #include "render/text.h"
-#include "src/errors.h"
-#include "src/suggest.h"
 
 namespace fetchscope {
 namespace {

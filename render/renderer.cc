@@ -14,7 +14,7 @@
 #include <string>
 #include <type_traits>
 
-#include "src/errors.h"
+#include "base/errors.h"
 
 namespace fetchscope {
 namespace {

@@ -9,7 +9,7 @@
 #include <fstream>
 #include <vector>
 
-#include "src/errors.h"
+#include "base/errors.h"
 
 namespace fetchscope {
 namespace fs = std::filesystem;

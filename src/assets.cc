@@ -6,8 +6,9 @@
 #include <filesystem>
 #include <vector>
 
-#include "src/errors.h"
-#include "src/sha256.h"
+#include "base/errors.h"
+#include "base/sha256.h"
+#include "fetchscope/paths.h"
 
 namespace fs = std::filesystem;
 

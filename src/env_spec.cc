@@ -1,7 +1,7 @@
 #include "src/env_spec.h"
 
-#include "src/errors.h"
-#include "src/suggest.h"
+#include "base/errors.h"
+#include "base/suggest.h"
 
 namespace fetchscope {
 namespace {

@@ -1,7 +1,7 @@
 #include "src/episode.h"
 
-#include "src/errors.h"
-#include "src/json_util.h"
+#include "base/errors.h"
+#include "base/json_util.h"
 
 namespace fetchscope {
 

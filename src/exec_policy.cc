@@ -16,8 +16,8 @@
 #include <nlohmann/json.hpp>
 #include <vector>
 
-#include "src/errors.h"
-#include "src/json_util.h"
+#include "base/errors.h"
+#include "base/json_util.h"
 #include "src/policy.h"
 
 namespace fetchscope {

@@ -8,7 +8,7 @@
 #include <random>
 #include <set>
 
-#include "src/errors.h"
+#include "base/errors.h"
 
 namespace fetchscope {
 namespace {

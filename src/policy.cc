@@ -2,7 +2,7 @@
 
 #include <map>
 
-#include "src/errors.h"
+#include "base/errors.h"
 #include "src/exec_policy.h"
 #include "src/replay_file.h"
 #include "src/rng.h"

@@ -16,7 +16,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
-#include "src/errors.h"
+#include "base/errors.h"
 
 namespace fetchscope {
 namespace {

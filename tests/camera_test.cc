@@ -9,8 +9,8 @@
 #include <string>
 #include <vector>
 
+#include "base/errors.h"
 #include "render/overlay.h"
-#include "src/errors.h"
 #include "src/mj_handles.h"
 #include "tests/test_util.h"
 

@@ -9,7 +9,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "render/png_io.h"
+#include "encode/png_io.h"
 #include "tests/test_util.h"
 
 namespace fetchscope {

@@ -1,5 +1,5 @@
 // Contact sheet layout, tile scaling and labels (the text itself: text_test.cc).
-#include "render/contact_sheet.h"
+#include "encode/contact_sheet.h"
 
 #include <gtest/gtest.h>
 
@@ -7,8 +7,8 @@
 #include <string>
 #include <vector>
 
+#include "base/errors.h"
 #include "render/text.h"
-#include "src/errors.h"
 
 namespace fetchscope {
 namespace {

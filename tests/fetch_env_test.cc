@@ -5,7 +5,7 @@
 
 #include <cmath>
 
-#include "src/errors.h"
+#include "base/errors.h"
 #include "tests/test_util.h"
 
 namespace fetchscope {

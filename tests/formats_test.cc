@@ -10,7 +10,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "render/video_writer.h"
+#include "encode/video_writer.h"
 #include "tests/test_util.h"
 
 namespace fetchscope {

@@ -10,7 +10,7 @@
 #include <string>
 #include <thread>
 
-#include "src/errors.h"
+#include "base/errors.h"
 
 namespace fetchscope {
 namespace {

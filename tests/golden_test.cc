@@ -12,10 +12,10 @@
 #include <string>
 #include <vector>
 
-#include "cli/golden_scene.h"
-#include "render/image_diff.h"
-#include "render/png_io.h"
-#include "src/errors.h"
+#include "base/errors.h"
+#include "encode/png_io.h"
+#include "inspect/golden_scene.h"
+#include "inspect/image_diff.h"
 #include "tests/test_util.h"
 
 namespace fs = std::filesystem;

@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "src/errors.h"
+#include "base/errors.h"
 
 namespace fetchscope {
 namespace {

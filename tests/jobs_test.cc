@@ -10,11 +10,11 @@
 #include <set>
 #include <thread>
 
+#include "base/errors.h"
 #include "cli/render_common.h"
 #include "render/gl_context.h"
 #include "render/renderer.h"
 #include "src/assets.h"
-#include "src/errors.h"
 #include "src/fetch_env.h"
 #include "tests/test_util.h"
 

@@ -1,6 +1,6 @@
 // JSON helpers: doubles round-trip bit for bit and read like Python's, non-finite values stay
 // strict RFC 8259.
-#include "src/json_util.h"
+#include "base/json_util.h"
 
 #include <gtest/gtest.h>
 

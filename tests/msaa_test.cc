@@ -7,13 +7,13 @@
 #include <string>
 #include <vector>
 
+#include "base/errors.h"
 #include "cli/render_common.h"
+#include "encode/png_io.h"
 #include "render/gl_context.h"
-#include "render/png_io.h"
 #include "render/renderer.h"
 #include "src/assets.h"
 #include "src/env_spec.h"
-#include "src/errors.h"
 #include "src/fetch_env.h"
 #include "tests/test_util.h"
 

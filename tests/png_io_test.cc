@@ -1,5 +1,5 @@
 // PNG writing and reading through libpng.
-#include "render/png_io.h"
+#include "encode/png_io.h"
 
 #include <gtest/gtest.h>
 #include <png.h>
@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-#include "src/errors.h"
+#include "base/errors.h"
 #include "tests/test_util.h"
 
 namespace fetchscope {

@@ -9,8 +9,8 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "render/contact_sheet.h"
-#include "render/png_io.h"
+#include "encode/contact_sheet.h"
+#include "encode/png_io.h"
 #include "tests/test_util.h"
 
 namespace fetchscope {

@@ -1,6 +1,6 @@
 // Progress in batch logs: log lines every 10% of the episodes and every 30 s when stderr is not
 // a terminal, the redrawn bar on a terminal; and a real record run with stderr into a pipe.
-#include "cli/progress.h"
+#include "run/progress.h"
 
 #include <gtest/gtest.h>
 

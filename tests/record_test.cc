@@ -7,7 +7,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
-#include "render/png_io.h"
+#include "encode/png_io.h"
 #include "tests/test_util.h"
 
 namespace fetchscope {

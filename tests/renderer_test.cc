@@ -18,13 +18,13 @@
 #include <string>
 #include <vector>
 
+#include "base/errors.h"
 #include "cli/render_common.h"
+#include "encode/png_io.h"
 #include "render/gl_context.h"
-#include "render/png_io.h"
 #include "src/assets.h"
 #include "src/env_spec.h"
 #include "src/episode.h"
-#include "src/errors.h"
 #include "src/fetch_env.h"
 #include "src/hindsight.h"
 #include "src/mj_handles.h"

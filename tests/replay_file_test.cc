@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "src/errors.h"
+#include "base/errors.h"
 #include "tests/test_util.h"
 
 namespace fetchscope {

@@ -11,9 +11,9 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "cli/html_page.h"
-#include "render/video_reader.h"
-#include "render/video_writer.h"
+#include "encode/video_reader.h"
+#include "encode/video_writer.h"
+#include "inspect/html_page.h"
 #include "tests/test_util.h"
 
 namespace fetchscope {

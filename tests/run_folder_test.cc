@@ -1,7 +1,7 @@
 // record's --out folder holds one run: a folder with another run's files is refused (exit 2),
 // --overwrite replaces that run wholly, --resume continues an interrupted run with the bytes of
 // an uninterrupted one, and a run that fails leaves nothing that was not there before.
-#include "cli/run_folder.h"
+#include "run/run_folder.h"
 
 #include <gtest/gtest.h>
 #include <signal.h>

@@ -1,5 +1,5 @@
 // SHA-256 against the FIPS 180-4 / NIST example vectors and coreutils' sha256sum.
-#include "src/sha256.h"
+#include "base/sha256.h"
 
 #include <gtest/gtest.h>
 
@@ -7,7 +7,7 @@
 #include <fstream>
 #include <string>
 
-#include "src/errors.h"
+#include "base/errors.h"
 #include "tests/test_util.h"
 
 namespace fetchscope {

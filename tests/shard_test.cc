@@ -1,6 +1,6 @@
 // --shard I/N and its environment variables, and merge-manifests: the shards of a run together
 // equal the unsharded run, file for file.
-#include "cli/shard.h"
+#include "run/shard.h"
 
 #include <gtest/gtest.h>
 
@@ -10,7 +10,7 @@
 #include <map>
 #include <nlohmann/json.hpp>
 
-#include "src/errors.h"
+#include "base/errors.h"
 #include "tests/test_util.h"
 
 namespace fetchscope {

@@ -15,7 +15,7 @@
 #include <string>
 #include <thread>
 
-#include "render/png_io.h"
+#include "encode/png_io.h"
 #include "tests/test_util.h"
 
 namespace fetchscope {

@@ -1,12 +1,12 @@
 // "did you mean": edit distance, the nearest name, and comma lists with spaces.
-#include "src/suggest.h"
+#include "base/suggest.h"
 
 #include <gtest/gtest.h>
 
+#include "base/errors.h"
 #include "render/camera.h"
 #include "render/overlay.h"
 #include "src/env_spec.h"
-#include "src/errors.h"
 
 namespace fetchscope {
 namespace {

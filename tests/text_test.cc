@@ -10,9 +10,9 @@
 #include <string>
 #include <vector>
 
-#include "render/image_diff.h"
-#include "render/png_io.h"
-#include "src/errors.h"
+#include "base/errors.h"
+#include "encode/png_io.h"
+#include "inspect/image_diff.h"
 #include "tests/test_util.h"
 
 namespace fetchscope {

@@ -1,6 +1,6 @@
 // VideoWriter: real libx264, libvpx-vp9 and GIF encodes, checked with ffprobe and decoded back
 // with libavformat/libavcodec; container tags read back by ffprobe.
-#include "render/video_writer.h"
+#include "encode/video_writer.h"
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -16,8 +16,8 @@
 #include <string>
 #include <vector>
 
-#include "render/av_handles.h"
-#include "src/errors.h"
+#include "base/errors.h"
+#include "encode/av_handles.h"
 #include "tests/test_util.h"
 
 namespace fetchscope {

@@ -13,7 +13,7 @@ packages=(cmake g++ make pkg-config
   libavfilter-dev libssl-dev libfreetype-dev libfontconfig-dev fonts-dejavu-core
   libcli11-dev nlohmann-json3-dev libgtest-dev
   ffmpeg python3 python3-numpy
-  binutils xz-utils
+  binutils xz-utils ccache
   chromium)
 # Node.js and npm: Debian's, unless a Node.js (e.g. NodeSource's, which bundles npm) is present
 if ! command -v node >/dev/null || ! command -v npm >/dev/null; then packages+=(nodejs npm); fi
@@ -21,7 +21,7 @@ for flag in "$@"; do
   case "$flag" in
     --bench) packages+=(libmujoco-samples xvfb xauth time) ;;
     # libclang-rt-14-dev holds libFuzzer and the clang sanitizer runtimes
-    --ci) packages+=(clang libclang-rt-14-dev valgrind) ;;
+    --ci) packages+=(clang clang-format libclang-rt-14-dev valgrind) ;;
     *) echo "install-deps: unknown option '$flag' (accepted: --bench, --ci)" >&2; exit 2 ;;
   esac
 done

@@ -3,7 +3,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 tools/install-deps.sh
-cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DBUILD_TESTING=ON >/dev/null
+tools/configure.sh
 cmake --build build -j"$(nproc)" --target fetchscope
 build/fetchscope record --env-id FetchPickAndPlace-v4 --policy scripted --seed 0 --episodes 1 \
   --out out/demo --overwrite  # a second run replaces the first

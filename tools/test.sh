@@ -3,8 +3,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 tools/install-deps.sh
-# -Werror: a warning (g++ -Wall -Wextra) fails the build
-cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DBUILD_TESTING=ON -DFETCHSCOPE_WERROR=ON >/dev/null
+tools/configure.sh  # the quick start's configuration: nothing it built is rebuilt
 cmake --build build -j"$(nproc)"
 cd build
 # the soak test (label soak, built only with -DFETCHSCOPE_SOAK=ON) is never part of this run

@@ -1,4 +1,4 @@
-#include "src/sha256.h"
+#include "base/sha256.h"
 
 #include <openssl/err.h>
 #include <openssl/evp.h>
@@ -10,7 +10,7 @@
 #include <cstring>
 #include <memory>
 
-#include "src/errors.h"
+#include "base/errors.h"
 
 namespace fetchscope {
 namespace {

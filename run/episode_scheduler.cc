@@ -1,4 +1,4 @@
-#include "cli/episode_scheduler.h"
+#include "run/episode_scheduler.h"
 
 #include <poll.h>
 #include <signal.h>
@@ -17,9 +17,9 @@
 #include <set>
 #include <thread>
 
+#include "base/errors.h"
+#include "base/json_util.h"
 #include "cli/common.h"
-#include "src/errors.h"
-#include "src/json_util.h"
 
 namespace fetchscope::cli {
 namespace {

@@ -1,4 +1,4 @@
-#include "src/json_util.h"
+#include "base/json_util.h"
 
 #include <charconv>
 #include <cmath>

@@ -1,4 +1,4 @@
-#include "cli/html_page.h"
+#include "inspect/html_page.h"
 
 #include <cmath>
 

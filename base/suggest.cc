@@ -1,4 +1,4 @@
-#include "src/suggest.h"
+#include "base/suggest.h"
 
 #include <algorithm>
 #include <cctype>

@@ -19,8 +19,8 @@
 #include <string>
 #include <vector>
 
+#include "inspect/image_diff.h"
 #include "render/gl_context.h"
-#include "render/image_diff.h"
 
 namespace fetchscope::cli {
 

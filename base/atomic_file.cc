@@ -1,4 +1,4 @@
-#include "src/atomic_file.h"
+#include "base/atomic_file.h"
 
 #include <fcntl.h>
 #include <sys/stat.h>
@@ -10,7 +10,7 @@
 #include <filesystem>
 #include <utility>
 
-#include "src/errors.h"
+#include "base/errors.h"
 
 namespace fetchscope {
 namespace {

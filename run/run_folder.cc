@@ -1,4 +1,4 @@
-#include "cli/run_folder.h"
+#include "run/run_folder.h"
 
 #include <unistd.h>
 
@@ -8,7 +8,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "src/errors.h"
+#include "base/errors.h"
 
 namespace fetchscope::cli {
 namespace {

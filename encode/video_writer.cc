@@ -1,4 +1,4 @@
-#include "render/video_writer.h"
+#include "encode/video_writer.h"
 
 #include <algorithm>
 #include <array>
@@ -14,9 +14,9 @@
 #include <utility>
 #include <vector>
 
-#include "render/av_handles.h"
-#include "src/errors.h"
-#include "src/suggest.h"
+#include "base/errors.h"
+#include "base/suggest.h"
+#include "encode/av_handles.h"
 
 extern "C" {
 #include <libavfilter/avfilter.h>

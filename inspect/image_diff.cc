@@ -1,4 +1,4 @@
-#include "render/image_diff.h"
+#include "inspect/image_diff.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,4 +1,4 @@
-#include "render/png_io.h"
+#include "encode/png_io.h"
 
 #include <fcntl.h>
 #include <png.h>
@@ -12,8 +12,8 @@
 #include <string>
 #include <vector>
 
-#include "src/atomic_file.h"
-#include "src/errors.h"
+#include "base/atomic_file.h"
+#include "base/errors.h"
 
 namespace fetchscope {
 namespace {

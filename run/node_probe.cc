@@ -1,4 +1,4 @@
-#include "cli/node_probe.h"
+#include "run/node_probe.h"
 
 #include <fcntl.h>
 #include <sys/wait.h>
@@ -8,9 +8,9 @@
 #include <cstdio>
 #include <cstring>
 
+#include "base/errors.h"
+#include "base/json_util.h"
 #include "render/gl_context.h"
-#include "src/errors.h"
-#include "src/json_util.h"
 
 namespace fetchscope::cli {
 namespace {

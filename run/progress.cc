@@ -1,11 +1,11 @@
-#include "cli/progress.h"
+#include "run/progress.h"
 
 #include <unistd.h>
 
 #include <algorithm>
 #include <cstdlib>
 
-#include "src/errors.h"
+#include "base/errors.h"
 
 namespace fetchscope::cli {
 namespace {

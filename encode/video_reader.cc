@@ -1,9 +1,9 @@
-#include "render/video_reader.h"
+#include "encode/video_reader.h"
 
 #include <utility>
 
-#include "render/av_handles.h"
-#include "src/errors.h"
+#include "base/errors.h"
+#include "encode/av_handles.h"
 
 extern "C" {
 #include <libavutil/error.h>

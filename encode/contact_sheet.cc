@@ -1,11 +1,11 @@
-#include "render/contact_sheet.h"
+#include "encode/contact_sheet.h"
 
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <string>
 
-#include "src/errors.h"
+#include "base/errors.h"
 
 namespace fetchscope {
 namespace {

@@ -1,4 +1,4 @@
-#include "cli/golden_scene.h"
+#include "inspect/golden_scene.h"
 
 #include <cmath>
 #include <cstdio>
@@ -7,14 +7,14 @@
 #include <set>
 #include <sstream>
 
+#include "base/errors.h"
+#include "base/json_util.h"
 #include "cli/render_common.h"
 #include "render/renderer.h"
 #include "src/assets.h"
 #include "src/env_spec.h"
 #include "src/episode.h"
-#include "src/errors.h"
 #include "src/fetch_env.h"
-#include "src/json_util.h"
 #include "src/policy.h"
 
 namespace fs = std::filesystem;

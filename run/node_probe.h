@@ -9,7 +9,7 @@
 #include <string>
 
 #include "cli/render_common.h"
-#include "render/video_writer.h"
+#include "encode/video_writer.h"
 
 namespace fetchscope::cli {
 

@@ -1,10 +1,10 @@
-#include "cli/shard.h"
+#include "run/shard.h"
 
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 
-#include "src/errors.h"
+#include "base/errors.h"
 
 namespace fetchscope::cli {
 namespace {

@@ -1,0 +1,36 @@
+#include "cli/resolve.h"
+
+#include "base/stop_signal.h"
+
+namespace fetchscope::cli {
+
+ResolvedEnv ResolveEnv(const EnvOptions& env, bool with_seed) {
+  ResolvedEnv resolved;
+  resolved.spec = &FindEnvSpec(env.env_id);
+  if (with_seed) resolved.seed = ParseSeed(env.seed);
+  resolved.assets = ResolveAssets(env.assets);
+  return resolved;
+}
+
+ResolvedRun ResolveRun(const EnvOptions& env, const EpisodeRequest& request) {
+  ResolvedRun run;
+  run.env = ResolveEnv(env);
+  if (auto replayed =
+          ReplayedEpisodes(request.policy, request.episodes_given ? request.episodes : 0,
+                           run.env.spec->id, run.env.seed, request.quiet)) {
+    run.episodes = *replayed;
+  } else {
+    for (int k = 0; k < request.episodes; ++k) run.episodes.push_back(k);
+  }
+  PolicyContext& context = run.policy_context;
+  context.seed = run.env.seed;
+  context.steps_per_episode = request.steps;
+  context.episodes = run.episodes.empty() ? 0 : run.episodes.back() + 1;
+  context.episode_indices = run.episodes;
+  context.exec_timeout_s = request.exec_timeout_s;
+  context.replay_dtype = request.replay_dtype;
+  context.stop_requested = [] { return StopSignal() != 0; };
+  return run;
+}
+
+}  // namespace fetchscope::cli

@@ -1,0 +1,50 @@
+// The one resolver of the options that env-driven commands share: --env-id, --seed, --assets,
+// --policy with its context, and the list of episodes a run plays.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "cli/common.h"
+#include "src/assets.h"
+#include "src/env_spec.h"
+#include "src/policy.h"
+
+namespace fetchscope::cli {
+
+/// --env-id, --seed and --assets, resolved (bad values are UsageError/RunError naming them).
+struct ResolvedEnv {
+  const EnvSpec* spec = nullptr;  ///< the v4 id (auto: FetchReachDense-v4)
+  uint64_t seed = 0;              ///< the first reset's seed
+  AssetSource assets;             ///< the model files
+};
+
+/// Resolves the env options; `with_seed` false leaves seed 0 and does not parse --seed.
+ResolvedEnv ResolveEnv(const EnvOptions& env, bool with_seed = true);
+
+/// What a run of episodes under a policy was asked for.
+struct EpisodeRequest {
+  std::string policy = "random";  ///< --policy
+  int episodes = 1;               ///< --episodes (or 1 for a one-frame command)
+  bool episodes_given = false;    ///< --episodes was on the command line
+  int steps = 50;                 ///< steps per episode
+  double exec_timeout_s = 10.0;   ///< --exec-timeout
+  std::string replay_dtype;       ///< --replay-dtype
+  bool quiet = false;             ///< no warnings on stderr
+};
+
+/// A run of episodes, resolved: the env, the episode indices played (a replay:FILE.json
+/// trajectory plays its own, each from its own reset; else 0 .. episodes-1) and the policy's
+/// context (stop requests from SIGINT/SIGTERM through StopSignal()).
+struct ResolvedRun {
+  ResolvedEnv env;
+  std::vector<int> episodes;
+  PolicyContext policy_context;
+};
+
+/// Resolves a run; the policy is not built (MakePolicy(request.policy, *env.spec,
+/// policy_context) builds one per worker).
+ResolvedRun ResolveRun(const EnvOptions& env, const EpisodeRequest& request);
+
+}  // namespace fetchscope::cli

@@ -1,0 +1,591 @@
+// fetchscope report DIR: one self-contained HTML page for a record run (provenance, a sortable
+// episode table, every episode's video, contact sheet and trajectory, distance-to-goal curves,
+// a histogram of returns, the success rate with its Wilson interval). Written by `record` (unless
+// --no-report) and `merge-manifests` too. The page is drawn in the browser by web/src/report.js
+// from the JSON this file computes; everything numeric is computed here, once.
+#include "inspect/report.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <set>
+#include <sstream>
+
+#include "base/atomic_file.h"
+#include "base/errors.h"
+#include "base/json_util.h"
+#include "cli/common.h"
+#include "inspect/html_page.h"
+#include "src/env_spec.h"
+
+namespace fetchscope::cli {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+std::string ReadText(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw RunError("cannot read '" + path.string() + "'");
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+std::vector<double> Doubles(const json& array, const fs::path& file, const char* what) {
+  if (!array.is_array()) throw RunError("'" + file.string() + "': " + what + " is not a list");
+  std::vector<double> values;
+  values.reserve(array.size());
+  for (const json& v : array) {
+    if (v.is_number()) {
+      values.push_back(v.get<double>());
+    } else if (v.is_string()) {  // JsonDouble writes non-finite values as strings
+      const std::string s = v.get<std::string>();
+      values.push_back(s == "inf" ? HUGE_VAL : s == "-inf" ? -HUGE_VAL : std::nan(""));
+    } else {
+      throw RunError("'" + file.string() + "': " + what + " holds a non-number");
+    }
+  }
+  return values;
+}
+
+// Rounded for plotting: a micrometre is far below what a plot shows, and keeps the page small.
+json Micro(double value) {
+  if (!std::isfinite(value)) return JsonDouble(value);
+  return std::round(value * 1e6) / 1e6;
+}
+
+std::string EpisodeLabel(int k) {
+  char text[32];
+  std::snprintf(text, sizeof(text), "%03d", k);
+  return text;
+}
+
+// Distinct non-empty values, in first-seen order.
+void AddUnique(std::vector<std::string>* list, const std::string& value) {
+  if (value.empty()) return;
+  if (std::find(list->begin(), list->end(), value) == list->end()) list->push_back(value);
+}
+
+std::string Join(const std::vector<std::string>& items, const char* separator) {
+  std::string out;
+  for (size_t i = 0; i < items.size(); ++i) out += (i ? separator : "") + items[i];
+  return out;
+}
+
+std::string Str(const json& j, const char* pointer) {
+  const json::json_pointer p(pointer);
+  if (!j.contains(p)) return "";
+  const json& v = j.at(p);
+  if (v.is_string()) return v.get<std::string>();
+  if (v.is_null()) return "";
+  return v.dump();
+}
+
+// "device (renderer)" of every worker that reported, for a plain or merged manifest.
+std::vector<std::string> GlDevices(const json& manifest) {
+  std::vector<std::string> devices;
+  auto add_workers = [&](const json& workers) {
+    if (!workers.is_array()) return;
+    for (const json& w : workers) {
+      std::string device = w.value("device", std::string());
+      const std::string renderer = w.value("gl_renderer", std::string());
+      if (!renderer.empty()) device += (device.empty() ? "" : " — ") + renderer;
+      AddUnique(&devices, device);
+    }
+  };
+  add_workers(manifest.value("workers", json()));
+  for (const json& shard : manifest.value("shards", json::array())) {
+    add_workers(shard.value("workers", json()));
+  }
+  if (devices.empty()) {  // older manifests: the backend block only
+    AddUnique(&devices,
+              Str(manifest, "/backend/device") + " " + Str(manifest, "/backend/gl_renderer"));
+  }
+  return devices;
+}
+
+bool IsVideoFile(const std::string& name) {
+  const std::string ext = fs::path(name).extension().string();
+  for (const char* known : {".mp4", ".webm", ".gif", ".mkv", ".mov", ".avi"}) {
+    if (ext == known) return true;
+  }
+  return false;
+}
+
+// mp4 (H.264) and webm (VP9) play in every browser; a gif is an image
+int FormatRank(const std::string& format) {
+  return format == "mp4" ? 0 : format == "webm" ? 1 : format == "gif" ? 2 : 3;
+}
+
+void CollectVideoFiles(const json& j, std::set<std::string>* files) {
+  if (j.is_string()) {
+    if (IsVideoFile(j.get<std::string>())) files->insert(j.get<std::string>());
+  } else if (j.is_structured()) {
+    for (const json& child : j) CollectVideoFiles(child, files);
+  }
+}
+
+// ", formats mp4, gif (gif: 10 frames/s, 320 px wide)" when record --format chose more or other
+// than mp4; "" otherwise
+std::string FormatsText(const json& m) {
+  const auto formats = m.find("video");
+  if (formats == m.end() || !formats->contains("formats") || !(*formats)["formats"].is_array()) {
+    return "";
+  }
+  std::vector<std::string> names;
+  for (const json& f : (*formats)["formats"]) {
+    if (f.is_string()) names.push_back(f.get<std::string>());
+  }
+  if (names == std::vector<std::string>{"mp4"}) return "";
+  std::string text = ", formats " + Join(names, ", ");
+  if (std::find(names.begin(), names.end(), "gif") != names.end()) {
+    text += " (gif: " + Str(m, "/video/gif/fps") + " frames/s, " + Str(m, "/video/gif/width") +
+            " px wide at most)";
+  }
+  return text;
+}
+
+}  // namespace
+
+std::vector<EpisodeVideo> EpisodeVideos(const json& entry) {
+  std::vector<EpisodeVideo> out;
+  const auto videos = entry.find("videos");
+  if (videos != entry.end() && videos->is_object()) {
+    for (const auto& [format, v] : videos->items()) {
+      if (!v.is_object() || !v.contains("file") || !v["file"].is_string()) continue;
+      const json& frames = v.value("frames", json());
+      out.push_back({format, v["file"].get<std::string>(),
+                     frames.is_number_integer() ? frames.get<int>() : -1});
+    }
+  }
+  const auto video = entry.find("video");
+  if (out.empty() && video != entry.end() && video->is_string() &&
+      !video->get<std::string>().empty()) {  // manifests from before --format
+    std::string format = fs::path(video->get<std::string>()).extension().string();
+    if (!format.empty()) format.erase(0, 1);
+    const json& frames = entry.value("frames", json());
+    out.push_back(
+        {format, video->get<std::string>(), frames.is_number_integer() ? frames.get<int>() : -1});
+  }
+  std::stable_sort(out.begin(), out.end(), [](const EpisodeVideo& a, const EpisodeVideo& b) {
+    const int ra = FormatRank(a.format), rb = FormatRank(b.format);
+    return ra != rb ? ra < rb : a.format < b.format;
+  });
+  return out;
+}
+
+std::vector<std::string> OtherEpisodeVideos(const json& entry) {
+  std::set<std::string> files;
+  CollectVideoFiles(entry, &files);
+  for (const EpisodeVideo& v : EpisodeVideos(entry)) files.erase(v.file);
+  return {files.begin(), files.end()};
+}
+
+const EpisodeVideo* PlayableVideo(const std::vector<EpisodeVideo>& videos, const fs::path& dir) {
+  for (const EpisodeVideo& v : videos) {
+    std::error_code ec;
+    if (fs::is_regular_file(dir / v.file, ec)) return &v;
+  }
+  return nullptr;
+}
+
+json RunProvenance(const RecordedRun& run) {
+  const json& m = run.manifest;
+  json rows = json::array();
+  auto row = [&](const std::string& label, const std::string& value) {
+    if (!value.empty()) rows.push_back({{"label", label}, {"value", value}});
+  };
+  row("env", Str(m, "/env_id"));
+  row("seed", Str(m, "/seed"));
+  row("policy", Str(m, "/policy"));
+  row("episodes", std::to_string(run.recorded.size()) + " recorded of " +
+                      std::to_string(run.expected.size()) + ", " + Str(m, "/steps_per_episode") +
+                      " steps each");
+  std::string assets = Str(m, "/assets/kind");
+  if (!Str(m, "/assets/origin").empty()) assets += " (" + Str(m, "/assets/origin") + ")";
+  row("assets", assets + " " + Str(m, "/assets/path"));
+  row("assets sha256", Str(m, "/assets/sha256"));
+  std::string encoder = Str(m, "/video/codec");
+  if (!Str(m, "/video/codec_reason").empty()) encoder += " — " + Str(m, "/video/codec_reason");
+  row("encoder", encoder);
+  row("video", Str(m, "/video/width") + "×" + Str(m, "/video/height") + " at " +
+                   Str(m, "/video/fps") + " frames/s, crf " + Str(m, "/video/crf") + ", preset " +
+                   Str(m, "/video/preset") + FormatsText(m));
+  row("GL backend", Str(m, "/backend/name") + " " + Str(m, "/backend/gl_version"));
+  row(GlDevices(m).size() > 1 ? "GL devices" : "GL device", Join(GlDevices(m), "; "));
+  row("GPU choice", Str(m, "/gpu/choice"));
+  row("camera", Str(m, "/camera"));
+  row("overlay", Str(m, "/overlay"));
+  row("MSAA", Str(m, "/msaa") +
+                  (Str(m, "/msaa_reason").empty() ? "" : " (" + Str(m, "/msaa_reason") + ")"));
+  std::vector<std::string> versions;
+  AddUnique(&versions, Str(m, "/versions/fetchscope"));
+  for (const json& shard : m.value("shards", json::array())) {
+    AddUnique(&versions, Str(shard, "/versions/fetchscope"));
+  }
+  row("fetchscope version", Join(versions, ", ") + " (MuJoCo " + Str(m, "/versions/mujoco") + ")");
+  if (m.contains("shards")) {
+    row("shards", std::to_string(m["shards"].size()) + " merged by merge-manifests");
+  } else {
+    row("jobs", Str(m, "/jobs") + " (" + Str(m, "/worker_mode") + ")");
+  }
+  if (m.value("interrupted", false)) row("interrupted", "by " + Str(m, "/signal"));
+  // record --from: the run that was re-rendered (its trajectories replayed)
+  if (!Str(m, "/from").empty()) row("from", "re-rendered from " + Str(m, "/from"));
+  if (m.contains("shards")) {
+    // a merged run: the shards' record commands, and the merge that made this manifest
+    std::vector<std::string> records;
+    for (const json& shard : m["shards"]) AddUnique(&records, Str(shard, "/command_line"));
+    constexpr size_t kShown = 8;
+    const size_t all = records.size();
+    if (all > kShown) {
+      records.resize(kShown);
+      records.push_back("... (" + std::to_string(all) + " in all)");
+    }
+    row(all > 1 ? "record commands" : "record command", Join(records, "\n"));
+    row("merge command", Str(m, "/command_line"));
+  } else {
+    row("command", Str(m, "/command_line"));
+  }
+  return rows;
+}
+
+namespace {
+
+// Bins for the histogram of returns: about sqrt(n) equal bins (5..20) over the range.
+json Histogram(const std::vector<double>& values) {
+  std::vector<double> finite;
+  for (double v : values) {
+    if (std::isfinite(v)) finite.push_back(v);
+  }
+  json out = {{"centres", json::array()}, {"counts", json::array()}, {"width", 1.0}};
+  if (finite.empty()) return out;
+  const auto [lo_it, hi_it] = std::minmax_element(finite.begin(), finite.end());
+  double lo = *lo_it, hi = *hi_it;
+  int bins = std::clamp(static_cast<int>(std::ceil(std::sqrt(finite.size()))), 5, 20);
+  if (hi - lo < 1e-12) {
+    lo -= 0.5;
+    hi += 0.5;
+    bins = 1;
+  }
+  const double width = (hi - lo) / bins;
+  std::vector<int> counts(bins, 0);
+  for (double v : finite) counts[std::min(bins - 1, static_cast<int>((v - lo) / width))]++;
+  for (int b = 0; b < bins; ++b) {
+    out["centres"].push_back(lo + (b + 0.5) * width);
+    out["counts"].push_back(counts[b]);
+  }
+  out["width"] = width;
+  return out;
+}
+
+}  // namespace
+
+RecordedRun ReadRunManifest(const fs::path& manifest_path) {
+  std::error_code ec;
+  if (!fs::is_regular_file(manifest_path, ec)) {
+    throw UsageError("no manifest '" + manifest_path.string() +
+                     "': give the folder of a record run (record --out DIR)");
+  }
+  RecordedRun run;
+  run.manifest_path = manifest_path;
+  run.dir = manifest_path.parent_path().empty() ? fs::path(".") : manifest_path.parent_path();
+  try {
+    run.manifest = json::parse(ReadText(manifest_path));
+  } catch (const json::parse_error& e) {
+    throw UsageError("'" + manifest_path.string() + "' is not JSON: " + e.what());
+  }
+  const json& m = run.manifest;
+  if (!m.is_object() || !m.contains("env_id") || !m.contains("episodes") ||
+      !m["episodes"].is_array()) {
+    throw UsageError("'" + manifest_path.string() +
+                     "' is not a record manifest (it lacks env_id or episodes)");
+  }
+  try {
+    // the episodes asked for: a shard's own, else all of them
+    const json& shard = m.value("shard", json());
+    if (shard.is_object() && shard.value("count", 1) > 1 && shard.contains("episodes")) {
+      run.expected = shard["episodes"].get<std::vector<int>>();
+    } else {
+      const int requested = m.value("episodes_requested", static_cast<int>(m["episodes"].size()));
+      for (int k = 0; k < requested; ++k) run.expected.push_back(k);
+    }
+    for (const json& e : m["episodes"]) run.recorded[e.at("index").get<int>()] = e;
+    for (const json& f : m.value("failures", json::array())) {
+      for (int k : f.value("episodes", std::vector<int>())) {
+        run.failed[k] = f.value("message", std::string());
+      }
+    }
+  } catch (const json::exception& e) {
+    throw UsageError("'" + manifest_path.string() + "' is not a record manifest: " + e.what());
+  }
+  return run;
+}
+
+RecordedRun ReadRunFolder(const std::string& dir) {
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec)) {
+    throw UsageError("'" + dir +
+                     "' is not a folder: give the folder of a record run (record --out DIR)");
+  }
+  const fs::path manifest = fs::path(dir) / "manifest.json";
+  if (!fs::exists(manifest, ec)) {
+    int shards = 0;
+    for (const auto& entry : fs::directory_iterator(dir, ec)) {
+      shards += entry.path().filename().string().rfind("manifest_shard_", 0) == 0;
+    }
+    if (shards > 0) {
+      throw UsageError("no manifest.json in '" + dir + "' but " + std::to_string(shards) +
+                       " shard manifest(s): run `fetchscope merge-manifests " + dir + "` first");
+    }
+    throw UsageError("no manifest.json in '" + dir +
+                     "': give the folder of a record run (record --out DIR)");
+  }
+  return ReadRunManifest(manifest);
+}
+
+std::vector<TrajectoryStep> ReadEpisodeTrajectory(const fs::path& path) {
+  json root;
+  try {
+    root = json::parse(ReadText(path));
+  } catch (const json::parse_error& e) {
+    throw RunError("'" + path.string() + "' is not JSON: " + e.what());
+  }
+  std::vector<TrajectoryStep> steps;
+  try {
+    const json& episodes = root.at("episodes");
+    if (!episodes.is_array() || episodes.empty()) {
+      throw RunError("'" + path.string() + "' holds no episode");
+    }
+    for (const json& s : episodes.at(0).at("steps")) {
+      TrajectoryStep step;
+      step.observation = Doubles(s.at("observation"), path, "observation");
+      step.achieved_goal = Doubles(s.at("achieved_goal"), path, "achieved_goal");
+      step.desired_goal = Doubles(s.at("desired_goal"), path, "desired_goal");
+      steps.push_back(std::move(step));
+    }
+  } catch (const json::exception& e) {
+    throw RunError("'" + path.string() + "' is not a trajectory file: " + e.what());
+  }
+  return steps;
+}
+
+double GoalDistance(const TrajectoryStep& step) {
+  double sum = 0;
+  const size_t n = std::min(step.achieved_goal.size(), step.desired_goal.size());
+  for (size_t i = 0; i < n; ++i) {
+    const double d = step.achieved_goal[i] - step.desired_goal[i];
+    sum += d * d;
+  }
+  return std::sqrt(sum);
+}
+
+json ReportData(const RecordedRun& run) {
+  const json& m = run.manifest;
+  double threshold = 0.05;
+  try {
+    threshold = FindEnvSpec(m.at("env_id").get<std::string>()).distance_threshold;
+  } catch (const std::exception&) {
+    // an env this build does not know: Fetch's 0.05 m
+  }
+  const int steps_requested = m.value("steps_per_episode", 0);
+  json episodes = json::array();
+  json notes = json::array();
+  std::vector<double> returns;  // of the complete episodes
+  int incomplete = 0;
+  bool has_hindsight = false;
+  std::set<int> all(run.expected.begin(), run.expected.end());
+  for (const auto& [k, entry] : run.recorded) all.insert(k);
+  for (int k : all) {
+    const auto it = run.recorded.find(k);
+    json e = {{"index", k}, {"label", EpisodeLabel(k)}};
+    if (it == run.recorded.end()) {
+      e["status"] = "missing";
+      const auto failure = run.failed.find(k);
+      e["reason"] = failure != run.failed.end()     ? failure->second
+                    : m.value("interrupted", false) ? "not recorded: the run was interrupted"
+                                                    : "not recorded";
+      episodes.push_back(std::move(e));
+      continue;
+    }
+    const json& entry = it->second;
+    const int length = entry.value("steps", 0);
+    const bool complete = entry.value("complete", true);  // older manifests: no flag, complete
+    e["status"] = complete ? "ok" : "incomplete";
+    e["complete"] = complete;
+    e["success"] = entry.value("is_success", false);
+    e["return"] = entry.contains("return") ? entry["return"] : json(nullptr);
+    // an interrupted episode's return covers only the steps it made: aggregates leave it out
+    if (complete && entry.contains("return") && entry["return"].is_number()) {
+      returns.push_back(entry["return"].get<double>());
+    }
+    incomplete += !complete;
+    e["length"] = length;
+    e["frames"] = entry.value("frames", length + 1);
+    // every format record wrote, linked by its name; the page shows the one a browser plays best
+    const std::vector<EpisodeVideo> videos = EpisodeVideos(entry);
+    json video_list = json::array();
+    for (const EpisodeVideo& v : videos) {
+      if (fs::is_regular_file(run.dir / v.file)) {
+        video_list.push_back({{"format", v.format}, {"file", v.file}, {"frames", v.frames}});
+      } else {
+        notes.push_back("episode " + EpisodeLabel(k) + ": " + v.format + " video '" + v.file +
+                        "' is missing");
+      }
+    }
+    const EpisodeVideo* shown = PlayableVideo(videos, run.dir);
+    e["video"] = shown ? json(shown->file) : json(nullptr);
+    e["video_format"] = shown ? json(shown->format) : json(nullptr);
+    e["videos"] = std::move(video_list);
+    // record --layers: per layer ("depth", "segmentation") its videos and legend, linked
+    json layers = json::array();
+    std::set<std::string> layer_files;
+    const auto layer_entries = entry.find("layers");
+    if (layer_entries != entry.end() && layer_entries->is_object()) {
+      for (const auto& [name, layer] : layer_entries->items()) {
+        if (!layer.is_object()) continue;
+        json layer_videos = json::array();
+        for (const EpisodeVideo& v : EpisodeVideos(layer)) {
+          layer_files.insert(v.file);
+          if (fs::is_regular_file(run.dir / v.file)) {
+            layer_videos.push_back({{"format", v.format}, {"file", v.file}, {"frames", v.frames}});
+          } else {
+            notes.push_back("episode " + EpisodeLabel(k) + ": " + name + " video '" + v.file +
+                            "' is missing");
+          }
+        }
+        json legend = nullptr;
+        if (layer.contains("legend") && layer["legend"].is_string() &&
+            fs::is_regular_file(run.dir / layer["legend"].get<std::string>())) {
+          legend = layer["legend"];
+        }
+        layers.push_back({{"name", name}, {"videos", std::move(layer_videos)}, {"legend", legend}});
+      }
+    }
+    e["layers"] = std::move(layers);
+    // any other video the entry names: linked
+    json others = json::array();
+    for (const std::string& file : OtherEpisodeVideos(entry)) {
+      if (layer_files.count(file)) continue;
+      if (fs::is_regular_file(run.dir / file)) {
+        others.push_back(file);
+      } else {
+        notes.push_back("episode " + EpisodeLabel(k) + ": video '" + file + "' is missing");
+      }
+    }
+    e["other_videos"] = std::move(others);
+    for (const char* kind : {"sheet", "trajectory"}) {
+      const std::string file = entry.value(kind, std::string());
+      e[kind] = file;
+      if (!file.empty() && !fs::is_regular_file(run.dir / file)) {
+        notes.push_back("episode " + EpisodeLabel(k) + ": " + kind + " '" + file + "' is missing");
+        e[kind] = nullptr;
+      }
+    }
+    if (entry.contains("hindsight") && entry["hindsight"].is_object()) {
+      e["hindsight"] = entry["hindsight"];
+      has_hindsight = true;
+    }
+    json distances = json::array();
+    e["final_distance"] = nullptr;
+    if (e["trajectory"].is_string()) {
+      try {
+        const std::vector<TrajectoryStep> steps =
+            ReadEpisodeTrajectory(run.dir / e["trajectory"].get<std::string>());
+        for (const TrajectoryStep& s : steps) distances.push_back(Micro(GoalDistance(s)));
+        if (!steps.empty()) e["final_distance"] = JsonDouble(GoalDistance(steps.back()));
+      } catch (const RunError& error) {
+        notes.push_back(std::string("episode ") + EpisodeLabel(k) + ": " + error.what());
+      }
+    }
+    e["distances"] = std::move(distances);
+    episodes.push_back(std::move(e));
+  }
+
+  // success rate over the complete episodes, in index order, with its Wilson interval as it grows
+  int n = 0, successes = 0;
+  json running = {{"n", json::array()},
+                  {"rate", json::array()},
+                  {"low", json::array()},
+                  {"high", json::array()}};
+  for (const json& e : episodes) {
+    if (e["status"] != "ok") continue;
+    ++n;
+    successes += e["success"].get<bool>();
+    const auto [low, high] = WilsonInterval(successes, n);
+    running["n"].push_back(n);
+    running["rate"].push_back(static_cast<double>(successes) / n);
+    running["low"].push_back(low);
+    running["high"].push_back(high);
+  }
+  const auto [low, high] = WilsonInterval(successes, n);
+  const int missing = static_cast<int>(all.size()) - static_cast<int>(run.recorded.size());
+  if (m.value("interrupted", false)) {
+    notes.insert(notes.begin(), "the run was interrupted by " + Str(m, "/signal") + ": " +
+                                    std::to_string(missing) + " episode(s) missing");
+  } else if (missing > 0) {
+    notes.insert(notes.begin(), std::to_string(missing) + " episode(s) missing (see the table)");
+  }
+  json provenance = RunProvenance(run);
+  // the re-rendered run's own page, where the path record --from was given still finds one
+  for (json& row : provenance) {
+    if (row["label"] != "from") continue;
+    std::error_code ec;
+    fs::path source = Str(m, "/from");
+    if (fs::is_directory(source, ec)) source /= "index.html";
+    if (fs::is_regular_file(source, ec)) {
+      row["href"] = fs::absolute(source)
+                        .lexically_normal()
+                        .lexically_relative(fs::absolute(run.dir).lexically_normal())
+                        .string();
+    }
+  }
+  return {
+      {"kind", "report"},
+      {"title", Str(m, "/env_id") + " · " + Str(m, "/policy") + " · seed " + Str(m, "/seed")},
+      {"generator", std::string("fetchscope ") + FETCHSCOPE_VERSION},
+      {"uplot", EmbeddedUplotVersion()},
+      {"provenance", std::move(provenance)},
+      {"notes", notes},
+      {"threshold", threshold},
+      {"steps_per_episode", steps_requested},
+      {"fps", m.contains("/video/fps"_json_pointer) ? m.at("/video/fps"_json_pointer) : json(25)},
+      {"has_hindsight", has_hindsight},
+      {"episodes", std::move(episodes)},
+      {"summary",
+       {{"expected", all.size()},
+        {"recorded", run.recorded.size()},
+        {"complete", n},
+        {"incomplete", incomplete},
+        {"successes", successes},
+        {"rate", n ? JsonDouble(static_cast<double>(successes) / n) : json(nullptr)},
+        {"wilson_low", low},
+        {"wilson_high", high},
+        {"confidence", 0.95}}},
+      {"running_success", std::move(running)},
+      {"returns_histogram", Histogram(returns)}};  // complete episodes only
+}
+
+fs::path WriteRunReport(const RecordedRun& run) {
+  const json data = ReportData(run);
+  const fs::path out = run.dir / "index.html";
+  WriteFileAtomically(
+      out.string(),
+      HtmlPage(PageKind::kReport, "fetchscope report: " + data["title"].get<std::string>(), data));
+  return out;
+}
+
+void WriteRunReportOrWarn(const fs::path& manifest_path, bool quiet) {
+  try {
+    const fs::path page = WriteRunReport(ReadRunManifest(manifest_path));
+    if (!quiet) std::fprintf(stderr, "report: %s\n", page.string().c_str());
+  } catch (const std::exception& e) {
+    std::fprintf(stderr,
+                 "fetchscope: warning: the run is recorded but its report was not written: %s\n",
+                 e.what());
+  }
+}
+
+}  // namespace fetchscope::cli

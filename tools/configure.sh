@@ -1,0 +1,12 @@
+#!/usr/bin/env bash
+# The one build configuration of tools/quickstart.sh and tools/test.sh (and so CI): the same
+# flags, so that the test command after the quick start reuses every object the quick start built.
+# -Werror: a warning (g++ -Wall -Wextra) fails the build. ccache is used when installed.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+launcher=()
+if command -v ccache >/dev/null; then
+  launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCMAKE_C_COMPILER_LAUNCHER=ccache)
+fi
+cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DBUILD_TESTING=ON -DFETCHSCOPE_WERROR=ON \
+  "${launcher[@]}" "$@" >/dev/null
