@@ -6,6 +6,7 @@
 #include <string>
 
 #include "base/errors.h"
+#include "render/canvas.h"
 
 namespace fetchscope {
 namespace {
@@ -42,10 +43,8 @@ std::vector<Span> BoxSpans(int source, int destination) {
   return spans;
 }
 
-// Box-filters `tile` to out_width x out_height and writes it at (x0, y0) of
-// the sheet (which is large enough).
-void PasteScaled(const SheetTile& tile, int out_width, int out_height, SheetImage* sheet, int x0,
-                 int y0) {
+// `tile` box-filtered to out_width x out_height, RGB24.
+std::vector<uint8_t> Scaled(const SheetTile& tile, int out_width, int out_height) {
   const std::vector<Span> columns = BoxSpans(tile.width, out_width);
   const std::vector<Span> rows = BoxSpans(tile.height, out_height);
   // Horizontal pass over every source row, then vertical pass.
@@ -67,9 +66,10 @@ void PasteScaled(const SheetTile& tile, int out_width, int out_height, SheetImag
       out[x * 3 + 2] = b;
     }
   }
+  std::vector<uint8_t> scaled(static_cast<std::size_t>(out_width) * out_height * 3);
   for (int y = 0; y < out_height; ++y) {
     const Span& span = rows[y];
-    uint8_t* out = sheet->rgb.data() + (static_cast<std::size_t>(y0 + y) * sheet->width + x0) * 3;
+    uint8_t* out = scaled.data() + static_cast<std::size_t>(y) * out_width * 3;
     for (int x = 0; x < out_width * 3; ++x) {
       double value = 0;
       for (std::size_t k = 0; k < span.weights.size(); ++k) {
@@ -78,17 +78,7 @@ void PasteScaled(const SheetTile& tile, int out_width, int out_height, SheetImag
       out[x] = static_cast<uint8_t>(std::clamp(std::lround(value), 0L, 255L));
     }
   }
-}
-
-void FillRect(SheetImage* image, int x0, int y0, int width, int height, Rgb color) {
-  for (int y = y0; y < y0 + height; ++y) {
-    uint8_t* p = image->rgb.data() + (static_cast<std::size_t>(y) * image->width + x0) * 3;
-    for (int x = 0; x < width; ++x, p += 3) {
-      p[0] = color.r;
-      p[1] = color.g;
-      p[2] = color.b;
-    }
-  }
+  return scaled;
 }
 
 // The first kLabelLines lines of `label`, each fitted to `max_width`.
@@ -162,7 +152,8 @@ SheetImage MakeContactSheet(const std::string& title, const std::vector<SheetTil
   sheet.height = layout.title_bar_height +
                  rows * (kSheetMargin + cell_height + layout.label_bar_height) + kSheetMargin;
   sheet.rgb.resize(static_cast<std::size_t>(sheet.width) * sheet.height * 3);
-  FillRect(&sheet, 0, 0, sheet.width, sheet.height, kSheetBackground);
+  Canvas canvas(sheet.rgb.data(), sheet.width, sheet.height);
+  canvas.FillRect(0, 0, sheet.width, sheet.height, kSheetBackground);
 
   // A long title drops to the label size before it is cut.
   const int title_room = sheet.width - 2 * kSheetMargin;
@@ -170,26 +161,22 @@ SheetImage MakeContactSheet(const std::string& title, const std::vector<SheetTil
   const int title_size = font.Measure(first_line, layout.title_pixel_size).width <= title_room
                              ? layout.title_pixel_size
                              : layout.label_pixel_size;
-  TextStyle title_style;
-  title_style.pixel_size = title_size;
-  title_style.color = kSheetText;
-  font.Draw(sheet.rgb.data(), sheet.width, sheet.height, kSheetMargin, kSheetMargin,
-            font.Fit(first_line, title_size, title_room), title_style);
+  canvas.Text(kSheetMargin, kSheetMargin, font.Fit(first_line, title_size, title_room), title_size,
+              kSheetText);
 
-  TextStyle label_style;
-  label_style.pixel_size = layout.label_pixel_size;
-  label_style.color = kSheetText;
   const int label_room = tile_width - 2 * kSheetLabelPadding;
   for (int i = 0; i < n; ++i) {
     const int x0 = kSheetMargin + (i % columns) * (tile_width + kSheetMargin);
     const int y0 = layout.title_bar_height + kSheetMargin +
                    (i / columns) * (kSheetMargin + cell_height + layout.label_bar_height);
-    PasteScaled(tiles[i], tile_width, ScaledHeight(tiles[i], tile_width), &sheet, x0, y0);
+    const int scaled_height = ScaledHeight(tiles[i], tile_width);
+    canvas.Paste(Scaled(tiles[i], tile_width, scaled_height).data(), tile_width, scaled_height, x0,
+                 y0);
     const int bar_y = y0 + cell_height;
-    FillRect(&sheet, x0, bar_y, tile_width, layout.label_bar_height, kSheetLabelBar);
-    font.Draw(sheet.rgb.data(), sheet.width, sheet.height, x0 + kSheetLabelPadding,
-              bar_y + kSheetLabelPadding,
-              FitLabel(font, tiles[i].label, layout.label_pixel_size, label_room), label_style);
+    canvas.FillRect(x0, bar_y, tile_width, layout.label_bar_height, kSheetLabelBar);
+    canvas.Text(x0 + kSheetLabelPadding, bar_y + kSheetLabelPadding,
+                FitLabel(font, tiles[i].label, layout.label_pixel_size, label_room),
+                layout.label_pixel_size, kSheetText);
   }
   return sheet;
 }

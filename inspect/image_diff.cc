@@ -3,10 +3,13 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
-#include <cstring>
+
+#include "render/canvas.h"
 
 namespace fetchscope {
 namespace {
+
+constexpr Rgb kSideBySideBackground = {40, 40, 40};
 
 int PixelDiff(const uint8_t* a, const uint8_t* b) {
   int d = 0;
@@ -82,16 +85,12 @@ std::vector<uint8_t> DiffHeatMap(const uint8_t* golden, const uint8_t* actual, i
 std::vector<uint8_t> SideBySide(const uint8_t* golden, const uint8_t* actual, const uint8_t* diff,
                                 int width, int height) {
   const int out_width = SideBySideWidth(width);
-  std::vector<uint8_t> out(static_cast<size_t>(out_width) * height * 3, 40);
+  std::vector<uint8_t> out(static_cast<size_t>(out_width) * height * 3);
+  Canvas canvas(out.data(), out_width, height);
+  canvas.FillRect(0, 0, out_width, height, kSideBySideBackground);
   const uint8_t* panels[3] = {golden, actual, diff};
-  const size_t row_bytes = static_cast<size_t>(width) * 3;
-  for (int p = 0; p < 3; ++p) {
-    const size_t x0 = static_cast<size_t>(p) * (width + kSideBySideGap);
-    for (int y = 0; y < height; ++y) {
-      std::memcpy(&out[(static_cast<size_t>(y) * out_width + x0) * 3], panels[p] + y * row_bytes,
-                  row_bytes);
-    }
-  }
+  for (int p = 0; p < 3; ++p)
+    canvas.Paste(panels[p], width, height, p * (width + kSideBySideGap), 0);
   return out;
 }
 

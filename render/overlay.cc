@@ -8,6 +8,7 @@
 
 #include "base/errors.h"
 #include "base/suggest.h"
+#include "render/canvas.h"
 #include "render/text.h"
 
 namespace fetchscope {
@@ -78,36 +79,22 @@ void AddConnector(mjvScene* scene, int type, double width, const std::array<doub
   SetCamdist(*scene, g);
 }
 
-// The one place frame text is drawn (HUD, tile labels): DejaVu Sans through FreeType
-// (render/text.h) at an em of `pixels`.
-void DrawFrameText(uint8_t* rgb, int width, int height, int x, int y, const std::string& text,
-                   int pixels, Rgb color) {
-  TextStyle style;
-  style.pixel_size = pixels;
-  style.color = color;
-  Font::Default().Draw(rgb, width, height, x, y, text, style);
-}
+// Frame text (HUD, tile labels) is DejaVu Sans through FreeType (render/text.h) at an em of
+// `pixels`, drawn through the canvas.
 TextMetrics FrameText(const std::string& text, int pixels) {
   return Font::Default().Measure(text, pixels);
 }
 
 constexpr Rgb kHudLabelColor = {200, 200, 200};
+constexpr Rgb kBoxBlack = {0, 0, 0};
 constexpr Rgb kHudValueColor = {255, 255, 255};
 // The value column is as wide as the widest action line (DejaVu's '+' is wider than its '-',
 // so this is the widest the action can be): the box keeps its size from frame to frame.
 constexpr char kHudWidestValue[] = "+0.00 +0.00 +0.00 +0.00";
 
-// Darkens `r` (clipped to the image) to (1 - opacity) of its brightness.
-void BlendBox(uint8_t* rgb, int width, int height, const PixelRect& r, double opacity) {
-  if (opacity <= 0) return;
-  const int x0 = std::max(0, r.x), y0 = std::max(0, r.y);
-  const int x1 = std::min(width, r.x + r.width), y1 = std::min(height, r.y + r.height);
-  // fixed-point blend: the same bytes on every machine
-  const int keep = static_cast<int>(std::lround((1.0 - std::min(1.0, opacity)) * 256));
-  for (int y = y0; y < y1; ++y) {
-    uint8_t* p = rgb + (static_cast<size_t>(y) * width + x0) * 3;
-    for (int i = 0; i < (x1 - x0) * 3; ++i) p[i] = static_cast<uint8_t>((p[i] * keep) >> 8);
-  }
+// The HUD's and tile labels' box: black blended over `r` at `opacity` (0: none, 1: opaque).
+void DrawBox(Canvas* canvas, const PixelRect& r, double opacity) {
+  canvas->FillRect(r.x, r.y, r.width, r.height, kBoxBlack, opacity);
 }
 
 bool Overlaps(const PixelRect& a, const PixelRect& b) {
@@ -379,23 +366,23 @@ bool DrawHud(uint8_t* rgb, int width, int height, const PixelRect& tile, const H
              HudPosition position, double opacity) {
   const auto g = LayoutHud(hud, tile, position);
   if (!g) return false;
-  BlendBox(rgb, width, height, g->box, opacity);
+  Canvas canvas(rgb, width, height);
+  DrawBox(&canvas, g->box, opacity);
   const Font& font = Font::Default();
   const int x = g->box.x + g->pad, value_x = x + g->label_w + g->gap;
   int y = g->box.y + g->pad;
   if (!hud.title.empty()) {
     const int title_w = g->box.width - 2 * g->pad;
-    DrawFrameText(rgb, width, height, x, y, font.Fit(hud.title, g->pixels, title_w), g->pixels,
-                  kHudValueColor);
+    canvas.Text(x, y, font.Fit(hud.title, g->pixels, title_w), g->pixels, kHudValueColor);
     y += g->pitch;
   }
   const std::vector<std::string> labels = Lines(hud.labels), values = Lines(hud.values);
   for (size_t i = 0; i < labels.size(); ++i, y += g->pitch) {
-    DrawFrameText(rgb, width, height, x, y, labels[i], g->pixels, kHudLabelColor);
+    canvas.Text(x, y, labels[i], g->pixels, kHudLabelColor);
     // each value cut to its column: the box never grows with the frame's text
     if (i < values.size()) {
-      DrawFrameText(rgb, width, height, value_x, y, font.Fit(values[i], g->pixels, g->value_w),
-                    g->pixels, kHudValueColor);
+      canvas.Text(value_x, y, font.Fit(values[i], g->pixels, g->value_w), g->pixels,
+                  kHudValueColor);
     }
   }
   return true;
@@ -415,8 +402,9 @@ bool DrawTileLabel(uint8_t* rgb, int width, int height, const PixelRect& tile,
   box.y = tile.y + pad;
   if (avoid && Overlaps(box, *avoid)) box.y = tile.y + tile.height - pad - box.height;
   if (avoid && Overlaps(box, *avoid)) return false;
-  BlendBox(rgb, width, height, box, opacity);
-  DrawFrameText(rgb, width, height, box.x + pad, box.y + pad, label, pixels, kHudValueColor);
+  Canvas canvas(rgb, width, height);
+  DrawBox(&canvas, box, opacity);
+  canvas.Text(box.x + pad, box.y + pad, label, pixels, kHudValueColor);
   return true;
 }
 

@@ -7,15 +7,9 @@
 #include <array>
 #include <optional>
 
-namespace fetchscope {
+#include "render/vec.h"
 
-/// A pixel position in a frame: x to the right, y down from the top row (row 0 = top, as the
-/// images fetchscope writes), in pixels; may lie outside the frame. Pixel (i, j) covers
-/// [i, i + 1) x [j, j + 1), so its centre is (i + 0.5, j + 0.5).
-struct Pixel {
-  double x;  ///< column, 0 = left edge of the frame
-  double y;  ///< row, 0 = top edge of the frame
-};
+namespace fetchscope {
 
 /// The scene camera's unit axes in world coordinates, as mjr_render's view matrix uses them.
 struct CameraAxes {

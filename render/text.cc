@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "base/errors.h"
+#include "render/canvas.h"
 
 namespace fetchscope {
 namespace fs = std::filesystem;
@@ -105,22 +106,6 @@ void CheckPixelSize(int pixel_size) {
     throw UsageError("text pixel size " + std::to_string(pixel_size) +
                      " is out of range: accepted " + std::to_string(kMinPixelSize) + ".." +
                      std::to_string(kMaxPixelSize));
-  }
-}
-
-uint8_t Blend(uint8_t under, uint8_t over, unsigned coverage) {
-  return static_cast<uint8_t>((under * (255u - coverage) + over * coverage + 127u) / 255u);
-}
-
-void FillBox(uint8_t* rgb, int width, int height, int x0, int y0, int w, int h, Rgb color) {
-  const int x1 = std::min(width, x0 + w), y1 = std::min(height, y0 + h);
-  for (int y = std::max(0, y0); y < y1; ++y) {
-    for (int x = std::max(0, x0); x < x1; ++x) {
-      uint8_t* p = rgb + (static_cast<size_t>(y) * width + x) * 3;
-      p[0] = color.r;
-      p[1] = color.g;
-      p[2] = color.b;
-    }
   }
 }
 
@@ -236,6 +221,12 @@ TextMetrics Font::Measure(const std::string& utf8, int pixel_size) const {
 
 TextMetrics Font::Draw(uint8_t* rgb, int width, int height, int x, int y, const std::string& utf8,
                        const TextStyle& style) const {
+  Canvas canvas(rgb, width, height);
+  return Draw(&canvas, x, y, utf8, style);
+}
+
+TextMetrics Font::Draw(Canvas* canvas, int x, int y, const std::string& utf8,
+                       const TextStyle& style) const {
   CheckPixelSize(style.pixel_size);
   if (style.padding < 0) {
     throw UsageError("text box padding " + std::to_string(style.padding) +
@@ -245,8 +236,8 @@ TextMetrics Font::Draw(uint8_t* rgb, int width, int height, int x, int y, const 
   impl_->SetSize(style.pixel_size);
   const TextMetrics m = impl_->Measure(utf8);
   if (style.background) {
-    FillBox(rgb, width, height, x - style.padding, y - style.padding, m.width + 2 * style.padding,
-            m.height + 2 * style.padding, *style.background);
+    canvas->FillRect(x - style.padding, y - style.padding, m.width + 2 * style.padding,
+                     m.height + 2 * style.padding, *style.background);
   }
   if (utf8.empty()) return m;
   int baseline = y + m.ascent;
@@ -262,16 +253,11 @@ TextMetrics Font::Draw(uint8_t* rgb, int width, int height, int x, int y, const 
       if (bitmap.pixel_mode == FT_PIXEL_MODE_GRAY) {
         for (int row = 0; row < static_cast<int>(bitmap.rows); ++row) {
           const int py = top + row;
-          if (py < 0 || py >= height) continue;
+          if (py < 0 || py >= canvas->height()) continue;
           const unsigned char* src = bitmap.buffer + static_cast<long>(row) * bitmap.pitch;
           for (int col = 0; col < static_cast<int>(bitmap.width); ++col) {
-            const int px = left + col;
-            const unsigned coverage = src[col];
-            if (px < 0 || px >= width || coverage == 0) continue;
-            uint8_t* p = rgb + (static_cast<size_t>(py) * width + px) * 3;
-            p[0] = Blend(p[0], style.color.r, coverage);
-            p[1] = Blend(p[1], style.color.g, coverage);
-            p[2] = Blend(p[2], style.color.b, coverage);
+            // coverage 0..255 as alpha: exactly the integer blend it replaced (canvas.h)
+            canvas->Blend(left + col, py, style.color, src[col] / 255.0);
           }
         }
       }

@@ -23,6 +23,8 @@
 
 namespace fetchscope {
 
+class Canvas;
+
 /// An 8-bit sRGB colour.
 struct Rgb {
   uint8_t r;  ///< red, 0..255
@@ -71,6 +73,11 @@ class Font {
   /// corner of its text box at (x, y). With style.background, first fills the text box grown by
   /// style.padding on every side. Returns the metrics of the text.
   TextMetrics Draw(uint8_t* rgb, int width, int height, int x, int y, const std::string& utf8,
+                   const TextStyle& style) const;
+
+  /// Draw() onto `canvas` (render/canvas.h): the glyphs are blended by their coverage through
+  /// the canvas's one blend.
+  TextMetrics Draw(Canvas* canvas, int x, int y, const std::string& utf8,
                    const TextStyle& style) const;
 
   /// `utf8` cut at a character boundary so it is at most `max_width` pixels wide at `pixel_size`,

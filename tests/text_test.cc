@@ -40,10 +40,10 @@ class ScopedEnv {
   std::string old_;
 };
 
-struct Canvas {
+struct Raster {
   int width, height;
   std::vector<uint8_t> rgb;
-  Canvas(int w, int h, uint8_t fill = 0)
+  Raster(int w, int h, uint8_t fill = 0)
       : width(w), height(h), rgb(static_cast<size_t>(w) * h * 3, fill) {}
   const uint8_t* At(int x, int y) const { return &rgb[(static_cast<size_t>(y) * width + x) * 3]; }
 };
@@ -52,7 +52,7 @@ struct Canvas {
 struct Box {
   int x0 = -1, y0 = -1, x1 = -1, y1 = -1;
 };
-Box InkBox(const Canvas& c, uint8_t fill) {
+Box InkBox(const Raster& c, uint8_t fill) {
   Box box;
   for (int y = 0; y < c.height; ++y) {
     for (int x = 0; x < c.width; ++x) {
@@ -69,7 +69,7 @@ Box InkBox(const Canvas& c, uint8_t fill) {
 }
 
 std::vector<uint8_t> Render(const std::string& text, int size) {
-  Canvas c(200, 60);
+  Raster c(200, 60);
   TextStyle style;
   style.pixel_size = size;
   style.color = kWhite;
@@ -153,7 +153,7 @@ TEST(FontTest, InkStaysInsideTheMeasuredBox) {
   const Font& font = Font::Default();
   for (int size : {9, 12, 18, 40}) {
     for (const std::string text : {"Hg", "FetchSlide-v4  r=-0.25", "two\nlines jq", "W"}) {
-      Canvas c(400, 200);
+      Raster c(400, 200);
       TextStyle style;
       style.pixel_size = size;
       const int x = 10, y = 20;
@@ -173,7 +173,7 @@ TEST(FontTest, InkStaysInsideTheMeasuredBox) {
 }
 
 TEST(FontTest, BackgroundBoxCoversTextBoxAndPadding) {
-  Canvas c(120, 60, 7);
+  Raster c(120, 60, 7);
   TextStyle style;
   style.pixel_size = 14;
   style.color = {250, 250, 250};
@@ -250,7 +250,7 @@ TEST(FontTest, ClipsAtEveryEdge) {
 // FETCHSCOPE_UPDATE_TEXT_GOLDEN=1 and checked by eye). Debian's FreeType renders the same bytes
 // on every machine; a small tolerance absorbs a FreeType point release.
 TEST(FontTest, LabelMatchesGoldenCrop) {
-  Canvas c(240, 40, 30);
+  Raster c(240, 40, 30);
   TextStyle style;
   style.pixel_size = 15;
   style.color = {235, 235, 235};
