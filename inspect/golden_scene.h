@@ -22,7 +22,7 @@
 #include "inspect/image_diff.h"
 #include "render/gl_context.h"
 
-namespace fetchscope::cli {
+namespace fetchscope {
 
 /// How close an image must be to its golden.
 struct GoldenTolerance {
@@ -93,4 +93,4 @@ struct StateComparison {
 StateComparison CompareStates(const nlohmann::json& golden, const nlohmann::json& actual,
                               double atol);
 
-}  // namespace fetchscope::cli
+}  // namespace fetchscope

@@ -90,7 +90,7 @@ TEST(GoldenState, NumbersWithinToleranceAreEqual) {
       {"steps", {{{"t", 0}, {"desired_goal", {1.0, 0.5, 0.4}}, {"reward", nullptr}}}}};
   nlohmann::json a = g;
   a["steps"][0]["desired_goal"][1] = 0.5 + 5e-7;
-  const cli::StateComparison c = cli::CompareStates(g, a, 1e-6);
+  const StateComparison c = CompareStates(g, a, 1e-6);
   EXPECT_TRUE(c.equal) << c.first;
   EXPECT_NEAR(c.max_abs, 5e-7, 1e-12);
 }
@@ -100,25 +100,25 @@ TEST(GoldenState, FirstDifferenceIsNamedByPath) {
       {"steps", {{{"t", 0}, {"desired_goal", {1.0, 0.5, 0.4}}, {"reward", nullptr}}}}};
   nlohmann::json a = g;
   a["steps"][0]["desired_goal"][2] = 0.41;
-  const cli::StateComparison c = cli::CompareStates(g, a, 1e-6);
+  const StateComparison c = CompareStates(g, a, 1e-6);
   EXPECT_FALSE(c.equal);
   EXPECT_NE(c.first.find("steps[0].desired_goal[2]"), std::string::npos) << c.first;
   a = g;
   a["steps"][0]["reward"] = -1.0;  // null vs number
-  EXPECT_FALSE(cli::CompareStates(g, a, 1e-6).equal);
+  EXPECT_FALSE(CompareStates(g, a, 1e-6).equal);
   a = g;
   a["steps"].push_back(g["steps"][0]);  // a longer trajectory
-  EXPECT_FALSE(cli::CompareStates(g, a, 1e-6).equal);
+  EXPECT_FALSE(CompareStates(g, a, 1e-6).equal);
 }
 
 // ---------------------------------------------------------------- the manifest
 
 TEST(GoldenManifest, CommittedManifestCoversTheIssue) {
-  const cli::GoldenManifest m = cli::ReadGoldenManifest((SourceDir() / "golden").string());
+  const GoldenManifest m = ReadGoldenManifest((SourceDir() / "golden").string());
   std::set<std::string> tasks, cameras;
   int bundled = 0, genuine = 0, reset = 0, mid = 0, overlays_on = 0, overlays_off = 0,
       non_square = 0;
-  for (const cli::GoldenScene& s : m.scenes) {
+  for (const GoldenScene& s : m.scenes) {
     (s.assets == "genuine" ? genuine : bundled) += 1;
     if (s.assets == "genuine") continue;
     tasks.insert(s.env_id.substr(5, s.env_id.find_first_of("D-", 5) - 5));
@@ -142,10 +142,10 @@ TEST(GoldenManifest, CommittedManifestCoversTheIssue) {
 }
 
 TEST(GoldenManifest, UnknownSceneNameIsAUsageErrorListingValidNames) {
-  const cli::GoldenManifest m = cli::ReadGoldenManifest((SourceDir() / "golden").string());
-  EXPECT_EQ(cli::SelectScenes(m, {"reach_reset,slide_reset"}).size(), 2u);
+  const GoldenManifest m = ReadGoldenManifest((SourceDir() / "golden").string());
+  EXPECT_EQ(SelectScenes(m, {"reach_reset,slide_reset"}).size(), 2u);
   try {
-    cli::SelectScenes(m, {"reach_reset", "nope"});
+    SelectScenes(m, {"reach_reset", "nope"});
     FAIL() << "expected UsageError";
   } catch (const UsageError& e) {
     EXPECT_NE(std::string(e.what()).find("'nope'"), std::string::npos) << e.what();
