@@ -26,11 +26,11 @@
 #include "cli/chapter.h"
 #include "cli/command.h"
 #include "cli/common.h"
-#include "cli/render_common.h"
 #include "encode/png_io.h"
 #include "render/projection.h"
 #include "render/renderer.h"
 #include "render/text.h"
+#include "render/view.h"
 #include "src/episode.h"
 #include "src/policy.h"
 

@@ -18,7 +18,7 @@
 #include "base/json_util.h"
 #include "cli/command.h"
 #include "cli/common.h"
-#include "cli/render_common.h"
+#include "cli/view_options.h"
 #include "encode/contact_sheet.h"
 #include "encode/png_io.h"
 #include "render/renderer.h"
