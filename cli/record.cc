@@ -17,7 +17,6 @@
 #include <vector>
 
 #include "base/errors.h"
-#include "base/json_util.h"
 #include "base/suggest.h"
 #include "cli/command.h"
 #include "cli/common.h"
@@ -70,7 +69,7 @@ struct RecordOptions {
   bool resume = false;          // continue the run already in --out
   std::string replay_dtype;     // --replay-dtype: "", float32, float64
   bool episodes_given = false;  // --episodes was on the command line
-  bool no_report = false;       // no index.html (cli/report.h)
+  bool no_report = false;       // no index.html (inspect/report.h)
   std::string from;             // record --from: a run folder or trajectory JSON
   std::string layers = "rgb";   // --layers: rgb plus depth, segmentation
 };

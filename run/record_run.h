@@ -14,7 +14,6 @@
 #include <string>
 #include <vector>
 
-#include "cli/record_from.h"  // transitional: TrajectorySource, EpisodeReplayer (fetchscope::cli)
 #include "encode/episode_sink.h"
 #include "encode/frame_pool.h"
 #include "encode/video_writer.h"
@@ -29,6 +28,12 @@
 #include "src/policy.h"
 
 namespace fetchscope {
+
+// transitional: record --from's recording and replayer are still in cli/record_from.h
+namespace cli {
+struct TrajectorySource;
+class EpisodeReplayer;
+}  // namespace cli
 
 /// Everything the parent decided before the workers start; workers only read it.
 struct RecordPlan {
@@ -90,9 +95,9 @@ class RecordRunner : public cli::EpisodeRunner {
   const int worker_;
   const EpisodeSinkOptions sink_;
   cli::EpisodeSequence sequence_;
-  std::unique_ptr<FetchEnv> replay_env_;  // hindsight: the env the replay renders
-  std::optional<cli::EpisodeReplayer> replayer_;
-  FetchEnv* render_env_ = nullptr;             // the env being replayed, while it is
+  std::unique_ptr<FetchEnv> replay_env_;            // hindsight: the env the replay renders
+  std::unique_ptr<cli::EpisodeReplayer> replayer_;  // --from, hindsight
+  FetchEnv* render_env_ = nullptr;                  // the env being replayed, while it is
   std::optional<HindsightEpisode> hindsight_;  // this episode's relabelling (hindsight overlay)
   std::vector<uint8_t> depth_;                 // the depth layer's millimetres, reused
   // Lifetime order: the GL context outlives the renderer; encoders go first (they hold frames).
