@@ -74,6 +74,7 @@ class RecordRunner : public cli::EpisodeRunner {
  public:
   /// Makes the environment and policy; `plan` must outlive the runner.
   RecordRunner(const RecordPlan& plan, int worker);
+  /// Aborts the encoders still running, then frees the renderer while its GL context exists.
   ~RecordRunner() override;
 
   /// Makes the GL context, renderer and frame pool; returns the worker's manifest entry
