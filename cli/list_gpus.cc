@@ -8,7 +8,6 @@
 #include "base/json_util.h"
 #include "cli/command.h"
 #include "cli/common.h"
-#include "cli/render_common.h"
 #include "encode/video_writer.h"
 #include "render/gl_context.h"
 #include "render/gpu_select.h"

@@ -12,7 +12,7 @@
 #include "base/errors.h"
 #include "cli/command.h"
 #include "cli/common.h"
-#include "cli/render_common.h"
+#include "cli/view_options.h"
 #include "encode/contact_sheet.h"
 #include "encode/png_io.h"
 #include "inspect/probe.h"

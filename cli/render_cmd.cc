@@ -7,9 +7,10 @@
 #include "base/errors.h"
 #include "cli/command.h"
 #include "cli/common.h"
-#include "cli/render_common.h"
 #include "cli/resolve.h"
+#include "cli/view_options.h"
 #include "encode/png_io.h"
+#include "render/layers.h"
 #include "render/renderer.h"
 #include "run/episode_scheduler.h"
 

@@ -9,8 +9,8 @@
 
 #include "base/errors.h"
 #include "base/json_util.h"
-#include "cli/render_common.h"
 #include "render/renderer.h"
+#include "render/view.h"
 #include "src/assets.h"
 #include "src/env_spec.h"
 #include "src/episode.h"

@@ -8,8 +8,8 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "cli/render_common.h"
 #include "encode/video_writer.h"
+#include "render/view.h"
 
 namespace fetchscope::cli {
 

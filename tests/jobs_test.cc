@@ -11,9 +11,9 @@
 #include <thread>
 
 #include "base/errors.h"
-#include "cli/render_common.h"
 #include "render/gl_context.h"
 #include "render/renderer.h"
+#include "render/view.h"
 #include "src/assets.h"
 #include "src/fetch_env.h"
 #include "tests/test_util.h"
@@ -174,18 +174,18 @@ TEST_P(JobsTest, RenderersOnSeparateThreadsAgree) {
       try {
         FetchEnv env(spec, assets);
         const Observation obs = env.Reset(7);
-        cli::ViewOptions view;
+        ViewOptions view;
         view.width = view.height = kSize;
         // made one at a time, as record does: MuJoCo binds its GL functions at the first
         std::unique_lock<std::mutex> lock(setup);
         auto gl = CreateGlContext(GetParam());
-        Renderer renderer(*gl, env.model(), cli::MakeRenderOptions(view, env.model()));
+        Renderer renderer(*gl, env.model(), MakeRenderOptions(view, env.model()));
         lock.unlock();
         StepRecord record;
         record.obs = obs;
         frames[i].resize(kSize * kSize * 3);
         for (int repeat = 0; repeat < 5; ++repeat) {  // overlap the threads' GL work
-          renderer.Render(env.data(), cli::MakeFrameInfo(env, record), frames[i].data());
+          renderer.Render(env.data(), MakeFrameInfo(env, record), frames[i].data());
         }
       } catch (const std::exception& e) {
         errors[i] = e.what();

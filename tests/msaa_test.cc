@@ -8,10 +8,10 @@
 #include <vector>
 
 #include "base/errors.h"
-#include "cli/render_common.h"
 #include "encode/png_io.h"
 #include "render/gl_context.h"
 #include "render/renderer.h"
+#include "render/view.h"
 #include "src/assets.h"
 #include "src/env_spec.h"
 #include "src/fetch_env.h"
@@ -49,14 +49,14 @@ INSTANTIATE_TEST_SUITE_P(
                       NameCase{"Mesa Intel(R) UHD Graphics 620 (KBL GT2)", ""}));
 
 TEST(ParseMsaaTest, AcceptsAutoAndTheCounts) {
-  EXPECT_EQ(cli::ParseMsaa("auto"), kMsaaAuto);
-  for (int n : {0, 1, 2, 4, 8, 16}) EXPECT_EQ(cli::ParseMsaa(std::to_string(n)), n);
+  EXPECT_EQ(ParseMsaa("auto"), kMsaaAuto);
+  for (int n : {0, 1, 2, 4, 8, 16}) EXPECT_EQ(ParseMsaa(std::to_string(n)), n);
 }
 
 TEST(ParseMsaaTest, RefusesOthersListingTheAccepted) {
   for (const char* bad : {"3", "-1", "32", "four", ""}) {
     try {
-      cli::ParseMsaa(bad);
+      ParseMsaa(bad);
       ADD_FAILURE() << "accepted '" << bad << "'";
     } catch (const UsageError& e) {
       const std::string message = e.what();

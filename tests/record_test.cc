@@ -1,13 +1,21 @@
-// Black-box tests of render and record: real EGL/OSMesa, real libx264, checked with ffprobe,
-// ffmpeg's decoder and libpng.
+// Black-box tests of render and record (real EGL/OSMesa, real libx264, checked with ffprobe,
+// ffmpeg's decoder and libpng), and record's worker (RecordRunner) in-process.
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
+#include <mutex>
 #include <nlohmann/json.hpp>
+#include <string>
 
 #include "encode/png_io.h"
+#include "render/layers.h"
+#include "run/record_run.h"
+#include "src/assets.h"
+#include "src/env_spec.h"
 #include "tests/test_util.h"
 
 namespace fetchscope {
@@ -217,6 +225,83 @@ INSTANTIATE_TEST_SUITE_P(
                       BadRender{"record --layers depth,depth --out OUT/r", 2,
                                 "--layers names 'depth' twice"},
                       BadRender{"record --layers rgb,,depth --out OUT/r", 2, "empty entry"}));
+
+// ---- RecordRunner in-process (run/record_run.h), with a channel standing in for the scheduler
+
+// Collects what a runner reports, as the scheduler's channel would.
+class CollectingChannel : public cli::WorkerChannel {
+ public:
+  void Progress(int n) override { frames += n; }
+  void Done(int episode, nlohmann::json result) override {
+    std::lock_guard<std::mutex> lock(mutex);
+    done[episode] = std::move(result);
+  }
+  bool StopRequested() const override { return false; }
+
+  std::atomic<int> frames{0};
+  std::mutex mutex;
+  std::map<int, nlohmann::json> done;
+};
+
+// A small plan: FetchPush-v4, random policy, 4 steps, 64x48, mp4 with the depth layer.
+RecordPlan SmallPlan(const fs::path& out, int encoders) {
+  RecordPlan plan;
+  plan.spec = &FindEnvSpec("FetchPush-v4");
+  plan.seed = 3;
+  plan.seed_text = "3";
+  plan.assets = ResolveAssets("bundled");
+  plan.policy = "random";
+  plan.steps = 4;
+  plan.policy_context.seed = plan.seed;
+  plan.policy_context.steps_per_episode = plan.steps;
+  plan.policy_context.episodes = 3;
+  plan.view.width = 64;
+  plan.view.height = 48;
+  plan.out = out.string();
+  plan.video.width = 64;
+  plan.video.height = 48;
+  plan.video.codec = "libx264";
+  plan.formats = {"mp4"};
+  plan.layers = {Layer::kDepth};
+  plan.encoders = encoders;
+  return plan;
+}
+
+TEST_F(RecordTest, RecordRunnerWritesTheSameBytesWithOneOrThreeEncoders) {
+  TempDir tmp;
+  std::map<std::string, std::string> files[2];
+  for (int i = 0; i < 2; ++i) {
+    const fs::path out = tmp.path() / ("encoders_" + std::to_string(i));
+    fs::create_directories(out);
+    const RecordPlan plan = SmallPlan(out, i == 0 ? 1 : 3);
+    CollectingChannel channel;
+    {
+      RecordRunner runner(plan, 0);
+      const nlohmann::json worker = runner.Start();
+      EXPECT_EQ(worker["worker"], 0);
+      EXPECT_FALSE(worker["gl_renderer"].get<std::string>().empty());
+      runner.Run(0, channel);
+      runner.Run(2, channel);  // episode 1 skipped: 2 starts where a sequential run reaches it
+      runner.Finish(channel);
+    }
+    EXPECT_EQ(channel.frames.load(), 2 * (plan.steps + 1));
+    ASSERT_EQ(channel.done.size(), 2u);
+    for (const auto& [k, entry] : channel.done) {
+      EXPECT_EQ(entry["index"], k);
+      EXPECT_EQ(entry["worker"], 0);
+      EXPECT_EQ(entry["frames"], plan.steps + 1);
+      EXPECT_EQ(entry["hindsight"]["transitions"], plan.steps);
+      EXPECT_EQ(entry["layers"]["depth"]["scales"].size(), 1u);
+    }
+    files[i] = testing::EpisodeFiles(out);
+    EXPECT_EQ(files[i].count("episode_002_depth.mp4"), 1u);
+    EXPECT_EQ(files[i].count("episode_001.mp4"), 0u);
+  }
+  ASSERT_EQ(files[0].size(), files[1].size());
+  for (const auto& [name, bytes] : files[0]) {
+    EXPECT_TRUE(files[1][name] == bytes) << name << " differs with 3 encoders";
+  }
+}
 
 }  // namespace
 }  // namespace fetchscope

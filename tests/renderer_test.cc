@@ -19,9 +19,9 @@
 #include <vector>
 
 #include "base/errors.h"
-#include "cli/render_common.h"
 #include "encode/png_io.h"
 #include "render/gl_context.h"
+#include "render/view.h"
 #include "src/assets.h"
 #include "src/env_spec.h"
 #include "src/episode.h"
@@ -867,7 +867,7 @@ TEST(HudEpisode, OnEveryFrameOrOnNoneInOneBoxWithinItsShare) {
     views.push_back(std::move(v));
   }
   RunPush(env, "scripted", 0, 8, [&](const StepRecord& record, const StepResult*) {
-    const FrameInfo info = cli::MakeFrameInfo(env, record);
+    const FrameInfo info = MakeFrameInfo(env, record);
     for (View& v : views) {
       std::vector<uint8_t> a(static_cast<size_t>(v.w) * v.h * 3), b(a.size());
       v.plain->Render(env.data(), info, a.data());
@@ -934,7 +934,7 @@ TEST(HindsightOverlay, PinsShowInTheRewardColoursWhereTheyProject) {
   int green = 0, red = 0, hidden = 0;
   RunPush(env, "random", kSeed, kSteps, [&](const StepRecord& record, const StepResult*) {
     if (record.t == 0) return true;
-    FrameInfo info = cli::MakeFrameInfo(env, record);
+    FrameInfo info = MakeFrameInfo(env, record);
     for (const HindsightGoal& g : her.transitions[record.t - 1])
       info.relabelled.push_back({g.goal, g.success});
     std::vector<uint8_t> a(kSize * kSize * 3), b(a.size()), depth;

@@ -1,19 +1,23 @@
-// Options and helpers shared by the subcommands that render (render, record, bench).
+// What a command renders and how (--camera, --overlay, --width, --height, --backend, --gpu,
+// --msaa, --readback, --hud-*), turned into a GL context, renderer options and the per-frame
+// overlay description. cli/view_options.h adds these options to a command.
 #pragma once
 
-#include <CLI/CLI.hpp>
-#include <nlohmann/json.hpp>
+#include <mujoco/mujoco.h>
+
+#include <memory>
 #include <string>
 
+#include "render/gl_context.h"
 #include "render/gpu_select.h"
 #include "render/overlay.h"
 #include "render/renderer.h"
 #include "src/episode.h"
 #include "src/fetch_env.h"
 
-namespace fetchscope::cli {
+namespace fetchscope {
 
-/// --camera, --overlay, --width, --height, --backend, --gpu, --msaa.
+/// --camera, --overlay, --width, --height, --backend, --gpu, --msaa, --readback, --hud-*.
 struct ViewOptions {
   std::string camera = "default";                    ///< see ParseCameraList
   std::string overlay = "goal,achieved,hud,labels";  ///< see ParseOverlays
@@ -27,8 +31,11 @@ struct ViewOptions {
   double hud_opacity = 0.6;               ///< see CheckHudOpacity
 };
 
-/// The accepted --readback values, and RenderOptions::readback for one (UsageError otherwise).
+/// The accepted --readback values, in the order the help and errors list them.
 inline constexpr const char* kReadbackValues[] = {"auto", "sync", "async"};
+
+/// RenderOptions::readback for a --readback value. Throws UsageError naming the value and
+/// listing kReadbackValues.
 Readback ParseReadback(const std::string& value);
 
 /// The accepted --msaa values, in the order the help and errors list them.
@@ -42,9 +49,6 @@ int ParseMsaa(const std::string& value);
 /// The renderer options for `view` on `model` (parses --camera, --overlay, --hud-position and
 /// checks --hud-opacity). The frame is FrameSize(result): --width/--height size each tile.
 RenderOptions MakeRenderOptions(const ViewOptions& view, const mjModel* model);
-
-/// Adds the view options to `sub`.
-void AddViewOptions(CLI::App* sub, ViewOptions* options);
 
 /// The GPU request of `view` in effect (--gpu, else MUJOCO_EGL_DEVICE_ID, else
 /// CUDA_VISIBLE_DEVICES, else auto) matched against this machine's EGL devices: the EGL indices
@@ -60,13 +64,4 @@ std::unique_ptr<GlContext> CreateViewContext(const ViewOptions& view, const GpuC
 /// The overlay/HUD description of the env's current state after `record`.
 FrameInfo MakeFrameInfo(const FetchEnv& env, const StepRecord& record);
 
-/// Parses --layers: a comma list of rgb, depth, segmentation (spaces after the commas allowed),
-/// each once, in the order given. UsageError names an empty, unknown (with "did you mean") or
-/// repeated entry and what is accepted.
-std::vector<Layer> ParseLayers(const std::string& list);
-
-/// One object of a segmentation legend (render's and record's): its colour as "#rrggbb" and as
-/// rgb, body, geoms, site (null for a body) and pixels.
-nlohmann::json SegmentObjectJson(const SegmentObject& object);
-
-}  // namespace fetchscope::cli
+}  // namespace fetchscope

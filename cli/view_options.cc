@@ -1,0 +1,72 @@
+#include "cli/view_options.h"
+
+#include <iterator>
+#include <string>
+#include <vector>
+
+#include "base/errors.h"
+#include "render/gpu_select.h"
+
+namespace fetchscope::cli {
+
+void AddViewOptions(CLI::App* sub, ViewOptions* o) {
+  sub->add_option("--camera", o->camera,
+                  "default (Gymnasium's view), a camera named in the model (see list-cameras), "
+                  "free:lookat=x,y,z,distance=d,azimuth=a,elevation=e, track (follows the "
+                  "gripper), or several joined by commas to tile them")
+      ->capture_default_str();
+  sub->add_option("--overlay", o->overlay,
+                  "Comma list of goal, achieved, hud, action, trail, labels (camera names on "
+                  "tiled views; on by default), hindsight (record only: the goals HER's future "
+                  "strategy relabels each transition with, green = relabelled success, red = "
+                  "failure); or all, or none. Spaces after the commas are fine")
+      ->capture_default_str();
+  sub->add_option("--width", o->width,
+                  "Width in pixels of each camera's view: N tiled cameras make a frame N views "
+                  "wide (a near-square grid from 4 on)")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 8192));
+  sub->add_option("--height", o->height, "Height in pixels of each camera's view")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 8192));
+  sub->add_option("--hud-position", o->hud_position,
+                  "Corner of the HUD: top-left, top-right, bottom-left or bottom-right (within "
+                  "the tile at that corner). The HUD text grows with the view; views smaller "
+                  "than 320x240 pixels get no HUD")
+      ->capture_default_str();
+  sub->add_option("--hud-opacity", o->hud_opacity,
+                  "Opacity of the black box behind the HUD and tile labels: 0 (none) .. 1")
+      ->capture_default_str();
+  sub->add_option("--backend", o->backend,
+                  "auto (EGL, then OSMesa), egl or osmesa; default: $MUJOCO_GL, else auto");
+  sub->add_option("--msaa", o->msaa,
+                  "Multisample anti-aliasing samples: auto, 0, 1, 2, 4, 8 or 16. auto: the "
+                  "model's 4 (as Gymnasium renders) on hardware GL, 0 on a software rasterizer "
+                  "(llvmpipe, softpipe, swrast), where multisampling is about half the frame time")
+      ->capture_default_str()
+      ->check(
+          CLI::IsMember(std::vector<std::string>(std::begin(kMsaaValues), std::end(kMsaaValues))));
+  sub->add_option("--readback", o->readback,
+                  "How frames come back from the GPU: auto, sync or async. async reads through "
+                  "pixel buffer objects, 3 frames in flight, so the GPU draws the next frame "
+                  "while one comes back (same pixels); auto: async on hardware GL, sync on a "
+                  "software rasterizer")
+      ->capture_default_str()
+      ->check(CLI::IsMember(
+          std::vector<std::string>(std::begin(kReadbackValues), std::end(kReadbackValues))));
+  sub->add_option("--gpu", o->gpu,
+                  std::string("GPU(s) to render on: ") + kGpuForms +
+                      ". Default: $MUJOCO_EGL_DEVICE_ID (EGL index), else cuda:0 when "
+                      "$CUDA_VISIBLE_DEVICES is set, else the first GPU. Workers are spread "
+                      "round-robin over the devices named")
+      ->check([](const std::string& text) -> std::string {
+        try {
+          ParseGpuSpec(text);
+        } catch (const UsageError& e) {
+          return e.what();
+        }
+        return "";
+      });
+}
+
+}  // namespace fetchscope::cli

@@ -1,0 +1,255 @@
+#include "encode/episode_sink.h"
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+
+#include "base/atomic_file.h"
+#include "base/json_util.h"
+#include "encode/png_io.h"
+
+namespace fetchscope {
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+double Since(Clock::time_point t) {
+  return std::chrono::duration<double>(Clock::now() - t).count();
+}
+
+// JSON as every output writes it: atomically, with a trailing newline.
+void WriteJsonFile(const std::string& path, const nlohmann::json& json) {
+  WriteFileAtomically(path, DumpJson(json) + "\n");
+}
+
+}  // namespace
+
+std::string EpisodeFileStem(int k) {
+  char name[32];
+  std::snprintf(name, sizeof(name), "episode_%03d", k);
+  return name;
+}
+
+std::string LayerVideoName(int k, Layer layer, const std::string& format) {
+  return EpisodeFileStem(k) + "_" + LayerName(layer) + "." + VideoFormatExtension(format);
+}
+
+std::string FormatCodec(const std::string& format, const std::string& h264) {
+  if (format == "mp4") return h264;
+  if (format == "webm") return "libvpx-vp9";
+  return format;  // gif
+}
+
+VideoOptions EpisodeVideoOptions(const EpisodeSinkOptions& options, int k,
+                                 const std::string& format) {
+  VideoOptions video = options.video;
+  video.format = format;
+  video.metadata = {{"title", options.env_id + " seed " + std::to_string(options.seed) +
+                                  " episode " + std::to_string(k) + " (" + options.policy + ")"},
+                    {"env_id", options.env_id},
+                    {"seed", std::to_string(options.seed)},
+                    {"policy", options.policy},
+                    {"episode", std::to_string(k)},
+                    {"fetchscope_version", FETCHSCOPE_VERSION}};
+  return video;
+}
+
+EpisodeEncoder::EpisodeEncoder(const EpisodeSinkOptions& options, int k, FramePool* pool,
+                               EpisodeDone done)
+    : options_(options), k_(k), pool_(*pool), done_(std::move(done)), name_(EpisodeFileStem(k)) {
+  const std::vector<int> indices = SheetFrameIndices(options.steps + 1, options.sheet_every);
+  on_sheet_.insert(indices.begin(), indices.end());
+  // the writers open here, on the render thread, so a bad folder fails before any frame
+  for (const std::string& format : options.formats) {
+    writers_.emplace_back(
+        (fs::path(options.out) / (name_ + "." + VideoFormatExtension(format))).string(),
+        EpisodeVideoOptions(options, k, format));
+  }
+  for (Layer layer : options.layers) {
+    for (const std::string& format : options.formats) {
+      VideoOptions video = EpisodeVideoOptions(options, k, format);
+      video.metadata.emplace_back("layer", LayerName(layer));
+      layer_writers_.emplace_back(
+          (fs::path(options.out) / LayerVideoName(k, layer, format)).string(), video);
+    }
+  }
+  thread_ = std::thread([this] { Body(); });
+}
+
+EpisodeEncoder::~EpisodeEncoder() {
+  if (thread_.joinable()) {
+    Abort();
+    thread_.join();
+  }
+}
+
+void EpisodeEncoder::Close(EpisodeRecord episode, double sim_s, double render_s) {
+  episode_ = std::move(episode);
+  sim_s_ = sim_s;
+  render_s_ = render_s;
+  Enqueue(nullptr, Command::kClose);
+}
+
+void EpisodeEncoder::SetLayerInfo(nlohmann::json legend, std::vector<DepthScale> depth) {
+  legend_ = std::move(legend);
+  depth_scales_ = std::move(depth);
+}
+
+void EpisodeEncoder::Join() {
+  if (thread_.joinable()) thread_.join();
+  if (error_) std::rethrow_exception(error_);
+}
+
+void EpisodeEncoder::Enqueue(Frame* f, Command c) {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    queue_.push_back({f, c});
+  }
+  cv_.notify_one();
+}
+
+void EpisodeEncoder::Body() {
+  Frame* held = nullptr;  // the latest frame, kept until the next: the sheet's last tile
+  while (true) {
+    std::pair<Frame*, Command> item;
+    {
+      std::unique_lock<std::mutex> lock(mutex_);
+      cv_.wait(lock, [&] { return !queue_.empty(); });
+      item = queue_.front();
+      queue_.pop_front();
+    }
+    if (item.second == Command::kFrame) {
+      Frame* f = item.first;
+      if (!error_) {
+        try {
+          const auto t0 = Clock::now();
+          for (VideoWriter& writer : writers_) writer.AddFrame(f->rgb.data());
+          const size_t formats = options_.formats.size();
+          for (size_t i = 0; i < layer_writers_.size(); ++i) {
+            layer_writers_[i].AddFrame(f->layers[i / formats].data());
+          }
+          encode_s_ += Since(t0);
+          if (on_sheet_.count(f->t)) AddTile(*f);
+        } catch (...) {
+          error_ = std::current_exception();
+        }
+      }
+      pool_.Release(held);  // keeps draining after a failure: the render thread never stalls
+      held = f;
+      continue;
+    }
+    if (item.second == Command::kClose && !error_) {
+      try {
+        if (held && !on_sheet_.count(held->t)) AddTile(*held);
+        pool_.Release(held);
+        held = nullptr;
+        Finalize();
+      } catch (...) {
+        error_ = std::current_exception();
+      }
+    }
+    pool_.Release(held);
+    if (error_ || item.second == Command::kAbort) {  // removes the partial videos
+      writers_.clear();
+      layer_writers_.clear();
+    }
+    finished_.store(true);
+    return;
+  }
+}
+
+void EpisodeEncoder::AddTile(const Frame& f) {
+  tiles_.push_back({f.rgb, options_.video.width, options_.video.height, f.label});
+}
+
+void EpisodeEncoder::Finalize() {
+  const EpisodeSinkOptions& o = options_;
+  const auto t0 = Clock::now();
+  for (VideoWriter& writer : writers_) writer.Finish();
+  for (VideoWriter& writer : layer_writers_) writer.Finish();
+  const int steps = static_cast<int>(episode_.steps.size()) - 1;
+  const bool complete = episode_.complete;  // false: ended early by SIGINT/SIGTERM
+  char title[256];
+  std::snprintf(title, sizeof(title), "%s  seed %s  policy %s  episode %d%s", o.env_id.c_str(),
+                o.seed_text.c_str(), o.policy.c_str(), k_, complete ? "" : "  (interrupted)");
+  const SheetImage sheet = MakeContactSheet(title, tiles_);
+  WritePng((fs::path(o.out) / (name_ + "_sheet.png")).string(), sheet.width, sheet.height, 3, 8,
+           sheet.rgb.data());
+  // the trajectory's env fields come from the spec and assets, as TrajectoryJson writes them
+  nlohmann::json trajectory = {{"env_id", o.env_id},
+                               {"seed", o.seed},
+                               {"policy", o.policy},
+                               {"assets", AssetsJson(o.assets)},
+                               {"episodes", nlohmann::json::array({EpisodeJson(episode_)})}};
+  WriteJsonFile((fs::path(o.out) / (name_ + ".json")).string(), trajectory);
+  const nlohmann::json layers = FinishLayers();
+  const double write_s = Since(t0);
+  const bool success = episode_.steps.back().is_success;
+  nlohmann::json videos = nlohmann::json::object();  // format -> file and frames in it
+  for (size_t i = 0; i < writers_.size(); ++i) {
+    videos[o.formats[i]] = {{"file", fs::path(writers_[i].path()).filename().string()},
+                            {"frames", writers_[i].frames_encoded()}};
+  }
+  const VideoWriter& first = writers_.front();
+  nlohmann::json entry = {
+      {"index", k_},
+      {"video", fs::path(first.path()).filename().string()},
+      {"videos", videos},
+      {"sheet", name_ + "_sheet.png"},
+      {"trajectory", name_ + ".json"},
+      {"frames", first.frames_written()},
+      {"steps", steps},
+      {"complete", complete},
+      {"return", JsonDouble(episode_.episode_return)},
+      {"is_success", success},
+      {"codec", first.codec_name()},
+      {"encoded_width", first.encoded_width()},
+      {"encoded_height", first.encoded_height()},
+      {"timings_s",
+       {{"sim", sim_s_}, {"render", render_s_}, {"encode", encode_s_}, {"write", write_s}}}};
+  if (!layers.empty()) entry["layers"] = layers;
+  if (extra_.is_object()) entry.update(extra_);
+  done_(k_, std::move(entry));
+}
+
+// The manifest entry's "layers" (empty without layers): per layer its videos as "videos" lists
+// them, the first format's file as "video", the depth scale or the segmentation legend (written
+// here).
+nlohmann::json EpisodeEncoder::FinishLayers() {
+  nlohmann::json layers = nlohmann::json::object();
+  const size_t formats = options_.formats.size();
+  for (size_t l = 0; l < options_.layers.size(); ++l) {
+    const Layer layer = options_.layers[l];
+    nlohmann::json videos = nlohmann::json::object();
+    for (size_t f = 0; f < formats; ++f) {
+      const VideoWriter& writer = layer_writers_[l * formats + f];
+      videos[options_.formats[f]] = {{"file", fs::path(writer.path()).filename().string()},
+                                     {"frames", writer.frames_encoded()}};
+    }
+    nlohmann::json entry = {{"video", videos[options_.formats.front()]["file"]},
+                            {"videos", videos}};
+    if (layer == Layer::kDepth) {
+      nlohmann::json scales = nlohmann::json::array();
+      const std::vector<std::string>& cameras = options_.cameras;
+      for (size_t i = 0; i < depth_scales_.size(); ++i) {
+        scales.push_back({{"camera", i < cameras.size() ? cameras[i] : std::string()},
+                          {"near_m", depth_scales_[i].near_mm / 1000.0},
+                          {"far_m", depth_scales_[i].far_mm / 1000.0}});
+      }
+      entry["scales"] = std::move(scales);
+      entry["mapping"] =
+          "per camera view: grey 255 (white) at near_m and nearer .. 32 at far_m and farther, "
+          "0 (black) = no depth";
+    }
+    if (layer == Layer::kSegmentation) {
+      const std::string legend = name_ + "_segmentation_legend.json";
+      WriteJsonFile((fs::path(options_.out) / legend).string(), legend_);
+      entry["legend"] = legend;
+    }
+    layers[LayerName(layer)] = std::move(entry);
+  }
+  return layers;
+}
+
+}  // namespace fetchscope

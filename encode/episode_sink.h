@@ -1,0 +1,127 @@
+// The episode video sink: one episode's files, written on their own thread while the episode is
+// still being rendered. Frames arrive from the render thread (encode/frame_pool.h); the sink
+// encodes them into one video per --format (and per extra layer), then writes the contact
+// sheet, the trajectory JSON and the segmentation legend, and hands the episode's manifest
+// entry to a callback.
+#pragma once
+
+#include <atomic>
+#include <condition_variable>
+#include <cstdint>
+#include <deque>
+#include <exception>
+#include <functional>
+#include <mutex>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <string>
+#include <thread>
+#include <utility>
+#include <vector>
+
+#include "encode/contact_sheet.h"
+#include "encode/frame_pool.h"
+#include "encode/video_writer.h"
+#include "render/layers.h"
+#include "render/renderer.h"
+#include "src/episode.h"
+
+namespace fetchscope {
+
+/// What every episode sink of a run shares: where the files go, how they are encoded, and what
+/// their titles, tags and trajectories name.
+struct EpisodeSinkOptions {
+  std::string out;                   ///< the run folder
+  std::string env_id;                ///< the env spec's id
+  uint64_t seed = 0;                 ///< the run's seed (tags, trajectory)
+  std::string seed_text;             ///< the seed as given on the command line (sheet titles)
+  std::string policy;                ///< the policy as given (titles, tags, trajectory)
+  AssetSource assets;                ///< the trajectory's "assets"
+  int steps = 50;                    ///< steps per episode: steps + 1 frames (sheet tiles)
+  int sheet_every = 0;               ///< every K-th frame on the sheet (SheetFrameIndices)
+  std::vector<std::string> cameras;  ///< the camera of each view, in order (depth scales)
+  VideoOptions video;                ///< size and codec decided; format and tags set per file
+  std::vector<std::string> formats;  ///< video formats, in --format order
+  std::vector<Layer> layers;         ///< layers beyond rgb, one video per format each
+};
+
+/// The stem of episode k's files: "episode_007".
+std::string EpisodeFileStem(int k);
+
+/// The file of episode k's `layer` video in `format`: "episode_000_depth.mp4".
+std::string LayerVideoName(int k, Layer layer, const std::string& format);
+
+/// The codec each format's file is encoded with: mp4 with the run's H.264 decision `h264`,
+/// webm with libvpx-vp9, gif with gif.
+std::string FormatCodec(const std::string& format, const std::string& h264);
+
+/// The options of episode k's video in `format`: the encoder settings of `options` plus the tags
+/// that trace a clip found alone back to its run (ffprobe -show_format lists them).
+VideoOptions EpisodeVideoOptions(const EpisodeSinkOptions& options, int k,
+                                 const std::string& format);
+
+/// Receives an episode's manifest entry once its files are written (on the sink's thread).
+using EpisodeDone = std::function<void(int episode, nlohmann::json entry)>;
+
+/// One episode's encoding, on its own thread: the videos frame by frame as frames arrive, then
+/// the contact sheet, the trajectory JSON and the manifest entry, given to `done`. Each video is
+/// encoded by one single-threaded encoder, so the bytes never depend on the machine.
+class EpisodeEncoder {
+ public:
+  /// Opens episode k's videos in options.out (here, on the caller's thread, so a bad folder
+  /// fails before any frame) and starts the thread. `options` and `pool` must outlive this.
+  EpisodeEncoder(const EpisodeSinkOptions& options, int k, FramePool* pool, EpisodeDone done);
+  /// Aborts (removing the partial videos) unless Close was called, and joins the thread.
+  ~EpisodeEncoder();
+  EpisodeEncoder(const EpisodeEncoder&) = delete;
+  EpisodeEncoder& operator=(const EpisodeEncoder&) = delete;
+
+  /// Hands a rendered frame over (render thread); the encoder returns it to the pool.
+  void Push(Frame* f) { Enqueue(f, Command::kFrame); }
+  /// No more frames: finish the files with `episode` as the trajectory; sim_s and render_s
+  /// are the render thread's seconds, for the manifest.
+  void Close(EpisodeRecord episode, double sim_s, double render_s);
+  /// Members added to the manifest entry (e.g. "hindsight"); call before Close.
+  void SetExtra(nlohmann::json extra) { extra_ = std::move(extra); }
+  /// The layers' extras: the segmentation legend JSON (written beside the videos) and the depth
+  /// scale (in the manifest entry); call before Close.
+  void SetLayerInfo(nlohmann::json legend, std::vector<DepthScale> depth);
+  /// No more frames and no files: the partial video is removed.
+  void Abort() { Enqueue(nullptr, Command::kAbort); }
+  /// Waits for the thread; rethrows its failure.
+  void Join();
+  /// True once the thread is done (the files written, or abandoned).
+  bool finished() const { return finished_.load(); }
+
+ private:
+  enum class Command { kFrame, kClose, kAbort };
+
+  void Enqueue(Frame* f, Command c);
+  void Body();
+  void AddTile(const Frame& f);
+  void Finalize();
+  nlohmann::json FinishLayers();
+
+  const EpisodeSinkOptions& options_;
+  const int k_;
+  FramePool& pool_;
+  const EpisodeDone done_;
+  const std::string name_;
+  std::set<int> on_sheet_;
+  std::vector<VideoWriter> writers_;        // one per options.formats entry, in that order
+  std::vector<VideoWriter> layer_writers_;  // per options.layers entry, one per format
+  std::vector<SheetTile> tiles_;
+  EpisodeRecord episode_;
+  nlohmann::json extra_;
+  nlohmann::json legend_;                 // the segmentation layer's
+  std::vector<DepthScale> depth_scales_;  // the depth layer's, one per camera view
+  double sim_s_ = 0, render_s_ = 0, encode_s_ = 0;
+  std::exception_ptr error_;
+  std::atomic<bool> finished_{false};
+  std::mutex mutex_;
+  std::condition_variable cv_;
+  std::deque<std::pair<Frame*, Command>> queue_;
+  std::thread thread_;  // last: starts after every member above exists
+};
+
+}  // namespace fetchscope

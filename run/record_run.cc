@@ -1,0 +1,259 @@
+#include "run/record_run.h"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+
+#include "base/cores.h"
+#include "base/suggest.h"
+#include "cli/record_from.h"  // transitional: TrajectorySource, EpisodeReplayer
+#include "render/layers.h"
+
+namespace fetchscope {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double Since(Clock::time_point t) {
+  return std::chrono::duration<double>(Clock::now() - t).count();
+}
+
+// The contact sheet's label of a frame: the step and reward, the distance and success.
+std::string TileLabel(const FrameInfo& info) {
+  char line1[96], line2[96];
+  if (info.step == 0) {
+    std::snprintf(line1, sizeof(line1), "t=0 reset");
+  } else {
+    std::snprintf(line1, sizeof(line1), "t=%d r=%.3g", info.step, info.reward);
+  }
+  std::snprintf(line2, sizeof(line2), "d=%.3f %s", info.distance, info.success ? "SUCCESS" : "");
+  return std::string(line1) + "\n" + line2;
+}
+
+}  // namespace
+
+EpisodeSinkOptions MakeEpisodeSinkOptions(const RecordPlan& plan) {
+  EpisodeSinkOptions sink;
+  sink.out = plan.out;
+  sink.env_id = plan.spec->id;
+  sink.seed = plan.seed;
+  sink.seed_text = plan.seed_text;
+  sink.policy = plan.policy;
+  sink.assets = plan.assets;
+  sink.steps = plan.steps;
+  sink.sheet_every = plan.sheet_every;
+  sink.cameras = SplitCommaList(plan.view.camera);
+  sink.video = plan.video;
+  sink.formats = plan.formats;
+  sink.layers = plan.layers;
+  return sink;
+}
+
+size_t FramePoolSize(int encoders, int steps) {
+  return 4 + kReadbackDepth + encoders + static_cast<size_t>(encoders - 1) * (steps + 1);
+}
+
+RecordRunner::RecordRunner(const RecordPlan& plan, int worker)
+    : plan_(plan),
+      worker_(worker),
+      sink_(MakeEpisodeSinkOptions(plan)),
+      sequence_(std::make_unique<FetchEnv>(*plan.spec, plan.assets),
+                // --from replays recorded actions: the policy that made them is not run
+                MakePolicy(plan.from ? "zero" : plan.policy, *plan.spec, plan.policy_context),
+                plan.seed, plan.steps) {}
+
+RecordRunner::~RecordRunner() {
+  encoders_.clear();  // aborts and joins whatever is still running (a failure elsewhere)
+  renderer_.reset();  // the renderer's MuJoCo context is freed with its GL context current
+  gl_.reset();
+}
+
+nlohmann::json RecordRunner::Start() {
+  gl_ = CreateViewContext(plan_.view, plan_.gpu, worker_);
+  renderer_.emplace(*gl_, sequence_.env().model(),
+                    MakeRenderOptions(plan_.view, sequence_.env().model()));
+  const size_t frame_bytes = static_cast<size_t>(renderer_->width()) * renderer_->height() * 3;
+  pool_.emplace(FramePoolSize(plan_.encoders, plan_.steps), frame_bytes, plan_.layers.size());
+  const GlInfo& gi = gl_->info();
+  return {{"worker", worker_},
+          {"pid", static_cast<long>(getpid())},
+          {"backend", gi.backend},
+          {"device", gi.device},
+          {"device_selection", gl_->selection()},
+          {"gl_vendor", gi.vendor},
+          {"gl_renderer", gi.renderer},
+          {"gl_version", gi.version},
+          {"msaa", renderer_->msaa_samples()},
+          {"msaa_reason", renderer_->msaa_reason()},
+          {"readback", renderer_->readback_reason()}};
+}
+
+void RecordRunner::Run(int k, cli::WorkerChannel& channel) {
+  // at most plan.encoders episodes encode at once: wait for the oldest beyond that
+  while (!encoders_.empty() &&
+         (encoders_.front()->finished() || static_cast<int>(encoders_.size()) >= plan_.encoders)) {
+    encoders_.front()->Join();
+    encoders_.pop_front();
+  }
+  const int worker = worker_;
+  auto encoder = std::make_unique<EpisodeEncoder>(
+      sink_, k, &*pool_, [&channel, worker](int episode, nlohmann::json entry) {
+        entry["worker"] = worker;
+        channel.Done(episode, std::move(entry));
+      });
+  renderer_->ResetTrail();
+  EpisodeLegend legend;
+  std::vector<DepthScale> depth_scales;
+  double sim_s = 0, render_s = 0;
+  // frames submitted to the renderer and not yet back, oldest first: with asynchronous
+  // readback the GPU draws frame t+1 while frame t comes back
+  std::deque<Frame*> in_flight;
+  auto collect_oldest = [&] {
+    renderer_->Collect();
+    encoder->Push(in_flight.front());
+    in_flight.pop_front();
+    channel.Progress(1);
+  };
+  auto sim_start = Clock::now();
+  auto on_step = [&](const StepRecord& record, const StepResult*) {
+    const auto render_start = Clock::now();
+    sim_s += std::chrono::duration<double>(render_start - sim_start).count();
+    Frame* f = pool_->Acquire();
+    FetchEnv& env = render_env_ ? *render_env_ : sequence_.env();
+    FrameInfo info = MakeFrameInfo(env, record);
+    AddRelabelled(record.t, &info);
+    f->t = record.t;
+    f->label = TileLabel(info);
+    in_flight.push_back(f);
+    renderer_->Submit(env.data(), info, f->rgb.data());
+    // the layers are drawn after the rgb frame's readback has been queued, and read at once
+    for (size_t i = 0; i < plan_.layers.size(); ++i) {
+      const Layer layer = plan_.layers[i];
+      if (layer == Layer::kSegmentation) {
+        renderer_->RenderLayer(env.data(), info, layer, &f->layers[i]);
+        legend.Add(renderer_->segmentation_legend());
+      } else {
+        renderer_->RenderLayer(env.data(), info, layer, &depth_);
+        if (depth_scales.empty()) {
+          depth_scales =
+              ScalesFromFrame(depth_, renderer_->width(), renderer_->height(), renderer_->tiles());
+        }
+        DepthToGrey(depth_, renderer_->width(), depth_scales, f->layers[i].data());
+      }
+    }
+    while (renderer_->pending() >= renderer_->pipeline_depth()) collect_oldest();
+    sim_start = Clock::now();
+    render_s += std::chrono::duration<double>(sim_start - render_start).count();
+    return !channel.StopRequested();
+  };
+  EpisodeRecord episode;
+  try {
+    episode = PlayEpisode(k, on_step, channel);
+    const auto drain_start = Clock::now();
+    while (!in_flight.empty()) collect_oldest();
+    render_s += Since(drain_start);
+  } catch (...) {
+    renderer_->DiscardPending();
+    for (Frame* f : in_flight) pool_->Release(f);
+    throw;  // aborts `encoder`
+  }
+  encoder->SetExtra({{"hindsight", HindsightCounts(episode)}});
+  encoder->SetLayerInfo(legend.Json(k), std::move(depth_scales));
+  encoder->Close(std::move(episode), sim_s, render_s);
+  encoders_.push_back(std::move(encoder));
+}
+
+void RecordRunner::Finish(cli::WorkerChannel& channel) {
+  (void)channel;
+  while (!encoders_.empty()) {
+    encoders_.front()->Join();
+    encoders_.pop_front();
+  }
+}
+
+// Plays episode k, calling on_step (which renders) at every step: live from the policy; or,
+// for --from and the hindsight overlay, a replay of recorded actions (the recording's, or
+// those of a first pass run here without rendering) with the hindsight goals sampled first.
+EpisodeRecord RecordRunner::PlayEpisode(int k, const StepCallback& on_step,
+                                        cli::WorkerChannel& channel) {
+  hindsight_.reset();
+  if (!plan_.from && !plan_.hindsight) return sequence_.Play(k, on_step);
+  EpisodeRecord first_pass;
+  const std::vector<StepRecord>* script = nullptr;
+  bool script_complete = true;
+  if (plan_.from) {
+    script = &plan_.from->episodes.at(k).steps;
+    script_complete = plan_.from->episodes.at(k).complete;
+  } else {
+    first_pass = sequence_.Play(
+        k, [&](const StepRecord&, const StepResult*) { return !channel.StopRequested(); });
+    script = &first_pass.steps;
+    script_complete = first_pass.complete;
+  }
+  if (plan_.hindsight) hindsight_ = SampleEpisodeHindsight(k, *script);
+  if (!replayer_) {
+    if (!plan_.from) replay_env_ = std::make_unique<FetchEnv>(*plan_.spec, plan_.assets);
+    replayer_ = std::make_unique<cli::EpisodeReplayer>(plan_.from ? sequence_.env() : *replay_env_,
+                                                       plan_.seed);
+  }
+  // the replay renders from the env of sequence_ (--from) or replay_env_ (hindsight)
+  render_env_ = plan_.from ? &sequence_.env() : replay_env_.get();
+  const std::string check = plan_.from ? plan_.from->episodes.at(k).file : std::string();
+  EpisodeRecord episode = replayer_->Replay(k, *script, script_complete, check, on_step);
+  render_env_ = nullptr;
+  return episode;
+}
+
+HindsightEpisode RecordRunner::SampleEpisodeHindsight(int k, const std::vector<StepRecord>& steps) {
+  std::vector<std::array<double, 3>> achieved;
+  for (const StepRecord& s : steps) achieved.push_back(s.obs.achieved_goal);
+  const FetchEnv& env = sequence_.env();
+  return SampleHindsight(
+      achieved, steps.front().obs.desired_goal, HindsightSeed(plan_.seed, k), kHindsightK,
+      [&env](const auto& a, const auto& g) { return env.ComputeReward(a, g); },
+      [&env](const auto& a, const auto& g) { return env.IsSuccess(a, g); });
+}
+
+// The manifest entry's "hindsight": relabelled successes (of k per transition) against the
+// episode's own successful transitions.
+nlohmann::json RecordRunner::HindsightCounts(const EpisodeRecord& episode) {
+  const HindsightEpisode h =
+      hindsight_ ? *hindsight_ : SampleEpisodeHindsight(episode.index, episode.steps);
+  const int transitions = static_cast<int>(episode.steps.size()) - 1;
+  return {{"relabelled_successes", h.relabelled_successes},
+          {"original_successes", h.original_successes},
+          {"k", kHindsightK},
+          {"transitions", transitions}};
+}
+
+// The hindsight overlay's goals for the frame after step t (the transition t-1 -> t).
+void RecordRunner::AddRelabelled(int t, FrameInfo* info) const {
+  if (!hindsight_ || t < 1 || t > static_cast<int>(hindsight_->transitions.size())) return;
+  int successes = 0;
+  for (const HindsightGoal& g : hindsight_->transitions[t - 1]) {
+    info->relabelled.push_back({g.goal, g.success});
+    successes += g.success;
+  }
+  info->relabelled_successes = successes;
+}
+
+cli::ScheduleResult RecordEpisodes(const RecordPlan& plan, const cli::ScheduleOptions& schedule) {
+  LimitLlvmpipeThreads(schedule.jobs);
+  return cli::RunEpisodes(
+      schedule, [&plan](int worker) { return std::make_unique<RecordRunner>(plan, worker); });
+}
+
+void LimitLlvmpipeThreads(int jobs) {
+  if (jobs > 1) setenv("LP_NUM_THREADS", "0", /*overwrite=*/0);
+}
+
+int EncodersPerWorker(int jobs) {
+  const int cores = UsableCores().usable;
+  return std::max(1, cores / std::max(1, jobs));
+}
+
+}  // namespace fetchscope
