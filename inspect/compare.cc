@@ -325,8 +325,12 @@ CompareResult CompareRuns(const CompareOptions& o) {
   const std::optional<RunDifference> d =
       SameRun(a.manifest.parameters, b.manifest.parameters, SameRunScope::kEpisodes);
   if (d) {
-    throw UsageError("the runs differ in " + d->parameter + ": " + d->a + " in '" + o.run_a +
-                     "' but " + d->b + " in '" + o.run_b +
+    // named as the manifests name it too: env_id, seed, steps_per_episode
+    const std::string member = d->parameter == "--env-id" ? "env_id"
+                               : d->parameter == "--seed" ? "seed"
+                                                          : "steps_per_episode";
+    throw UsageError("the runs differ in " + member + " (" + d->parameter + "): " + d->a + " in '" +
+                     o.run_a + "' but " + d->b + " in '" + o.run_b +
                      "'; compare needs two runs of the same env, seed and episodes");
   }
   std::vector<int> ka, kb;
