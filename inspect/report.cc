@@ -390,24 +390,22 @@ json ReportData(const RecordedRun& run) {
     // record --layers: per layer ("depth", "segmentation") its videos and legend, linked
     json layers = json::array();
     std::set<std::string> layer_files;
-    {
-      for (const auto& [name, layer] : entry.layers) {
-        json layer_videos = json::array();
-        for (const EpisodeVideo& v : EpisodeVideos(layer)) {
-          layer_files.insert(v.file);
-          if (fs::is_regular_file(run.dir / v.file)) {
-            layer_videos.push_back({{"format", v.format}, {"file", v.file}, {"frames", v.frames}});
-          } else {
-            notes.push_back("episode " + EpisodeLabel(k) + ": " + name + " video '" + v.file +
-                            "' is missing");
-          }
+    for (const auto& [name, layer] : entry.layers) {
+      json layer_videos = json::array();
+      for (const EpisodeVideo& v : EpisodeVideos(layer)) {
+        layer_files.insert(v.file);
+        if (fs::is_regular_file(run.dir / v.file)) {
+          layer_videos.push_back({{"format", v.format}, {"file", v.file}, {"frames", v.frames}});
+        } else {
+          notes.push_back("episode " + EpisodeLabel(k) + ": " + name + " video '" + v.file +
+                          "' is missing");
         }
-        json legend = nullptr;
-        if (!layer.legend.empty() && fs::is_regular_file(run.dir / layer.legend)) {
-          legend = layer.legend;
-        }
-        layers.push_back({{"name", name}, {"videos", std::move(layer_videos)}, {"legend", legend}});
       }
+      json legend = nullptr;
+      if (!layer.legend.empty() && fs::is_regular_file(run.dir / layer.legend)) {
+        legend = layer.legend;
+      }
+      layers.push_back({{"name", name}, {"videos", std::move(layer_videos)}, {"legend", legend}});
     }
     e["layers"] = std::move(layers);
     // any other video the entry names: linked
