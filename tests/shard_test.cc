@@ -333,6 +333,39 @@ TEST_F(ShardRunTest, MergeRefusesShardsRecordedWithOtherOptions) {
   EXPECT_FALSE(fs::exists(m0 / "manifest_shard_0001_of_0002.json"));
 }
 
+// A shard manifest of a newer schema version, or one from before "parameters", cannot be told to
+// be of the same run: merge-manifests refuses it, naming the file (and the versions).
+TEST_F(ShardRunTest, MergeRefusesNewerAndUnversionedShardManifests) {
+  TempDir tmp;
+  const fs::path dir = tmp.path() / "run";
+  for (int i : {0, 1}) {
+    auto r =
+        RunFetchscope(Record(2) + " --shard " + std::to_string(i) + "/2 --out " + dir.string());
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+  }
+  const fs::path m1 = dir / "manifest_shard_0001_of_0002.json";
+  auto manifest = nlohmann::json::parse(ReadFile(m1));
+  EXPECT_EQ(manifest["schema_version"], 1);
+  manifest["schema_version"] = 2;
+  std::ofstream(m1) << manifest.dump(2);
+  auto r = RunFetchscope("merge-manifests " + dir.string());
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("'" + m1.string() +
+                          "' has manifest schema version 2; this fetchscope reads versions 0 to 1: "
+                          "use a newer fetchscope"),
+            std::string::npos)
+      << r.output;
+  manifest.erase("schema_version");  // version 0: read as before, but without its parameters
+  manifest.erase("parameters");
+  std::ofstream(m1) << manifest.dump(2);
+  r = RunFetchscope("merge-manifests " + dir.string());
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("'" + m1.string() + "' does not record the run's parameters"),
+            std::string::npos)
+      << r.output;
+  EXPECT_FALSE(fs::exists(dir / "manifest.json"));
+}
+
 // The environment of a Slurm array task and of a Kubernetes Indexed Job pod, as the binary sees it.
 TEST_F(ShardRunTest, ShardFromSlurmAndKubernetesEnvironment) {
   TempDir tmp;
