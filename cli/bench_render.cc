@@ -22,6 +22,8 @@
 #include "render/gpu_select.h"
 #include "render/renderer.h"
 #include "render/view.h"
+#include "run/manifest.h"
+#include "run/run_files.h"
 #include "src/episode.h"
 #include "src/fetch_env.h"
 #include "src/policy.h"
@@ -71,10 +73,13 @@ std::string ReadText(const std::string& path) {
   return in ? ss.str() : std::string();
 }
 
-// A manifest.json as JSON; not an object when absent or not JSON.
-nlohmann::json ReadManifest(const fs::path& dir) {
-  return nlohmann::json::parse(ReadText((dir / "manifest.json").string()), nullptr,
-                               /*allow_exceptions=*/false);
+// The manifest of the run in `dir`; nullopt when it wrote none (or not one this build reads).
+std::optional<Manifest> ReadManifestIn(const fs::path& dir) {
+  try {
+    return ReadManifest(dir / kManifestFileName);
+  } catch (const ManifestError&) {
+    return std::nullopt;
+  }
 }
 
 // "msaa auto (0)", "msaa 4": the table label for a requested and a resolved sample count.
@@ -274,27 +279,25 @@ namespace {
 // One `fetchscope record` child: its process figures and the manifest it wrote.
 struct RecordRun {
   ChildRun child;
-  nlohmann::json manifest;  // null when the run wrote none
+  std::optional<Manifest> manifest;  // nullopt when the run wrote none
 };
 
 // Runs this binary's `record` with `args` into `dir` (removed afterwards).
 RecordRun RunRecordChild(const std::string& self, const std::string& args, const fs::path& dir) {
   RecordRun run;
   run.child = RunChild("'" + self + "' record --quiet " + args + " --out '" + dir.string() + "'");
-  run.manifest = ReadManifest(dir);
+  run.manifest = ReadManifestIn(dir);
   std::error_code ec;
   fs::remove_all(dir, ec);
   return run;
 }
 
-// The samples a record run used: the manifest's "msaa" where it has one, else what auto picks
-// for the manifest's GL renderer, else -1 (unknown).
-int ManifestMsaa(const nlohmann::json& manifest, const std::string& requested) {
-  if (manifest.is_object() && manifest.contains("msaa")) return manifest["msaa"].get<int>();
+// The samples a record run used: its manifest's "msaa"; without a manifest the samples asked
+// for, or -1 (unknown) for auto.
+int ManifestMsaa(const std::optional<Manifest>& manifest, const std::string& requested) {
+  if (manifest) return manifest->msaa;
   if (requested != "auto") return std::stoi(requested);
-  if (!manifest.is_object() || !manifest.contains("backend")) return -1;
-  const std::string renderer = manifest["backend"].value("gl_renderer", "");
-  return SoftwareRendererName(renderer).empty() ? 4 : 0;
+  return -1;
 }
 
 std::string AssetsArg(const AssetSource& assets) {
@@ -360,8 +363,7 @@ nlohmann::json BenchRecord(const AssetSource& assets, const std::string& backend
                             {"wall_s", run.child.wall_s},
                             {"s_per_frame", run.child.wall_s / frames},
                             {"peak_rss_mib", run.child.peak_rss_mib}};
-      if (run.manifest.is_object() && run.manifest.contains("msaa_reason"))
-        row["msaa_reason"] = run.manifest["msaa_reason"];
+      if (run.manifest) row["msaa_reason"] = run.manifest->msaa_reason;
       rows.push_back(row);
     }
   }
@@ -480,7 +482,7 @@ nlohmann::json BenchSoak(const AssetSource& assets, const std::string& backends,
   }
   const double wall = Since(start);
   const int exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-  const nlohmann::json manifest = ReadManifest(dir);
+  const std::optional<Manifest> manifest = ReadManifestIn(dir);
   std::error_code ec;
   fs::remove_all(dir, ec);
   if (exit_code != 0) {
@@ -488,7 +490,7 @@ nlohmann::json BenchSoak(const AssetSource& assets, const std::string& backends,
     return {{"skipped", "record failed (exit " + std::to_string(exit_code) + ")"},
             {"backend", backend}};
   }
-  const long frames = manifest.is_object() ? manifest.value("frames", 0L) : 0L;
+  const long frames = manifest ? manifest->frames : 0L;
   // flatness: the resident set once the first episodes have warmed up (after a tenth of the
   // run) against its largest later value and the last sample
   double settled = -1, later_max = 0, last = 0;
@@ -691,9 +693,7 @@ nlohmann::json BenchNode(const AssetSource& assets, const std::string& backends,
     }
     if (c.msaa == "auto" && auto_msaa < 0) auto_msaa = ManifestMsaa(run.manifest, "auto");
     const int frames = episodes * 51;
-    const nlohmann::json video = run.manifest.is_object()
-                                     ? run.manifest.value("video", nlohmann::json::object())
-                                     : nlohmann::json::object();
+    const nlohmann::json video = run.manifest ? run.manifest->video : nlohmann::json::object();
     const std::string codec = video.value("codec", "?");
     std::printf("%-44s %4dx%-4d %12.0f %9.2f %s\n", label.c_str(), w, h, frames / run.child.wall_s,
                 run.child.wall_s, codec.c_str());

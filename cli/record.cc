@@ -28,6 +28,7 @@
 #include "render/layers.h"
 #include "render/text.h"
 #include "run/episode_scheduler.h"
+#include "run/manifest.h"
 #include "run/node_probe.h"
 #include "run/progress.h"
 #include "run/record_run.h"
@@ -107,45 +108,40 @@ void ValidatePolicy(const std::string& policy, const EnvSpec& spec, const Policy
   MakePolicy(policy, spec, context);
 }
 
-// What makes two record runs the same run, by option: what a resumed run must repeat for its
-// episodes to come out byte for byte as the run it continues (--jobs, --gpu and --backend
+// What makes two record runs the same run (SameRun), by option: what a resumed run must repeat for
+// its episodes to come out byte for byte as the run it continues (--jobs, --gpu and --backend
 // are free: outputs do not depend on them on one machine).
-nlohmann::json RecordParameters(const RecordOptions& o, const RecordPlan& plan,
-                                const Shard& shard) {
-  nlohmann::json parameters = {{"--env-id", plan.spec->id},
-                               {"--seed", plan.seed},
-                               {"--policy", o.policy},
-                               {"--replay-dtype", o.replay_dtype},
-                               {"--episodes", o.episodes},
-                               {"--steps", o.steps},
-                               {"--sheet-every", o.sheet_every},
-                               {"--assets", plan.assets.sha256},
-                               {"--camera", o.view.camera},
-                               {"--overlay", o.view.overlay},
-                               {"--width", o.view.width},
-                               {"--height", o.view.height},
-                               {"--msaa", o.view.msaa},
-                               {"--codec", plan.video.codec},
-                               {"--crf", o.crf},
-                               {"--preset", o.preset.empty() ? kDefaultVideoPreset : o.preset},
-                               {"--fps", o.fps},
-                               {"--shard", ShardLabel(shard)}};
-  // newer options join only when they change the files, so that runs recorded before they
-  // existed stay resumable
-  if (plan.formats != std::vector<std::string>{"mp4"}) {
-    parameters["--format"] = plan.formats;
-    if (std::find(plan.formats.begin(), plan.formats.end(), "gif") != plan.formats.end()) {
-      parameters["--gif-fps"] = o.gif_fps;
-      parameters["--gif-width"] = o.gif_width;
-    }
-  }
-  if (!plan.layers.empty()) parameters["--layers"] = LayersLabel(plan.layers);
-  return parameters;
+RunParameters RecordParameters(const RecordOptions& o, const RecordPlan& plan, const Shard& shard) {
+  RunParameters p;
+  p.env_id = plan.spec->id;
+  p.seed = plan.seed;
+  p.policy = o.policy;
+  p.replay_dtype = o.replay_dtype;
+  p.episodes = o.episodes;
+  p.steps = o.steps;
+  p.sheet_every = o.sheet_every;
+  p.assets_sha256 = plan.assets.sha256;
+  p.camera = o.view.camera;
+  p.overlay = o.view.overlay;
+  p.width = o.view.width;
+  p.height = o.view.height;
+  p.msaa = o.view.msaa;
+  p.codec = plan.video.codec;
+  p.crf = o.crf;
+  p.preset = o.preset.empty() ? kDefaultVideoPreset : o.preset;
+  p.fps = o.fps;
+  p.shard_index = shard.index;
+  p.shard_count = shard.count;
+  p.formats = plan.formats;
+  p.gif_fps = o.gif_fps;
+  p.gif_width = o.gif_width;
+  p.layers = LayersLabel(plan.layers);
+  return p;
 }
 
 RunFolderRequest MakeRunFolderRequest(const RecordOptions& o, const Shard& shard,
                                       const std::vector<int>& episodes,
-                                      const nlohmann::json& parameters) {
+                                      const RunParameters& parameters) {
   RunFolderRequest request;
   request.out = o.out;
   request.mode = ParseReuseMode(o.overwrite, o.resume);
@@ -159,11 +155,11 @@ RunFolderRequest MakeRunFolderRequest(const RecordOptions& o, const Shard& shard
 
 // --resume: the manifest entries of this run and the complete ones kept from the run it
 // continues, in episode order.
-nlohmann::json WithKeptEpisodes(nlohmann::json entries, const std::vector<nlohmann::json>& kept) {
-  for (const nlohmann::json& e : kept) entries.push_back(e);
-  std::sort(entries.begin(), entries.end(), [](const nlohmann::json& a, const nlohmann::json& b) {
-    return a.at("index").get<int>() < b.at("index").get<int>();
-  });
+std::vector<ManifestEpisode> WithKeptEpisodes(std::vector<ManifestEpisode> entries,
+                                              const std::vector<ManifestEpisode>& kept) {
+  entries.insert(entries.end(), kept.begin(), kept.end());
+  std::sort(entries.begin(), entries.end(),
+            [](const ManifestEpisode& a, const ManifestEpisode& b) { return a.index < b.index; });
   return entries;
 }
 
@@ -247,7 +243,7 @@ int RunRecord(const RecordOptions& options, const std::string& command_line,
   // never two runs in one folder; a failure below leaves nothing this run made. From here a
   // SIGINT/SIGTERM is an interruption (the scheduler takes over the handlers when it starts).
   InstallStopSignals();
-  const nlohmann::json parameters = RecordParameters(o, plan, shard);
+  const RunParameters parameters = RecordParameters(o, plan, shard);
   RunFolder folder(MakeRunFolderRequest(o, shard, episodes, parameters));
   if (!folder.notice().empty() && !o.quiet) {
     std::fprintf(stderr, "fetchscope: note: %s\n", folder.notice().c_str());
@@ -288,7 +284,7 @@ int RunRecord(const RecordOptions& options, const std::string& command_line,
   }
 
   const double wall = Since(wall_start);
-  nlohmann::json episodes_json = nlohmann::json::array();
+  std::vector<ManifestEpisode> entries;
   std::map<std::string, double> timings = {{"sim", 0}, {"render", 0}, {"encode", 0}, {"write", 0}};
   std::map<int, std::vector<int>> by_worker;  // the episodes each worker recorded
   for (const auto& [k, entry] : result.results) {
@@ -301,9 +297,9 @@ int RunRecord(const RecordOptions& options, const std::string& command_line,
     e.erase("codec");
     e.erase("encoded_width");
     e.erase("encoded_height");
-    episodes_json.push_back(std::move(e));
+    entries.push_back(ManifestEpisodeFromJson(e));
   }
-  episodes_json = WithKeptEpisodes(std::move(episodes_json), folder.kept());
+  entries = WithKeptEpisodes(std::move(entries), folder.kept());
   // The first worker that started speaks for the GL setup (all run the same backend).
   nlohmann::json first_worker;
   for (const nlohmann::json& w : result.workers) {
@@ -325,16 +321,6 @@ int RunRecord(const RecordOptions& options, const std::string& command_line,
     entry["episodes"] = by_worker[static_cast<int>(w)];
     workers_json.push_back(std::move(entry));
   }
-  nlohmann::json failures_json = nlohmann::json::array();
-  for (const WorkerFailure& f : result.failures) {
-    failures_json.push_back(
-        {{"worker", f.worker}, {"episodes", f.episodes}, {"message", f.message}});
-  }
-  const nlohmann::json shard_json = {
-      {"index", shard.index},
-      {"count", shard.count},
-      {"source", shard.source.empty() ? nlohmann::json(nullptr) : nlohmann::json(shard.source)},
-      {"episodes", episodes}};
   const int sig = result.signal;
   // the encoder of each format's files, and all of them in --format order as one line
   nlohmann::json codecs = nlohmann::json::object();
@@ -348,73 +334,72 @@ int RunRecord(const RecordOptions& options, const std::string& command_line,
            : "--format " + o.formats + ": no H.264 encoded, so --codec does not apply";
   // episodes cut short: by this run's signal, or already in the recording --from replays
   std::vector<int> incomplete;
-  for (const nlohmann::json& e : episodes_json) {
-    if (!e.value("complete", true)) incomplete.push_back(e.at("index").get<int>());
+  for (const ManifestEpisode& e : entries) {
+    if (!e.complete.value_or(true)) incomplete.push_back(e.index);
   }
-  nlohmann::json manifest = {
-      {"env_id", plan.spec->id},
-      {"seed", plan.seed},
-      {"policy", o.policy},
-      {"from", from ? nlohmann::json(from->path) : nlohmann::json(nullptr)},
-      {"episodes_requested", o.episodes},
-      {"steps_per_episode", o.steps},
-      {"sheet_every", o.sheet_every},
-      {"episodes", episodes_json},
-      {"missing", result.missing},
-      {"failures", failures_json},
-      {"shard", shard_json},
-      {"jobs", result.jobs},
-      {"worker_mode", o.worker_mode},
-      {"workers", workers_json},
-      {"gpu",
-       {{"request", o.view.gpu}, {"choice", plan.gpu.reason}, {"devices", plan.gpu.devices}}},
-      {"assets", AssetsJson(plan.assets)},
-      {"model_file", model_path},
-      {"camera", o.view.camera},
-      {"overlay", o.view.overlay},
-      {"msaa", first_worker.value("msaa", 0)},
-      {"msaa_reason", first_worker.value("msaa_reason", "")},
-      {"backend",
-       {{"name", first_worker.value("backend", "")},
-        {"device", first_worker.value("device", "")},
-        {"gl_vendor", first_worker.value("gl_vendor", "")},
-        {"gl_renderer", first_worker.value("gl_renderer", "")},
-        {"gl_version", first_worker.value("gl_version", "")}}},
-      {"layers", SplitCommaList(LayersLabel(plan.layers))},
-      {"video",
-       {{"codec", codec_used},
-        {"codecs", codecs},
-        {"codec_reason", codec_reason},
-        {"crf", o.crf},
-        {"preset", o.preset.empty() ? kDefaultVideoPreset : o.preset},
-        {"fps", o.fps},
-        {"width", plan.video.width},
-        {"height", plan.video.height},
-        {"encoded_width", (plan.video.width + 1) & ~1},
-        {"encoded_height", (plan.video.height + 1) & ~1},
-        {"encoder_threads", plan.video.threads},
-        {"encoders_per_worker", plan.encoders},
-        {"container", plan.formats.front()},
-        {"formats", plan.formats},
-        {"gif", {{"fps", std::min(o.gif_fps, o.fps)}, {"width", o.gif_width}}},
-        {"pix_fmt", "yuv420p"}}},
-      {"versions", VersionsJson()},
-      {"timings_s",
-       {{"wall", wall},
-        {"sim", timings["sim"]},
-        {"render", timings["render"]},
-        {"encode", timings["encode"]},
-        {"write", timings["write"]}}},
-      {"frames", progress.frames()},
-      {"interrupted", sig != 0},
-      {"incomplete_episodes", incomplete},
-      {"signal",
-       sig == 0 ? nlohmann::json(nullptr) : nlohmann::json(sig == SIGINT ? "SIGINT" : "SIGTERM")},
-      {"command_line", command_line},
-      {"parameters", parameters},
-      {"resumed", o.resume && !folder.kept().empty()}};
+  Manifest manifest;
+  manifest.env_id = plan.spec->id;
+  manifest.seed = plan.seed;
+  manifest.policy = o.policy;
+  if (from) manifest.from = from->path;
+  manifest.episodes_requested = o.episodes;
+  manifest.steps_per_episode = o.steps;
+  manifest.sheet_every = o.sheet_every;
+  manifest.episodes = std::move(entries);
+  manifest.missing = result.missing;
+  for (const WorkerFailure& f : result.failures) {
+    manifest.failures.push_back({f.worker, f.episodes, f.message});
+  }
+  manifest.shard = ManifestShard{shard.index, shard.count, std::nullopt, episodes};
+  if (!shard.source.empty()) manifest.shard->source = shard.source;
+  manifest.jobs = result.jobs;
+  manifest.worker_mode = o.worker_mode;
+  manifest.workers = workers_json;
+  manifest.gpu = {
+      {"request", o.view.gpu}, {"choice", plan.gpu.reason}, {"devices", plan.gpu.devices}};
+  manifest.assets = AssetsJson(plan.assets);
+  manifest.model_file = model_path;
+  manifest.camera = o.view.camera;
+  manifest.overlay = o.view.overlay;
+  manifest.msaa = first_worker.value("msaa", 0);
+  manifest.msaa_reason = first_worker.value("msaa_reason", "");
+  manifest.backend = {{"name", first_worker.value("backend", "")},
+                      {"device", first_worker.value("device", "")},
+                      {"gl_vendor", first_worker.value("gl_vendor", "")},
+                      {"gl_renderer", first_worker.value("gl_renderer", "")},
+                      {"gl_version", first_worker.value("gl_version", "")}};
+  manifest.layers = SplitCommaList(LayersLabel(plan.layers));
+  manifest.video = {{"codec", codec_used},
+                    {"codecs", codecs},
+                    {"codec_reason", codec_reason},
+                    {"crf", o.crf},
+                    {"preset", o.preset.empty() ? kDefaultVideoPreset : o.preset},
+                    {"fps", o.fps},
+                    {"width", plan.video.width},
+                    {"height", plan.video.height},
+                    {"encoded_width", (plan.video.width + 1) & ~1},
+                    {"encoded_height", (plan.video.height + 1) & ~1},
+                    {"encoder_threads", plan.video.threads},
+                    {"encoders_per_worker", plan.encoders},
+                    {"container", plan.formats.front()},
+                    {"formats", plan.formats},
+                    {"gif", {{"fps", std::min(o.gif_fps, o.fps)}, {"width", o.gif_width}}},
+                    {"pix_fmt", "yuv420p"}};
+  manifest.versions = VersionsJson();
+  manifest.timings_s = {{"wall", wall},
+                        {"sim", timings["sim"]},
+                        {"render", timings["render"]},
+                        {"encode", timings["encode"]},
+                        {"write", timings["write"]}};
+  manifest.frames = progress.frames();
+  manifest.interrupted = sig != 0;
+  manifest.incomplete_episodes = incomplete;
+  if (sig != 0) manifest.signal = sig == SIGINT ? "SIGINT" : "SIGTERM";
+  manifest.command_line = command_line;
+  manifest.parameters = parameters;
+  manifest.resumed = o.resume && !folder.kept().empty();
   const fs::path manifest_path = fs::path(o.out) / ShardManifestName(shard);
-  WriteJson(manifest_path.string(), manifest);
+  WriteManifest(manifest_path, manifest);
   folder.Commit();
   const size_t recorded = result.results.size();
   char summary[768];

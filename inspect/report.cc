@@ -15,8 +15,8 @@
 #include "base/atomic_file.h"
 #include "base/errors.h"
 #include "base/json_util.h"
-#include "cli/common.h"
 #include "inspect/html_page.h"
+#include "run/run_files.h"
 #include "src/env_spec.h"
 
 namespace fetchscope::cli {
@@ -84,7 +84,7 @@ std::string Str(const json& j, const char* pointer) {
 }
 
 // "device (renderer)" of every worker that reported, for a plain or merged manifest.
-std::vector<std::string> GlDevices(const json& manifest) {
+std::vector<std::string> GlDevices(const Manifest& manifest) {
   std::vector<std::string> devices;
   auto add_workers = [&](const json& workers) {
     if (!workers.is_array()) return;
@@ -95,13 +95,11 @@ std::vector<std::string> GlDevices(const json& manifest) {
       AddUnique(&devices, device);
     }
   };
-  add_workers(manifest.value("workers", json()));
-  for (const json& shard : manifest.value("shards", json::array())) {
-    add_workers(shard.value("workers", json()));
-  }
+  add_workers(manifest.workers);
+  for (const json& shard : manifest.shards) add_workers(shard.value("workers", json()));
   if (devices.empty()) {  // older manifests: the backend block only
     AddUnique(&devices,
-              Str(manifest, "/backend/device") + " " + Str(manifest, "/backend/gl_renderer"));
+              Str(manifest.backend, "/device") + " " + Str(manifest.backend, "/gl_renderer"));
   }
   return devices;
 }
@@ -114,11 +112,6 @@ bool IsVideoFile(const std::string& name) {
   return false;
 }
 
-// mp4 (H.264) and webm (VP9) play in every browser; a gif is an image
-int FormatRank(const std::string& format) {
-  return format == "mp4" ? 0 : format == "webm" ? 1 : format == "gif" ? 2 : 3;
-}
-
 void CollectVideoFiles(const json& j, std::set<std::string>* files) {
   if (j.is_string()) {
     if (IsVideoFile(j.get<std::string>())) files->insert(j.get<std::string>());
@@ -129,19 +122,17 @@ void CollectVideoFiles(const json& j, std::set<std::string>* files) {
 
 // ", formats mp4, gif (gif: 10 frames/s, 320 px wide)" when record --format chose more or other
 // than mp4; "" otherwise
-std::string FormatsText(const json& m) {
-  const auto formats = m.find("video");
-  if (formats == m.end() || !formats->contains("formats") || !(*formats)["formats"].is_array()) {
-    return "";
-  }
+std::string FormatsText(const Manifest& m) {
+  const auto formats = m.video.find("formats");
+  if (formats == m.video.end() || !formats->is_array()) return "";
   std::vector<std::string> names;
-  for (const json& f : (*formats)["formats"]) {
+  for (const json& f : *formats) {
     if (f.is_string()) names.push_back(f.get<std::string>());
   }
   if (names == std::vector<std::string>{"mp4"}) return "";
   std::string text = ", formats " + Join(names, ", ");
   if (std::find(names.begin(), names.end(), "gif") != names.end()) {
-    text += " (gif: " + Str(m, "/video/gif/fps") + " frames/s, " + Str(m, "/video/gif/width") +
+    text += " (gif: " + Str(m.video, "/gif/fps") + " frames/s, " + Str(m.video, "/gif/width") +
             " px wide at most)";
   }
   return text;
@@ -149,36 +140,9 @@ std::string FormatsText(const json& m) {
 
 }  // namespace
 
-std::vector<EpisodeVideo> EpisodeVideos(const json& entry) {
-  std::vector<EpisodeVideo> out;
-  const auto videos = entry.find("videos");
-  if (videos != entry.end() && videos->is_object()) {
-    for (const auto& [format, v] : videos->items()) {
-      if (!v.is_object() || !v.contains("file") || !v["file"].is_string()) continue;
-      const json& frames = v.value("frames", json());
-      out.push_back({format, v["file"].get<std::string>(),
-                     frames.is_number_integer() ? frames.get<int>() : -1});
-    }
-  }
-  const auto video = entry.find("video");
-  if (out.empty() && video != entry.end() && video->is_string() &&
-      !video->get<std::string>().empty()) {  // manifests from before --format
-    std::string format = fs::path(video->get<std::string>()).extension().string();
-    if (!format.empty()) format.erase(0, 1);
-    const json& frames = entry.value("frames", json());
-    out.push_back(
-        {format, video->get<std::string>(), frames.is_number_integer() ? frames.get<int>() : -1});
-  }
-  std::stable_sort(out.begin(), out.end(), [](const EpisodeVideo& a, const EpisodeVideo& b) {
-    const int ra = FormatRank(a.format), rb = FormatRank(b.format);
-    return ra != rb ? ra < rb : a.format < b.format;
-  });
-  return out;
-}
-
-std::vector<std::string> OtherEpisodeVideos(const json& entry) {
+std::vector<std::string> OtherEpisodeVideos(const ManifestEpisode& entry) {
   std::set<std::string> files;
-  CollectVideoFiles(entry, &files);
+  CollectVideoFiles(ManifestEpisodeToJson(entry), &files);
   for (const EpisodeVideo& v : EpisodeVideos(entry)) files.erase(v.file);
   return {files.begin(), files.end()};
 }
@@ -192,52 +156,49 @@ const EpisodeVideo* PlayableVideo(const std::vector<EpisodeVideo>& videos, const
 }
 
 json RunProvenance(const RecordedRun& run) {
-  const json& m = run.manifest;
+  const Manifest& m = run.manifest;
   json rows = json::array();
   auto row = [&](const std::string& label, const std::string& value) {
     if (!value.empty()) rows.push_back({{"label", label}, {"value", value}});
   };
-  row("env", Str(m, "/env_id"));
-  row("seed", Str(m, "/seed"));
-  row("policy", Str(m, "/policy"));
+  row("env", m.env_id);
+  row("seed", std::to_string(m.seed));
+  row("policy", m.policy);
   row("episodes", std::to_string(run.recorded.size()) + " recorded of " +
-                      std::to_string(run.expected.size()) + ", " + Str(m, "/steps_per_episode") +
-                      " steps each");
-  std::string assets = Str(m, "/assets/kind");
-  if (!Str(m, "/assets/origin").empty()) assets += " (" + Str(m, "/assets/origin") + ")";
-  row("assets", assets + " " + Str(m, "/assets/path"));
-  row("assets sha256", Str(m, "/assets/sha256"));
-  std::string encoder = Str(m, "/video/codec");
-  if (!Str(m, "/video/codec_reason").empty()) encoder += " — " + Str(m, "/video/codec_reason");
+                      std::to_string(run.expected.size()) + ", " +
+                      std::to_string(m.steps_per_episode) + " steps each");
+  std::string assets = Str(m.assets, "/kind");
+  if (!Str(m.assets, "/origin").empty()) assets += " (" + Str(m.assets, "/origin") + ")";
+  row("assets", assets + " " + Str(m.assets, "/path"));
+  row("assets sha256", Str(m.assets, "/sha256"));
+  std::string encoder = Str(m.video, "/codec");
+  if (!Str(m.video, "/codec_reason").empty()) encoder += " — " + Str(m.video, "/codec_reason");
   row("encoder", encoder);
-  row("video", Str(m, "/video/width") + "×" + Str(m, "/video/height") + " at " +
-                   Str(m, "/video/fps") + " frames/s, crf " + Str(m, "/video/crf") + ", preset " +
-                   Str(m, "/video/preset") + FormatsText(m));
-  row("GL backend", Str(m, "/backend/name") + " " + Str(m, "/backend/gl_version"));
+  row("video", Str(m.video, "/width") + "×" + Str(m.video, "/height") + " at " +
+                   Str(m.video, "/fps") + " frames/s, crf " + Str(m.video, "/crf") + ", preset " +
+                   Str(m.video, "/preset") + FormatsText(m));
+  row("GL backend", Str(m.backend, "/name") + " " + Str(m.backend, "/gl_version"));
   row(GlDevices(m).size() > 1 ? "GL devices" : "GL device", Join(GlDevices(m), "; "));
-  row("GPU choice", Str(m, "/gpu/choice"));
-  row("camera", Str(m, "/camera"));
-  row("overlay", Str(m, "/overlay"));
-  row("MSAA", Str(m, "/msaa") +
-                  (Str(m, "/msaa_reason").empty() ? "" : " (" + Str(m, "/msaa_reason") + ")"));
+  row("GPU choice", Str(m.gpu, "/choice"));
+  row("camera", m.camera);
+  row("overlay", m.overlay);
+  row("MSAA", std::to_string(m.msaa) + (m.msaa_reason.empty() ? "" : " (" + m.msaa_reason + ")"));
   std::vector<std::string> versions;
-  AddUnique(&versions, Str(m, "/versions/fetchscope"));
-  for (const json& shard : m.value("shards", json::array())) {
-    AddUnique(&versions, Str(shard, "/versions/fetchscope"));
-  }
-  row("fetchscope version", Join(versions, ", ") + " (MuJoCo " + Str(m, "/versions/mujoco") + ")");
-  if (m.contains("shards")) {
-    row("shards", std::to_string(m["shards"].size()) + " merged by merge-manifests");
+  AddUnique(&versions, Str(m.versions, "/fetchscope"));
+  for (const json& shard : m.shards) AddUnique(&versions, Str(shard, "/versions/fetchscope"));
+  row("fetchscope version", Join(versions, ", ") + " (MuJoCo " + Str(m.versions, "/mujoco") + ")");
+  if (m.merged) {
+    row("shards", std::to_string(m.shards.size()) + " merged by merge-manifests");
   } else {
-    row("jobs", Str(m, "/jobs") + " (" + Str(m, "/worker_mode") + ")");
+    row("jobs", std::to_string(m.jobs) + " (" + m.worker_mode + ")");
   }
-  if (m.value("interrupted", false)) row("interrupted", "by " + Str(m, "/signal"));
+  if (m.interrupted) row("interrupted", "by " + m.signal.value_or(""));
   // record --from: the run that was re-rendered (its trajectories replayed)
-  if (!Str(m, "/from").empty()) row("from", "re-rendered from " + Str(m, "/from"));
-  if (m.contains("shards")) {
+  if (!m.from.value_or("").empty()) row("from", "re-rendered from " + *m.from);
+  if (m.merged) {
     // a merged run: the shards' record commands, and the merge that made this manifest
     std::vector<std::string> records;
-    for (const json& shard : m["shards"]) AddUnique(&records, Str(shard, "/command_line"));
+    for (const json& shard : m.shards) AddUnique(&records, Str(shard, "/command_line"));
     constexpr size_t kShown = 8;
     const size_t all = records.size();
     if (all > kShown) {
@@ -245,9 +206,9 @@ json RunProvenance(const RecordedRun& run) {
       records.push_back("... (" + std::to_string(all) + " in all)");
     }
     row(all > 1 ? "record commands" : "record command", Join(records, "\n"));
-    row("merge command", Str(m, "/command_line"));
+    row("merge command", m.command_line);
   } else {
-    row("command", Str(m, "/command_line"));
+    row("command", m.command_line);
   }
   return rows;
 }
@@ -293,33 +254,20 @@ RecordedRun ReadRunManifest(const fs::path& manifest_path) {
   run.manifest_path = manifest_path;
   run.dir = manifest_path.parent_path().empty() ? fs::path(".") : manifest_path.parent_path();
   try {
-    run.manifest = json::parse(ReadText(manifest_path));
-  } catch (const json::parse_error& e) {
-    throw UsageError("'" + manifest_path.string() + "' is not JSON: " + e.what());
+    run.manifest = ReadManifest(manifest_path);
+  } catch (const ManifestError& e) {
+    throw UsageError(e.what());  // a folder that is not a record run: the user's mistake
   }
-  const json& m = run.manifest;
-  if (!m.is_object() || !m.contains("env_id") || !m.contains("episodes") ||
-      !m["episodes"].is_array()) {
-    throw UsageError("'" + manifest_path.string() +
-                     "' is not a record manifest (it lacks env_id or episodes)");
+  const Manifest& m = run.manifest;
+  // the episodes asked for: a shard's own, else all of them
+  if (m.shard && m.shard->count > 1 && m.shard->episodes) {
+    run.expected = *m.shard->episodes;
+  } else {
+    for (int k = 0; k < m.episodes_requested; ++k) run.expected.push_back(k);
   }
-  try {
-    // the episodes asked for: a shard's own, else all of them
-    const json& shard = m.value("shard", json());
-    if (shard.is_object() && shard.value("count", 1) > 1 && shard.contains("episodes")) {
-      run.expected = shard["episodes"].get<std::vector<int>>();
-    } else {
-      const int requested = m.value("episodes_requested", static_cast<int>(m["episodes"].size()));
-      for (int k = 0; k < requested; ++k) run.expected.push_back(k);
-    }
-    for (const json& e : m["episodes"]) run.recorded[e.at("index").get<int>()] = e;
-    for (const json& f : m.value("failures", json::array())) {
-      for (int k : f.value("episodes", std::vector<int>())) {
-        run.failed[k] = f.value("message", std::string());
-      }
-    }
-  } catch (const json::exception& e) {
-    throw UsageError("'" + manifest_path.string() + "' is not a record manifest: " + e.what());
+  for (const ManifestEpisode& e : m.episodes) run.recorded[e.index] = e;
+  for (const ManifestFailure& f : m.failures) {
+    for (int k : f.episodes) run.failed[k] = f.message;
   }
   return run;
 }
@@ -330,11 +278,11 @@ RecordedRun ReadRunFolder(const std::string& dir) {
     throw UsageError("'" + dir +
                      "' is not a folder: give the folder of a record run (record --out DIR)");
   }
-  const fs::path manifest = fs::path(dir) / "manifest.json";
+  const fs::path manifest = fs::path(dir) / kManifestFileName;
   if (!fs::exists(manifest, ec)) {
     int shards = 0;
     for (const auto& entry : fs::directory_iterator(dir, ec)) {
-      shards += entry.path().filename().string().rfind("manifest_shard_", 0) == 0;
+      shards += IsShardManifestFileName(entry.path().filename().string());
     }
     if (shards > 0) {
       throw UsageError("no manifest.json in '" + dir + "' but " + std::to_string(shards) +
@@ -383,14 +331,14 @@ double GoalDistance(const TrajectoryStep& step) {
 }
 
 json ReportData(const RecordedRun& run) {
-  const json& m = run.manifest;
+  const Manifest& m = run.manifest;
   double threshold = 0.05;
   try {
-    threshold = FindEnvSpec(m.at("env_id").get<std::string>()).distance_threshold;
+    threshold = FindEnvSpec(m.env_id).distance_threshold;
   } catch (const std::exception&) {
     // an env this build does not know: Fetch's 0.05 m
   }
-  const int steps_requested = m.value("steps_per_episode", 0);
+  const int steps_requested = m.steps_per_episode;
   json episodes = json::array();
   json notes = json::array();
   std::vector<double> returns;  // of the complete episodes
@@ -404,26 +352,26 @@ json ReportData(const RecordedRun& run) {
     if (it == run.recorded.end()) {
       e["status"] = "missing";
       const auto failure = run.failed.find(k);
-      e["reason"] = failure != run.failed.end()     ? failure->second
-                    : m.value("interrupted", false) ? "not recorded: the run was interrupted"
-                                                    : "not recorded";
+      e["reason"] = failure != run.failed.end() ? failure->second
+                    : m.interrupted             ? "not recorded: the run was interrupted"
+                                                : "not recorded";
       episodes.push_back(std::move(e));
       continue;
     }
-    const json& entry = it->second;
-    const int length = entry.value("steps", 0);
-    const bool complete = entry.value("complete", true);  // older manifests: no flag, complete
+    const ManifestEpisode& entry = it->second;
+    const int length = entry.steps.value_or(0);
+    const bool complete = entry.complete.value_or(true);  // older manifests: no flag, complete
     e["status"] = complete ? "ok" : "incomplete";
     e["complete"] = complete;
-    e["success"] = entry.value("is_success", false);
-    e["return"] = entry.contains("return") ? entry["return"] : json(nullptr);
+    e["success"] = entry.is_success;
+    e["return"] = entry.episode_return ? JsonDouble(*entry.episode_return) : json(nullptr);
     // an interrupted episode's return covers only the steps it made: aggregates leave it out
-    if (complete && entry.contains("return") && entry["return"].is_number()) {
-      returns.push_back(entry["return"].get<double>());
+    if (complete && entry.episode_return && std::isfinite(*entry.episode_return)) {
+      returns.push_back(*entry.episode_return);
     }
     incomplete += !complete;
     e["length"] = length;
-    e["frames"] = entry.value("frames", length + 1);
+    e["frames"] = entry.frames.value_or(length + 1);
     // every format record wrote, linked by its name; the page shows the one a browser plays best
     const std::vector<EpisodeVideo> videos = EpisodeVideos(entry);
     json video_list = json::array();
@@ -442,27 +390,22 @@ json ReportData(const RecordedRun& run) {
     // record --layers: per layer ("depth", "segmentation") its videos and legend, linked
     json layers = json::array();
     std::set<std::string> layer_files;
-    const auto layer_entries = entry.find("layers");
-    if (layer_entries != entry.end() && layer_entries->is_object()) {
-      for (const auto& [name, layer] : layer_entries->items()) {
-        if (!layer.is_object()) continue;
-        json layer_videos = json::array();
-        for (const EpisodeVideo& v : EpisodeVideos(layer)) {
-          layer_files.insert(v.file);
-          if (fs::is_regular_file(run.dir / v.file)) {
-            layer_videos.push_back({{"format", v.format}, {"file", v.file}, {"frames", v.frames}});
-          } else {
-            notes.push_back("episode " + EpisodeLabel(k) + ": " + name + " video '" + v.file +
-                            "' is missing");
-          }
+    for (const auto& [name, layer] : entry.layers) {
+      json layer_videos = json::array();
+      for (const EpisodeVideo& v : EpisodeVideos(layer)) {
+        layer_files.insert(v.file);
+        if (fs::is_regular_file(run.dir / v.file)) {
+          layer_videos.push_back({{"format", v.format}, {"file", v.file}, {"frames", v.frames}});
+        } else {
+          notes.push_back("episode " + EpisodeLabel(k) + ": " + name + " video '" + v.file +
+                          "' is missing");
         }
-        json legend = nullptr;
-        if (layer.contains("legend") && layer["legend"].is_string() &&
-            fs::is_regular_file(run.dir / layer["legend"].get<std::string>())) {
-          legend = layer["legend"];
-        }
-        layers.push_back({{"name", name}, {"videos", std::move(layer_videos)}, {"legend", legend}});
       }
+      json legend = nullptr;
+      if (!layer.legend.empty() && fs::is_regular_file(run.dir / layer.legend)) {
+        legend = layer.legend;
+      }
+      layers.push_back({{"name", name}, {"videos", std::move(layer_videos)}, {"legend", legend}});
     }
     e["layers"] = std::move(layers);
     // any other video the entry names: linked
@@ -476,16 +419,18 @@ json ReportData(const RecordedRun& run) {
       }
     }
     e["other_videos"] = std::move(others);
-    for (const char* kind : {"sheet", "trajectory"}) {
-      const std::string file = entry.value(kind, std::string());
+    for (const auto& [kind, file] :
+         {std::pair<const char*, const std::string&>{"sheet", entry.sheet},
+          {"trajectory", entry.trajectory}}) {
       e[kind] = file;
       if (!file.empty() && !fs::is_regular_file(run.dir / file)) {
         notes.push_back("episode " + EpisodeLabel(k) + ": " + kind + " '" + file + "' is missing");
         e[kind] = nullptr;
       }
     }
-    if (entry.contains("hindsight") && entry["hindsight"].is_object()) {
-      e["hindsight"] = entry["hindsight"];
+    const auto hindsight = entry.extra.find("hindsight");
+    if (hindsight != entry.extra.end() && hindsight->is_object()) {
+      e["hindsight"] = *hindsight;
       has_hindsight = true;
     }
     json distances = json::array();
@@ -522,8 +467,8 @@ json ReportData(const RecordedRun& run) {
   }
   const auto [low, high] = WilsonInterval(successes, n);
   const int missing = static_cast<int>(all.size()) - static_cast<int>(run.recorded.size());
-  if (m.value("interrupted", false)) {
-    notes.insert(notes.begin(), "the run was interrupted by " + Str(m, "/signal") + ": " +
+  if (m.interrupted) {
+    notes.insert(notes.begin(), "the run was interrupted by " + m.signal.value_or("") + ": " +
                                     std::to_string(missing) + " episode(s) missing");
   } else if (missing > 0) {
     notes.insert(notes.begin(), std::to_string(missing) + " episode(s) missing (see the table)");
@@ -533,8 +478,8 @@ json ReportData(const RecordedRun& run) {
   for (json& row : provenance) {
     if (row["label"] != "from") continue;
     std::error_code ec;
-    fs::path source = Str(m, "/from");
-    if (fs::is_directory(source, ec)) source /= "index.html";
+    fs::path source = m.from.value_or("");
+    if (fs::is_directory(source, ec)) source /= kReportFileName;
     if (fs::is_regular_file(source, ec)) {
       row["href"] = fs::absolute(source)
                         .lexically_normal()
@@ -542,35 +487,34 @@ json ReportData(const RecordedRun& run) {
                         .string();
     }
   }
-  return {
-      {"kind", "report"},
-      {"title", Str(m, "/env_id") + " · " + Str(m, "/policy") + " · seed " + Str(m, "/seed")},
-      {"generator", std::string("fetchscope ") + FETCHSCOPE_VERSION},
-      {"uplot", EmbeddedUplotVersion()},
-      {"provenance", std::move(provenance)},
-      {"notes", notes},
-      {"threshold", threshold},
-      {"steps_per_episode", steps_requested},
-      {"fps", m.contains("/video/fps"_json_pointer) ? m.at("/video/fps"_json_pointer) : json(25)},
-      {"has_hindsight", has_hindsight},
-      {"episodes", std::move(episodes)},
-      {"summary",
-       {{"expected", all.size()},
-        {"recorded", run.recorded.size()},
-        {"complete", n},
-        {"incomplete", incomplete},
-        {"successes", successes},
-        {"rate", n ? JsonDouble(static_cast<double>(successes) / n) : json(nullptr)},
-        {"wilson_low", low},
-        {"wilson_high", high},
-        {"confidence", 0.95}}},
-      {"running_success", std::move(running)},
-      {"returns_histogram", Histogram(returns)}};  // complete episodes only
+  return {{"kind", "report"},
+          {"title", m.env_id + " · " + m.policy + " · seed " + std::to_string(m.seed)},
+          {"generator", std::string("fetchscope ") + FETCHSCOPE_VERSION},
+          {"uplot", EmbeddedUplotVersion()},
+          {"provenance", std::move(provenance)},
+          {"notes", notes},
+          {"threshold", threshold},
+          {"steps_per_episode", steps_requested},
+          {"fps", m.video.contains("fps") ? m.video.at("fps") : json(25)},
+          {"has_hindsight", has_hindsight},
+          {"episodes", std::move(episodes)},
+          {"summary",
+           {{"expected", all.size()},
+            {"recorded", run.recorded.size()},
+            {"complete", n},
+            {"incomplete", incomplete},
+            {"successes", successes},
+            {"rate", n ? JsonDouble(static_cast<double>(successes) / n) : json(nullptr)},
+            {"wilson_low", low},
+            {"wilson_high", high},
+            {"confidence", 0.95}}},
+          {"running_success", std::move(running)},
+          {"returns_histogram", Histogram(returns)}};  // complete episodes only
 }
 
 fs::path WriteRunReport(const RecordedRun& run) {
   const json data = ReportData(run);
-  const fs::path out = run.dir / "index.html";
+  const fs::path out = run.dir / kReportFileName;
   WriteFileAtomically(
       out.string(),
       HtmlPage(PageKind::kReport, "fetchscope report: " + data["title"].get<std::string>(), data));

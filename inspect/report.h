@@ -8,16 +8,18 @@
 #include <string>
 #include <vector>
 
+#include "run/manifest.h"
+
 namespace fetchscope::cli {
 
 /// A record run as its manifest describes it.
 struct RecordedRun {
   std::filesystem::path dir;            ///< the folder holding the manifest
   std::filesystem::path manifest_path;  ///< dir/manifest.json (or a shard manifest)
-  nlohmann::json manifest;
-  std::vector<int> expected;               ///< the episodes the run was asked to record
-  std::map<int, nlohmann::json> recorded;  ///< manifest entries by episode index
-  std::map<int, std::string> failed;       ///< a worker's failure message by episode index
+  Manifest manifest;
+  std::vector<int> expected;                ///< the episodes the run was asked to record
+  std::map<int, ManifestEpisode> recorded;  ///< manifest entries by episode index
+  std::map<int, std::string> failed;        ///< a worker's failure message by episode index
 };
 
 /// Reads `manifest_path` (a record or merge-manifests manifest). Throws UsageError when the file
@@ -39,21 +41,9 @@ struct TrajectoryStep {
 /// the file when it is missing or malformed.
 std::vector<TrajectoryStep> ReadEpisodeTrajectory(const std::filesystem::path& path);
 
-/// One video file of an episode in one output format (record --format).
-struct EpisodeVideo {
-  std::string format;  ///< "mp4", "webm", "gif", or the file's extension for others
-  std::string file;    ///< relative to the run folder
-  int frames = -1;     ///< frames in the file, -1 when the manifest does not say
-};
-
-/// The episode's videos in the formats record wrote (the manifest entry's "videos", format ->
-/// {file, frames}; older manifests: "video" alone), in the order a browser plays them best:
-/// mp4, webm, gif, then any other format by name.
-std::vector<EpisodeVideo> EpisodeVideos(const nlohmann::json& entry);
-
 /// Every other video file the entry names anywhere (such as per-layer videos of record
 /// --layers), by file name, in name order, without those of EpisodeVideos().
-std::vector<std::string> OtherEpisodeVideos(const nlohmann::json& entry);
+std::vector<std::string> OtherEpisodeVideos(const ManifestEpisode& entry);
 
 /// The video a page or a comparison shows of an episode: the first of EpisodeVideos() whose
 /// file exists in `dir`, or nullptr when none does.

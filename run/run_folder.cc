@@ -3,101 +3,30 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <cctype>
 #include <cstdio>
-#include <fstream>
-#include <sstream>
 
 #include "base/errors.h"
+#include "run/run_files.h"
 
-namespace fetchscope::cli {
+namespace fetchscope {
 namespace {
 
 namespace fs = std::filesystem;
 
-bool AllDigits(const std::string& s) {
-  return !s.empty() && std::all_of(s.begin(), s.end(), [](char c) {
-    return std::isdigit(static_cast<unsigned char>(c));
-  });
-}
-
-bool EndsWith(const std::string& s, const std::string& tail) {
-  return s.size() >= tail.size() && s.compare(s.size() - tail.size(), tail.size(), tail) == 0;
-}
-
-// What may follow episode_NNN in an episode's file names: the videos (one per --format), the
-// contact sheet, the trajectory, and the --layers videos and legend.
-bool EpisodeFileTail(const std::string& tail) {
-  static const std::set<std::string> tails = [] {
-    std::set<std::string> t = {"_sheet.png", ".json", "_segmentation_legend.json"};
-    for (const char* ext : {"mp4", "webm", "gif"}) {
-      for (const char* layer : {"", "_depth", "_segmentation"}) {
-        t.insert(std::string(layer) + "." + ext);
-      }
-    }
-    return t;
-  }();
-  return tails.count(tail) > 0;
-}
-
-// A visible name as record writes it.
-std::optional<RunFileName> ParseVisible(const std::string& name) {
-  RunFileName parsed;
-  if (name == "manifest.json") {
-    parsed.manifest = true;
-    return parsed;
-  }
-  if (name.rfind("manifest_shard_", 0) == 0 && EndsWith(name, ".json")) {
-    parsed.manifest = true;
-    return parsed;
-  }
-  if (name == "index.html") {
-    parsed.report = true;
-    return parsed;
-  }
-  if (name.rfind("episode_", 0) != 0) return std::nullopt;
-  size_t end = 8;
-  while (end < name.size() && std::isdigit(static_cast<unsigned char>(name[end]))) ++end;
-  const std::string digits = name.substr(8, end - 8);
-  if (!AllDigits(digits) || digits.size() > 9 || !EpisodeFileTail(name.substr(end))) {
+// The manifest at `path`; nullopt when it cannot be read as one.
+std::optional<Manifest> ReadManifestOrNull(const fs::path& path) {
+  try {
+    return ReadManifest(path);
+  } catch (const ManifestError&) {
     return std::nullopt;
   }
-  parsed.episode = std::stoi(digits);
-  return parsed;
 }
 
-std::string ReadText(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
-// The manifest at `path` as JSON; null when it is not a readable JSON object.
-nlohmann::json ReadManifest(const fs::path& path) {
-  nlohmann::json j = nlohmann::json::parse(ReadText(path), nullptr, /*allow_exceptions=*/false);
-  return j.is_object() ? j : nlohmann::json(nullptr);
-}
-
-std::string Shown(const nlohmann::json& value) {
-  if (value.is_null()) return "(not given)";
-  return value.is_string() ? value.get<std::string>() : value.dump();
-}
-
-// The first parameter that differs between `theirs` and `ours` (skipping `skip`), as
-// "--steps is 50 there and 20 here"; empty when they agree.
-std::string FirstDifference(const nlohmann::json& theirs, const nlohmann::json& ours,
-                            const std::string& skip) {
-  std::set<std::string> keys;
-  for (const auto& [k, v] : ours.items()) keys.insert(k);
-  for (const auto& [k, v] : theirs.items()) keys.insert(k);
-  for (const std::string& key : keys) {
-    if (key == skip) continue;
-    const nlohmann::json a = theirs.contains(key) ? theirs[key] : nlohmann::json(nullptr);
-    const nlohmann::json b = ours.contains(key) ? ours[key] : nlohmann::json(nullptr);
-    if (a != b) return key + " is " + Shown(a) + " there and " + Shown(b) + " here";
-  }
-  return "";
+// "--steps is 50 there and 20 here" for the first parameter in which `theirs` and `ours`
+// differ; empty when they are the same run in `scope`.
+std::string Difference(const RunParameters& theirs, const RunParameters& ours, SameRunScope scope) {
+  const std::optional<RunDifference> d = SameRun(theirs, ours, scope);
+  return d ? d->parameter + " is " + d->a + " there and " + d->b + " here" : "";
 }
 
 // The start of the hidden folder's name inside --out where --overwrite keeps the earlier run
@@ -105,32 +34,6 @@ std::string FirstDifference(const nlohmann::json& theirs, const nlohmann::json& 
 // ".manifest_shard_0001_of_0004.replaced-".
 std::string AsideFolderPrefix(const std::string& manifest_name) {
   return "." + fs::path(manifest_name).stem().string() + ".replaced-";
-}
-
-// Every file a manifest entry names: video, sheet, trajectory, the videos of each format and
-// the layers' videos and legend.
-std::vector<std::string> EntryFiles(const nlohmann::json& e) {
-  std::vector<std::string> files;
-  for (const char* kind : {"video", "sheet", "trajectory"}) {
-    files.push_back(e.value(kind, std::string("?")));
-  }
-  auto add_videos = [&files](const nlohmann::json& holder) {
-    const auto videos = holder.find("videos");
-    if (videos == holder.end() || !videos->is_object()) return;
-    for (const auto& [format, v] : videos->items()) {
-      if (v.is_object()) files.push_back(v.value("file", std::string("?")));
-    }
-  };
-  add_videos(e);
-  const auto layers = e.find("layers");
-  if (layers != e.end() && layers->is_object()) {
-    for (const auto& [name, layer] : layers->items()) {
-      if (!layer.is_object()) continue;
-      add_videos(layer);
-      if (layer.contains("legend")) files.push_back(layer.value("legend", std::string("?")));
-    }
-  }
-  return files;
 }
 
 std::string Listed(const std::vector<std::string>& names) {
@@ -141,25 +44,6 @@ std::string Listed(const std::vector<std::string>& names) {
 }
 
 }  // namespace
-
-std::optional<RunFileName> ParseRunFileName(const std::string& name) {
-  if (name.empty()) return std::nullopt;
-  if (name[0] != '.') return ParseVisible(name);
-  // .STEM.partial.EXT (VideoWriter) and .NAME.tmp-XXXX (WriteFileAtomically)
-  std::string inner = name.substr(1);
-  const size_t tmp = inner.find(".tmp-");
-  const size_t partial = inner.rfind(".partial.");
-  if (tmp != std::string::npos) {
-    inner = inner.substr(0, tmp);
-  } else if (partial != std::string::npos) {
-    inner = inner.substr(0, partial) + inner.substr(partial + 8);
-  } else {
-    return std::nullopt;
-  }
-  std::optional<RunFileName> parsed = ParseVisible(inner);
-  if (parsed) parsed->hidden = true;
-  return parsed;
-}
 
 ReuseMode ParseReuseMode(bool overwrite, bool resume) {
   if (overwrite && resume) {
@@ -238,18 +122,18 @@ RunFolder::RunFolder(const RunFolderRequest& request) : request_(request) {
   // Other manifests: a sharded run shares the folder with the other shards of the same run;
   // anything else is another run.
   for (const std::string& name : manifests) {
-    const nlohmann::json m = ReadManifest(out / name);
-    const bool same_run = request.sharded && m.is_object() && m.contains("parameters") &&
-                          FirstDifference(m["parameters"], request.parameters, "--shard").empty();
+    const std::optional<Manifest> m = ReadManifestOrNull(out / name);
+    const bool recorded = m && m->parameters.recorded;
+    const bool same_run =
+        request.sharded && recorded &&
+        Difference(m->parameters, request.parameters, SameRunScope::kShards).empty();
     if (same_run) continue;
     if (!request.sharded && request.mode == ReuseMode::kOverwrite) {
       run_files.push_back(name);  // replaced with the rest of the earlier run
       continue;
     }
     std::string why;
-    if (m.is_object() && m.contains("parameters")) {
-      why = FirstDifference(m["parameters"], request.parameters, "");
-    }
+    if (recorded) why = Difference(m->parameters, request.parameters, SameRunScope::kRun);
     throw UsageError(quoted + " holds another record run (" + name +
                      (why.empty() ? "" : ": " + why) + "): choose another --out" +
                      (request.sharded ? "" : ", or pass --overwrite to replace it"));
@@ -291,26 +175,27 @@ RunFolder::RunFolder(const RunFolderRequest& request) : request_(request) {
                   ": nothing to resume, recording the whole run";
         break;
       }
-      const nlohmann::json m = ReadManifest(out / request.manifest_name);
-      if (!m.is_object() || !m.contains("parameters") || !m.contains("episodes")) {
+      const std::optional<Manifest> m = ReadManifestOrNull(out / request.manifest_name);
+      if (!m || !m->parameters.recorded) {
         throw UsageError("cannot --resume " + quoted + ": its " + request.manifest_name +
                          " does not record the run's parameters (written by an older fetchscope, "
                          "or not a record manifest): pass --overwrite instead");
       }
-      const std::string why = FirstDifference(m["parameters"], request.parameters, "");
+      const std::string why = Difference(m->parameters, request.parameters, SameRunScope::kRun);
       if (!why.empty()) {
         throw UsageError(
             "cannot --resume " + quoted + " with other parameters: " + why +
             "; pass the options of the run being resumed, or --overwrite to replace it");
       }
       std::set<int> done;
-      for (const nlohmann::json& e : m["episodes"]) {
-        const int k = e.value("index", -1);
-        if (!e.value("complete", false) ||
+      for (const ManifestEpisode& e : m->episodes) {
+        const int k = e.index;
+        if (!e.complete.value_or(false) ||
             !std::binary_search(request.episodes.begin(), request.episodes.end(), k))
           continue;
-        bool files = true;
-        for (const std::string& file : EntryFiles(e)) {
+        // its video, sheet and trajectory, and every other file it names, all there
+        bool files = !e.video.empty() && !e.sheet.empty() && !e.trajectory.empty();
+        for (const std::string& file : e.FileNames()) {
           files = files && fs::is_regular_file(out / file, ec);
         }
         if (!files) continue;
@@ -428,4 +313,4 @@ void RunFolder::Cleanup() noexcept {
   }
 }
 
-}  // namespace fetchscope::cli
+}  // namespace fetchscope

@@ -2,12 +2,8 @@
 // whole with --overwrite, or continued with --resume), and leaving nothing behind when the run
 // fails.
 //
-// A run's files are the ones record and its report write: manifest.json /
-// manifest_shard_IIII_of_NNNN.json, index.html, and per episode episode_NNN.{mp4,webm,gif},
-// episode_NNN_sheet.png, episode_NNN.json, the layer videos episode_NNN_{depth,segmentation}.EXT
-// and episode_NNN_segmentation_legend.json, and their hidden temporaries
-// (.episode_NNN.partial.EXT, .NAME.tmp-...). Anything else in the folder is the user's and is
-// never touched.
+// A run's files are the ones record and its report write (run/run_files.h names them all) and their
+// hidden temporaries. Anything else in the folder is the user's and is never touched.
 //
 // --overwrite moves the earlier run's files aside into a hidden folder inside --out
 // (.manifest.replaced-PID, or .manifest_shard_IIII_of_NNNN.replaced-PID for a shard) and deletes
@@ -20,13 +16,13 @@
 
 #include <filesystem>
 #include <functional>
-#include <nlohmann/json.hpp>
-#include <optional>
 #include <set>
 #include <string>
 #include <vector>
 
-namespace fetchscope::cli {
+#include "run/manifest.h"
+
+namespace fetchscope {
 
 /// What to do with a folder that already holds a run.
 enum class ReuseMode {
@@ -34,18 +30,6 @@ enum class ReuseMode {
   kOverwrite,  ///< --overwrite: remove the earlier run's files, then record afresh
   kResume,     ///< --resume: keep its complete episodes, record the rest
 };
-
-/// A record run file name, parsed. `episode` is -1 for a manifest and the report; `hidden` for
-/// a temporary.
-struct RunFileName {
-  int episode = -1;
-  bool manifest = false;  ///< manifest.json or a shard's manifest
-  bool report = false;    ///< index.html, the run's report
-  bool hidden = false;
-};
-
-/// Parses `name` as one of the run's file names (see the top of this file); nullopt otherwise.
-std::optional<RunFileName> ParseRunFileName(const std::string& name);
 
 /// What a run asks of its folder.
 struct RunFolderRequest {
@@ -55,9 +39,9 @@ struct RunFolderRequest {
   bool sharded = false;           ///< other shards' files may be there
   std::function<bool(int)> owns;  ///< true for the episodes of this run (its shard)
   std::vector<int> episodes;      ///< this run's episodes, ascending
-  /// What makes two manifests the same run: option name ("--steps") -> value. Stored in the
-  /// manifest as "parameters"; --resume refuses a folder whose run differs in any of them.
-  nlohmann::json parameters;
+  /// What makes two manifests the same run (SameRun), stored in the manifest; --resume refuses a
+  /// folder whose run differs in any of them.
+  RunParameters parameters;
 };
 
 /// The folder, prepared: conflicts checked, earlier files removed as asked, the folder made.
@@ -76,7 +60,7 @@ class RunFolder {
   /// The episodes still to record (all of them, unless resuming).
   const std::vector<int>& todo() const { return todo_; }
   /// --resume: the earlier manifest's entries of the complete episodes kept, by index.
-  const std::vector<nlohmann::json>& kept() const { return kept_; }
+  const std::vector<ManifestEpisode>& kept() const { return kept_; }
   /// The run ended as it should (done or interrupted, with its manifest): keep everything, and
   /// delete the earlier run that --overwrite set aside.
   void Commit();
@@ -96,7 +80,7 @@ class RunFolder {
   std::vector<std::filesystem::path> created_dirs_;  // deepest first
   std::set<std::string> before_;                     // names present before the run
   std::vector<int> todo_;
-  std::vector<nlohmann::json> kept_;
+  std::vector<ManifestEpisode> kept_;
   std::filesystem::path aside_;  // --overwrite: where the earlier run's files wait
   std::vector<std::filesystem::path> stale_aside_;  // left by a killed --overwrite
   std::vector<std::string> set_aside_;              // their names (in --out and in aside_)
@@ -107,4 +91,4 @@ class RunFolder {
 /// Parses --overwrite/--resume into a mode; both at once is a UsageError.
 ReuseMode ParseReuseMode(bool overwrite, bool resume);
 
-}  // namespace fetchscope::cli
+}  // namespace fetchscope

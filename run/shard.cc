@@ -1,12 +1,12 @@
 #include "run/shard.h"
 
 #include <algorithm>
-#include <cstdio>
 #include <cstdlib>
 
 #include "base/errors.h"
+#include "run/run_files.h"
 
-namespace fetchscope::cli {
+namespace fetchscope {
 namespace {
 
 // A whole decimal number 0 .. 2^31-1, nothing else (no sign, no spaces, no "3.0").
@@ -113,14 +113,11 @@ std::vector<int> ShardEpisodes(const Shard& shard, int episodes) {
 }
 
 std::string ShardManifestName(const Shard& shard) {
-  if (!shard.sharded()) return "manifest.json";
-  char name[64];
-  std::snprintf(name, sizeof(name), "manifest_shard_%04d_of_%04d.json", shard.index, shard.count);
-  return name;
+  return ManifestFileName(shard.index, shard.count);
 }
 
 std::string ShardLabel(const Shard& shard) {
   return std::to_string(shard.index) + "/" + std::to_string(shard.count);
 }
 
-}  // namespace fetchscope::cli
+}  // namespace fetchscope

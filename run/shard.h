@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-namespace fetchscope::cli {
+namespace fetchscope {
 
 /// One shard of a run: `index` of `count`, and where that came from.
 struct Shard {
@@ -39,11 +39,11 @@ Shard ResolveShard(const std::string& flag, int shard_count, const EnvLookup& en
 /// The episodes of `shard` among 0 .. episodes-1, ascending.
 std::vector<int> ShardEpisodes(const Shard& shard, int episodes);
 
-/// Manifest file name: "manifest.json" for an unsplit run, else
-/// "manifest_shard_IIII_of_NNNN.json" (so shards writing into one folder never collide).
+/// The shard's manifest file name (ManifestFileName): "manifest.json" for an unsplit run, else
+/// "manifest_shard_IIII_of_NNNN.json".
 std::string ShardManifestName(const Shard& shard);
 
 /// "I/N" for messages.
 std::string ShardLabel(const Shard& shard);
 
-}  // namespace fetchscope::cli
+}  // namespace fetchscope

@@ -20,6 +20,7 @@
 #include <tuple>
 #include <vector>
 
+#include "run/run_files.h"
 #include "tests/test_util.h"
 
 namespace fetchscope {
@@ -72,7 +73,6 @@ class RunFolderTest : public ::testing::Test {
 
 // Which names in a folder are a record run's (and so never the user's).
 TEST(RunFileName, NamesRecordWritesAndNothingElse) {
-  using cli::ParseRunFileName;
   for (const char* name : {"manifest.json", "manifest_shard_0001_of_0004.json"}) {
     ASSERT_TRUE(ParseRunFileName(name)) << name;
     EXPECT_TRUE(ParseRunFileName(name)->manifest) << name;

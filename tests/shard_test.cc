@@ -16,8 +16,6 @@
 namespace fetchscope {
 namespace {
 
-using cli::ResolveShard;
-using cli::Shard;
 using testing::EpisodeFiles;
 using testing::ReadFile;
 using testing::RunCommand;
@@ -159,11 +157,11 @@ INSTANTIATE_TEST_SUITE_P(
         ShardCase{"", -2, {}, 0, 0, "", "--shard-count -2"}));
 
 TEST(ShardTest, EpisodesAndManifestNames) {
-  EXPECT_EQ(cli::ShardEpisodes({1, 3, ""}, 8), (std::vector<int>{1, 4, 7}));
-  EXPECT_EQ(cli::ShardEpisodes({0, 1, ""}, 3), (std::vector<int>{0, 1, 2}));
-  EXPECT_TRUE(cli::ShardEpisodes({5, 6, ""}, 5).empty());
-  EXPECT_EQ(cli::ShardManifestName({0, 1, ""}), "manifest.json");
-  EXPECT_EQ(cli::ShardManifestName({2, 16, ""}), "manifest_shard_0002_of_0016.json");
+  EXPECT_EQ(ShardEpisodes({1, 3, ""}, 8), (std::vector<int>{1, 4, 7}));
+  EXPECT_EQ(ShardEpisodes({0, 1, ""}, 3), (std::vector<int>{0, 1, 2}));
+  EXPECT_TRUE(ShardEpisodes({5, 6, ""}, 5).empty());
+  EXPECT_EQ(ShardManifestName({0, 1, ""}), "manifest.json");
+  EXPECT_EQ(ShardManifestName({2, 16, ""}), "manifest_shard_0002_of_0016.json");
 }
 
 // -- black box: the real binary ------------------------------------------------------------
@@ -279,11 +277,93 @@ TEST_F(ShardRunTest, MergeNamesMissingInterruptedAndForeignShards) {
   ASSERT_EQ(RunFetchscope(Record(7, 12) + " --shard 0/3 --out " + other.string()).exit_code, 0);
   r = RunFetchscope("merge-manifests " + dir.string() + " " + other.string());
   EXPECT_EQ(r.exit_code, 1) << r.output;
-  EXPECT_NE(r.output.find("belongs to another run: seed is 12"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("manifest_shard_0000_of_0003.json' (shard 0/3) belongs to another run: "
+                          "--seed is 12 there but 11 in '"),
+            std::string::npos)
+      << r.output;
 
   r = RunFetchscope("merge-manifests " + (tmp.path() / "nowhere").string());
   EXPECT_EQ(r.exit_code, 1) << r.output;
   EXPECT_NE(r.output.find("nowhere' is not a folder"), std::string::npos) << r.output;
+}
+
+// Shards recorded with different options are not one run: merge-manifests refuses them, naming
+// the first option that differs and both values, and writes nothing (before, shard 0 with
+// --layers rgb,depth and shard 1 with --msaa 4 merged into a manifest claiming depth for both).
+TEST_F(ShardRunTest, MergeRefusesShardsRecordedWithOtherOptions) {
+  TempDir tmp;
+  const std::string run = Record(2);
+  struct Case {
+    std::string shard0, shard1;  // the options each shard adds
+    std::string message;
+  };
+  const std::vector<Case> cases = {
+      {"--layers rgb,depth", "--msaa 4", "--msaa is 4 there but auto in '"},
+      {"--layers rgb,depth", "", "--layers is rgb there but rgb,depth in '"},
+      {"", "--format mp4,webm", "--format is mp4,webm there but mp4 in '"}};
+  for (size_t i = 0; i < cases.size(); ++i) {
+    const Case& c = cases[i];
+    // each shard in its own folder, as on two machines
+    const fs::path m0 = tmp.path() / ("m0_" + std::to_string(i));
+    const fs::path m1 = tmp.path() / ("m1_" + std::to_string(i));
+    auto r = RunFetchscope(run + " --shard 0/2 " + c.shard0 + " --out " + m0.string());
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    r = RunFetchscope(run + " --shard 1/2 " + c.shard1 + " --out " + m1.string());
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    r = RunFetchscope("merge-manifests " + m0.string() + " " + m1.string());
+    EXPECT_EQ(r.exit_code, 1) << r.output;
+    EXPECT_NE(
+        r.output.find("fetchscope: error: '" + (m1 / "manifest_shard_0001_of_0002.json").string() +
+                      "' (shard 1/2) belongs to another run: " + c.message +
+                      (m0 / "manifest_shard_0000_of_0002.json").string() +
+                      "' (shard 0/2); record every shard of a run with the same options"),
+        std::string::npos)
+        << r.output;
+    EXPECT_FALSE(fs::exists(m0 / "manifest.json"));
+    EXPECT_FALSE(fs::exists(m0 / "index.html"));
+  }
+  // in one folder, record itself refuses the second shard, by the same definition
+  const fs::path m0 = tmp.path() / "m0_0";
+  auto r = RunFetchscope(run + " --shard 1/2 --msaa 4 --out " + m0.string());
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("holds another record run (manifest_shard_0000_of_0002.json: --msaa "
+                          "is auto there and 4 here)"),
+            std::string::npos)
+      << r.output;
+  EXPECT_FALSE(fs::exists(m0 / "manifest_shard_0001_of_0002.json"));
+}
+
+// A shard manifest of a newer schema version, or one from before "parameters", cannot be told to
+// be of the same run: merge-manifests refuses it, naming the file (and the versions).
+TEST_F(ShardRunTest, MergeRefusesNewerAndUnversionedShardManifests) {
+  TempDir tmp;
+  const fs::path dir = tmp.path() / "run";
+  for (int i : {0, 1}) {
+    auto r =
+        RunFetchscope(Record(2) + " --shard " + std::to_string(i) + "/2 --out " + dir.string());
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+  }
+  const fs::path m1 = dir / "manifest_shard_0001_of_0002.json";
+  auto manifest = nlohmann::json::parse(ReadFile(m1));
+  EXPECT_EQ(manifest["schema_version"], 1);
+  manifest["schema_version"] = 2;
+  std::ofstream(m1) << manifest.dump(2);
+  auto r = RunFetchscope("merge-manifests " + dir.string());
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("'" + m1.string() +
+                          "' has manifest schema version 2; this fetchscope reads versions 0 to 1: "
+                          "use a newer fetchscope"),
+            std::string::npos)
+      << r.output;
+  manifest.erase("schema_version");  // version 0: read as before, but without its parameters
+  manifest.erase("parameters");
+  std::ofstream(m1) << manifest.dump(2);
+  r = RunFetchscope("merge-manifests " + dir.string());
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("'" + m1.string() + "' does not record the run's parameters"),
+            std::string::npos)
+      << r.output;
+  EXPECT_FALSE(fs::exists(dir / "manifest.json"));
 }
 
 // The environment of a Slurm array task and of a Kubernetes Indexed Job pod, as the binary sees it.

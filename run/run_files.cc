@@ -1,0 +1,122 @@
+#include "run/run_files.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cstdio>
+#include <set>
+
+namespace fetchscope {
+namespace {
+
+constexpr const char kShardManifestPrefix[] = "manifest_shard_";
+constexpr const char kEpisodePrefix[] = "episode_";
+constexpr const char kSheetTail[] = "_sheet.png";
+constexpr const char kLegendTail[] = "_segmentation_legend.json";
+
+bool EndsWith(const std::string& s, const std::string& tail) {
+  return s.size() >= tail.size() && s.compare(s.size() - tail.size(), tail.size(), tail) == 0;
+}
+
+bool AllDigits(const std::string& s) {
+  return !s.empty() && std::all_of(s.begin(), s.end(), [](char c) {
+    return std::isdigit(static_cast<unsigned char>(c));
+  });
+}
+
+// What may follow episode_NNN in an episode's file names: the videos (one per
+// --format), the contact sheet, the trajectory, and the --layers videos and legend.
+bool EpisodeFileTail(const std::string& tail) {
+  static const std::set<std::string> tails = [] {
+    std::set<std::string> t = {kSheetTail, ".json", kLegendTail};
+    for (const char* ext : {"mp4", "webm", "gif"}) {
+      for (const char* layer : {"", "_depth", "_segmentation"}) {
+        t.insert(std::string(layer) + "." + ext);
+      }
+    }
+    return t;
+  }();
+  return tails.count(tail) > 0;
+}
+
+// A visible name as record writes it.
+std::optional<RunFileName> ParseVisible(const std::string& name) {
+  RunFileName parsed;
+  if (IsManifestFileName(name)) {
+    parsed.manifest = true;
+    return parsed;
+  }
+  if (name == kReportFileName) {
+    parsed.report = true;
+    return parsed;
+  }
+  const size_t start = sizeof(kEpisodePrefix) - 1;
+  if (name.rfind(kEpisodePrefix, 0) != 0) return std::nullopt;
+  size_t end = start;
+  while (end < name.size() && std::isdigit(static_cast<unsigned char>(name[end]))) ++end;
+  const std::string digits = name.substr(start, end - start);
+  if (!AllDigits(digits) || digits.size() > 9 || !EpisodeFileTail(name.substr(end))) {
+    return std::nullopt;
+  }
+  parsed.episode = std::stoi(digits);
+  return parsed;
+}
+
+}  // namespace
+
+std::string EpisodeStem(int k) {
+  char name[32];
+  std::snprintf(name, sizeof(name), "%s%03d", kEpisodePrefix, k);
+  return name;
+}
+
+std::string EpisodeVideoFileName(int k, const std::string& extension) {
+  return EpisodeStem(k) + "." + extension;
+}
+
+std::string EpisodeLayerVideoFileName(int k, const std::string& layer,
+                                      const std::string& extension) {
+  return EpisodeStem(k) + "_" + layer + "." + extension;
+}
+
+std::string EpisodeLegendFileName(int k) { return EpisodeStem(k) + kLegendTail; }
+
+std::string EpisodeSheetFileName(int k) { return EpisodeStem(k) + kSheetTail; }
+
+std::string EpisodeTrajectoryFileName(int k) { return EpisodeStem(k) + ".json"; }
+
+std::string ManifestFileName(int shard_index, int shard_count) {
+  if (shard_count <= 1) return kManifestFileName;
+  char name[64];
+  std::snprintf(name, sizeof(name), "%s%04d_of_%04d.json", kShardManifestPrefix, shard_index,
+                shard_count);
+  return name;
+}
+
+bool IsShardManifestFileName(const std::string& name) {
+  return name.rfind(kShardManifestPrefix, 0) == 0 && EndsWith(name, ".json");
+}
+
+bool IsManifestFileName(const std::string& name) {
+  return name == kManifestFileName || IsShardManifestFileName(name);
+}
+
+std::optional<RunFileName> ParseRunFileName(const std::string& name) {
+  if (name.empty()) return std::nullopt;
+  if (name[0] != '.') return ParseVisible(name);
+  // .STEM.partial.EXT (VideoWriter) and .NAME.tmp-XXXX (WriteFileAtomically)
+  std::string inner = name.substr(1);
+  const size_t tmp = inner.find(".tmp-");
+  const size_t partial = inner.rfind(".partial.");
+  if (tmp != std::string::npos) {
+    inner = inner.substr(0, tmp);
+  } else if (partial != std::string::npos) {
+    inner = inner.substr(0, partial) + inner.substr(partial + 8);
+  } else {
+    return std::nullopt;
+  }
+  std::optional<RunFileName> parsed = ParseVisible(inner);
+  if (parsed) parsed->hidden = true;
+  return parsed;
+}
+
+}  // namespace fetchscope
