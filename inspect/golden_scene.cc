@@ -296,12 +296,12 @@ SceneResult RenderScene(GlContext& gl, const GoldenScene& scene, const std::stri
   context.steps_per_episode = scene.steps;
   auto policy = MakePolicy(policy_spec, spec, context);
   FetchEnv env(spec, ResolveAssets(assets_root));
-  cli::ViewOptions view;  // transitional: the view options of cli/render_common.h
+  ViewOptions view;
   view.camera = scene.camera;
   view.overlay = scene.overlay;
   view.width = scene.width;
   view.height = scene.height;
-  RenderOptions options = cli::MakeRenderOptions(view, env.model());
+  RenderOptions options = MakeRenderOptions(view, env.model());
   // pinned per scene: goldens must not follow whatever default --msaa has
   options.msaa_samples = scene.msaa;
   gl.MakeCurrent();
@@ -315,13 +315,13 @@ SceneResult RenderScene(GlContext& gl, const GoldenScene& scene, const std::stri
   StepCallback on_step;
   if (options.overlays.trail) {
     on_step = [&](const StepRecord& record, const StepResult*) {
-      renderer.Render(env.data(), cli::MakeFrameInfo(env, record), result.rgb.data());
+      renderer.Render(env.data(), MakeFrameInfo(env, record), result.rgb.data());
       return true;
     };
   }
   const EpisodeRecord episode = RunEpisode(env, *policy, 0, scene.seed, scene.steps, on_step);
   if (!options.overlays.trail) {
-    renderer.Render(env.data(), cli::MakeFrameInfo(env, episode.steps.back()), result.rgb.data());
+    renderer.Render(env.data(), MakeFrameInfo(env, episode.steps.back()), result.rgb.data());
   }
   result.state = StateJson(scene, episode);
   return result;
