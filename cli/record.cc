@@ -29,6 +29,7 @@
 #include "base/suggest.h"
 #include "cli/command.h"
 #include "cli/common.h"
+#include "cli/jobs_options.h"
 #include "cli/record_from.h"
 #include "cli/render_common.h"
 #include "encode/contact_sheet.h"
