@@ -1,8 +1,6 @@
 // bench's rendering, encoding and recording parts, with the peers measured in the same run:
 // MuJoCo's own record sample (Debian's mujoco-record under xvfb-run) and the ffmpeg program.
-#include <fcntl.h>
 #include <sys/resource.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -12,9 +10,11 @@
 #include <filesystem>
 #include <fstream>
 #include <memory>
+#include <optional>
 #include <sstream>
 
 #include "base/errors.h"
+#include "base/process.h"
 #include "cli/bench.h"
 #include "cli/common.h"
 #include "encode/video_writer.h"
@@ -44,25 +44,31 @@ struct ChildRun {
   double peak_rss_mib = 0;
 };
 
-// Runs a shell command with output discarded; wall time and the child's peak RSS.
-ChildRun RunChild(const std::string& command) {
+// Output discarded: the child's stdout and stderr go to /dev/null.
+SpawnOptions Quiet() {
+  SpawnOptions options;
+  options.out = Stdio::kNull;
+  options.err = Stdio::kNull;
+  return options;
+}
+
+// Runs `argv` (no shell) with its output discarded; wall time and the child's peak RSS.
+ChildRun RunChild(const std::vector<std::string>& argv) {
   ChildRun run;
   const auto start = Clock::now();
-  pid_t pid = fork();
-  if (pid == 0) {
-    int devnull = open("/dev/null", O_WRONLY);
-    dup2(devnull, STDOUT_FILENO);
-    dup2(devnull, STDERR_FILENO);
-    execl("/bin/sh", "sh", "-c", command.c_str(), static_cast<char*>(nullptr));
-    _exit(127);
-  }
-  int status = 0;
+  ChildProcess child = ChildProcess::Spawn(argv, Quiet());
   rusage usage{};
-  wait4(pid, &status, 0, &usage);
+  const ChildExit status = child.Wait(&usage);
   run.wall_s = Since(start);
-  run.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  run.exit_code = status.ShellCode();
   run.peak_rss_mib = usage.ru_maxrss / 1024.0;
   return run;
+}
+
+// `a` followed by `b`.
+std::vector<std::string> Concat(std::vector<std::string> a, const std::vector<std::string>& b) {
+  a.insert(a.end(), b.begin(), b.end());
+  return a;
 }
 
 // The whole of a text file; "" when it cannot be read.
@@ -87,7 +93,7 @@ std::string MsaaLabel(const std::string& requested, int samples) {
   return requested == "auto" ? "msaa auto (" + std::to_string(samples) + ")" : "msaa " + requested;
 }
 
-bool HaveProgram(const std::string& name) { return RunChild("command -v " + name).exit_code == 0; }
+bool HaveProgram(const std::string& name) { return !FindProgram(name).empty(); }
 
 std::vector<std::string> Split(const std::string& list) {
   std::vector<std::string> out;
@@ -117,9 +123,8 @@ nlohmann::json PeerMujocoRecord(const std::string& model, int frames, const std:
     return {{"skipped", "mujoco-record or xvfb-run missing: tools/install-deps.sh --bench"}};
   }
   const double duration = frames / 25.0 - 1e-6;
-  const std::string cmd = "xvfb-run -a -s '-screen 0 1024x768x24' mujoco-record '" + model + "' " +
-                          std::to_string(duration) + " 25 '" + rgb_out + "'";
-  const ChildRun run = RunChild(cmd);
+  const ChildRun run = RunChild({"xvfb-run", "-a", "-s", "-screen 0 1024x768x24", "mujoco-record",
+                                 model, std::to_string(duration), "25", rgb_out});
   std::error_code ec;
   const auto bytes = fs::file_size(rgb_out, ec);
   const long got = ec ? 0 : static_cast<long>(bytes / (640 * 480 * 3));
@@ -283,9 +288,10 @@ struct RecordRun {
 };
 
 // Runs this binary's `record` with `args` into `dir` (removed afterwards).
-RecordRun RunRecordChild(const std::string& self, const std::string& args, const fs::path& dir) {
+RecordRun RunRecordChild(const std::string& self, const std::vector<std::string>& args,
+                         const fs::path& dir) {
   RecordRun run;
-  run.child = RunChild("'" + self + "' record --quiet " + args + " --out '" + dir.string() + "'");
+  run.child = RunChild(Concat(Concat({self, "record", "--quiet"}, args), {"--out", dir.string()}));
   run.manifest = ReadManifestIn(dir);
   std::error_code ec;
   fs::remove_all(dir, ec);
@@ -300,13 +306,22 @@ int ManifestMsaa(const std::optional<Manifest>& manifest, const std::string& req
   return -1;
 }
 
-std::string AssetsArg(const AssetSource& assets) {
-  return " --assets '" + (assets.kind == "bundled" ? std::string("bundled") : assets.root) + "'";
+std::vector<std::string> AssetsArg(const AssetSource& assets) {
+  return {"--assets", assets.kind == "bundled" ? std::string("bundled") : assets.root};
 }
 
-// True when this binary's record takes --jobs.
+// True when this binary's record takes --jobs (its help names it).
 bool RecordHasJobs(const std::string& self) {
-  return RunChild("'" + self + "' record --help | grep -q -- --jobs").exit_code == 0;
+  SpawnOptions options = Quiet();
+  options.out = Stdio::kPipe;
+  ChildProcess child = ChildProcess::Spawn({self, "record", "--help"}, options);
+  child.channel().CloseOutput();
+  std::string help;
+  while (child.channel().ReadSome()) {
+    while (std::optional<std::string> line = child.channel().TakeLine()) help += *line + "\n";
+  }
+  child.Wait();
+  return help.find("--jobs") != std::string::npos;
 }
 
 // Resident set size (VmRSS) of process `pid` in MiB, or -1 once it has gone.
@@ -327,9 +342,10 @@ nlohmann::json BenchRecord(const AssetSource& assets, const std::string& backend
   const fs::path dir =
       fs::temp_directory_path() / ("fetchscope_bench_record_" + std::to_string(getpid()));
   const int episodes = 4, frames = episodes * 51;
-  const std::string common = "--env-id FetchPush-v4 --policy scripted --episodes " +
-                             std::to_string(episodes) + " --width 640 --height 480" +
-                             AssetsArg(assets);
+  const std::vector<std::string> common =
+      Concat({"--env-id", "FetchPush-v4", "--policy", "scripted", "--episodes",
+              std::to_string(episodes), "--width", "640", "--height", "480"},
+             AssetsArg(assets));
   nlohmann::json rows = nlohmann::json::array();
   std::string first_backend;
   std::printf("%-30s %-10s %s\n", "record (whole process)", "size", "ms/frame   peak RSS");
@@ -339,7 +355,7 @@ nlohmann::json BenchRecord(const AssetSource& assets, const std::string& backend
     for (size_t m = 0; m < msaa_values.size(); ++m) {
       const std::string msaa = msaa_values[m];  // a copy: the list may grow below
       const RecordRun run =
-          RunRecordChild(self, common + " --backend " + backend + " --msaa " + msaa, dir);
+          RunRecordChild(self, Concat(common, {"--backend", backend, "--msaa", msaa}), dir);
       if (run.child.exit_code != 0) {
         rows.push_back(
             {{"backend", backend},
@@ -382,9 +398,10 @@ nlohmann::json BenchRecord(const AssetSource& assets, const std::string& backend
     for (int jobs : {1, 2}) {
       const RecordRun run = RunRecordChild(
           self,
-          "--env-id FetchPush-v4 --policy scripted --episodes " + std::to_string(job_episodes) +
-              " --width 640 --height 480" + AssetsArg(assets) + " --backend " + first_backend +
-              " --jobs " + std::to_string(jobs),
+          Concat(Concat({"--env-id", "FetchPush-v4", "--policy", "scripted", "--episodes",
+                         std::to_string(job_episodes), "--width", "640", "--height", "480"},
+                        AssetsArg(assets)),
+                 {"--backend", first_backend, "--jobs", std::to_string(jobs)}),
           dir);
       if (run.child.exit_code != 0) {
         jobs_rows.push_back(
@@ -415,8 +432,8 @@ nlohmann::json BenchRecord(const AssetSource& assets, const std::string& backend
     const std::string rgb = dir.string() + ".rgb", mp4 = dir.string() + ".mp4";
     nlohmann::json peer = PeerMujocoRecord(GenuineModel(assets, "push.xml"), frames, rgb);
     if (peer.contains("frames") && HaveProgram("ffmpeg")) {
-      const ChildRun enc = RunChild("ffmpeg -y -f rawvideo -pix_fmt rgb24 -s 640x480 -r 25 -i '" +
-                                    rgb + "' -vf vflip '" + mp4 + "'");
+      const ChildRun enc = RunChild({"ffmpeg", "-y", "-f", "rawvideo", "-pix_fmt", "rgb24", "-s",
+                                     "640x480", "-r", "25", "-i", rgb, "-vf", "vflip", mp4});
       const double total = peer["wall_s"].get<double>() + enc.wall_s;
       peer["ffmpeg_wall_s"] = enc.wall_s;
       peer["ffmpeg_peak_rss_mib"] = enc.peak_rss_mib;
@@ -454,34 +471,28 @@ nlohmann::json BenchSoak(const AssetSource& assets, const std::string& backends,
   std::printf("soak: record of %d episodes (%d frames) at 640x480 on %s, RSS every %.1f s\n",
               episodes, episodes * 51, backend.c_str(), interval_s);
   const auto start = Clock::now();
-  pid_t pid = fork();
-  if (pid == 0) {
-    int devnull = open("/dev/null", O_WRONLY);
-    dup2(devnull, STDOUT_FILENO);
-    dup2(devnull, STDERR_FILENO);
-    std::vector<char*> argv;
-    for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-    argv.push_back(nullptr);
-    execv(self.c_str(), argv.data());
-    _exit(127);
+  ChildProcess child;
+  try {
+    child = ChildProcess::Spawn(args, Quiet());
+  } catch (const RunError& e) {
+    throw RunError(std::string("bench soak: cannot start record: ") + e.what());
   }
-  if (pid < 0) throw RunError("bench soak: cannot start record: fork failed");
   // sample the child's resident set until it exits (sampled directly: it is not a shell)
   nlohmann::json samples = nlohmann::json::array();
-  int status = 0;
   rusage usage{};
   double next = 0;
-  while (wait4(pid, &status, WNOHANG, &usage) == 0) {
+  std::optional<ChildExit> status;
+  while (!(status = child.TryWait(&usage))) {
     const double t = Since(start);
     if (t >= next) {
-      const double rss = ReadRssMiB(pid);
+      const double rss = ReadRssMiB(child.pid());
       if (rss >= 0) samples.push_back({{"t_s", t}, {"rss_mib", rss}});
       next += interval_s;
     }
     usleep(20000);
   }
   const double wall = Since(start);
-  const int exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  const int exit_code = status->ShellCode();
   const std::optional<Manifest> manifest = ReadManifestIn(dir);
   std::error_code ec;
   fs::remove_all(dir, ec);
@@ -673,13 +684,15 @@ nlohmann::json BenchNode(const AssetSource& assets, const std::string& backends,
   for (const Case& c : cases) {
     if (c.msaa == "0" && auto_msaa == 0) continue;  // auto already rendered without multisampling
     const int episodes = std::max(8, 4 * c.jobs);
-    const RecordRun run = RunRecordChild(
-        self,
-        "--env-id FetchPush-v4 --policy random --episodes " + std::to_string(episodes) +
-            " --width " + std::to_string(w) + " --height " + std::to_string(h) + AssetsArg(assets) +
-            " --backend " + backend + " --msaa " + c.msaa + " --jobs " + std::to_string(c.jobs) +
-            " --worker-mode " + c.mode,
-        dir);
+    const RecordRun run =
+        RunRecordChild(self,
+                       Concat(Concat({"--env-id", "FetchPush-v4", "--policy", "random",
+                                      "--episodes", std::to_string(episodes), "--width",
+                                      std::to_string(w), "--height", std::to_string(h)},
+                                     AssetsArg(assets)),
+                              {"--backend", backend, "--msaa", c.msaa, "--jobs",
+                               std::to_string(c.jobs), "--worker-mode", c.mode}),
+                       dir);
     const std::string label = "--jobs " + std::to_string(c.jobs) + " " +
                               (c.mode == "process" ? "processes" : "threads") + ", msaa " + c.msaa;
     if (run.child.exit_code != 0) {

@@ -10,6 +10,7 @@
 #include "cli/chapter.h"
 #include "cli/command.h"
 #include "cli/common.h"
+#include "cli/jobs_options.h"
 #include "cli/resolve.h"
 #include "run/episode_scheduler.h"
 #include "src/episode.h"

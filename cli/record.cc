@@ -20,6 +20,7 @@
 #include "base/suggest.h"
 #include "cli/command.h"
 #include "cli/common.h"
+#include "cli/jobs_options.h"
 #include "cli/record_from.h"
 #include "cli/view_options.h"
 #include "encode/episode_sink.h"

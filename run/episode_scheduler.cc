@@ -1,27 +1,20 @@
 #include "run/episode_scheduler.h"
 
-#include <poll.h>
 #include <signal.h>
-#include <sys/prctl.h>
-#include <sys/socket.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
-#include <cerrno>
 #include <chrono>
 #include <condition_variable>
-#include <cstdio>
-#include <cstring>
 #include <mutex>
-#include <set>
 #include <thread>
 
+#include "base/cores.h"
 #include "base/errors.h"
-#include "base/json_util.h"
-#include "cli/common.h"
+#include "base/process.h"
+#include "base/stop_signal.h"
 
-namespace fetchscope::cli {
+namespace fetchscope {
 namespace {
 
 // ---- the wire between a worker process and the parent: one JSON object per line ----
@@ -30,69 +23,9 @@ namespace {
 //                   {"t":"done","episode":K,"result":...}  {"t":"error","message":...,"usage":B}
 // parent -> worker: {"t":"episode","k":K}  {"t":"quit"}
 
-// Writes all of `line`; false when the peer is gone. MSG_NOSIGNAL: no SIGPIPE.
-bool SendLine(int fd, const std::string& line) {
-  size_t done = 0;
-  while (done < line.size()) {
-    const ssize_t n = send(fd, line.data() + done, line.size() - done, MSG_NOSIGNAL);
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) return false;
-    done += static_cast<size_t>(n);
-  }
-  return true;
-}
-
-bool SendMessage(int fd, const nlohmann::json& message) {
-  return SendLine(fd, DumpJson(message, -1) + "\n");
-}
-
-// Reads what is available into `inbox`; false at end of file or on an error.
-bool ReadAvailable(int fd, std::string* inbox) {
-  char buffer[65536];
-  while (true) {
-    const ssize_t n = read(fd, buffer, sizeof(buffer));
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) return false;
-    inbox->append(buffer, static_cast<size_t>(n));
-    return true;
-  }
-}
-
-// Takes the complete lines off the front of `inbox`.
-std::vector<nlohmann::json> TakeMessages(std::string* inbox) {
-  std::vector<nlohmann::json> messages;
-  size_t start = 0, end;
-  while ((end = inbox->find('\n', start)) != std::string::npos) {
-    messages.push_back(nlohmann::json::parse(inbox->begin() + start, inbox->begin() + end));
-    start = end + 1;
-  }
-  inbox->erase(0, start);
-  return messages;
-}
-
-// Blocks for the next whole message (worker side); nullopt when the parent is gone.
-std::optional<nlohmann::json> ReceiveMessage(int fd, std::string* inbox) {
-  while (true) {
-    const size_t end = inbox->find('\n');
-    if (end != std::string::npos) {
-      nlohmann::json message = nlohmann::json::parse(inbox->begin(), inbox->begin() + end);
-      inbox->erase(0, end + 1);
-      return message;
-    }
-    if (!ReadAvailable(fd, inbox)) return std::nullopt;
-  }
-}
-
-// "signal 9 (SIGKILL: Killed)": the number, the name users grep for, and the description.
-std::string SignalName(int sig) {
-  const char* abbrev = sigabbrev_np(sig);
-  const char* description = sigdescr_np(sig);
-  std::string text = "signal " + std::to_string(sig);
-  if (abbrev)
-    text +=
-        std::string(" (SIG") + abbrev + (description ? std::string(": ") + description : "") + ")";
-  return text;
-}
+// How often the parent beats on_progress(0) while no message comes: the progress line stays
+// alive while an episode makes no frames. A timer only: stops end the wait at once.
+constexpr int kBeatMs = 100;
 
 std::string EpisodeList(const std::vector<int>& episodes) {
   std::string out;
@@ -100,11 +33,12 @@ std::string EpisodeList(const std::vector<int>& episodes) {
   return out;
 }
 
-// The channel of a worker process: everything goes to the parent over the socket. Progress is
-// batched (a message per kProgressBatch frames, or when an episode is reported).
+// The channel of a worker process: everything goes to the parent over its socket. Progress is
+// batched (a message per kProgressBatch frames, or when an episode is reported). Done may come
+// from a runner's encoder threads, hence the lock.
 class SocketChannel : public WorkerChannel {
  public:
-  explicit SocketChannel(int fd) : fd_(fd) {}
+  explicit SocketChannel(LineChannel& parent) : parent_(parent) {}
   void Progress(int n) override {
     std::lock_guard<std::mutex> lock(mutex_);
     pending_ += n;
@@ -113,37 +47,37 @@ class SocketChannel : public WorkerChannel {
   void Done(int episode, nlohmann::json result) override {
     std::lock_guard<std::mutex> lock(mutex_);
     FlushLocked();
-    SendMessage(fd_, {{"t", "done"}, {"episode", episode}, {"result", std::move(result)}});
+    parent_.Send({{"t", "done"}, {"episode", episode}, {"result", std::move(result)}});
   }
   bool StopRequested() const override { return StopSignal() != 0; }
   void Send(const nlohmann::json& message) {
     std::lock_guard<std::mutex> lock(mutex_);
     FlushLocked();
-    SendMessage(fd_, message);
+    parent_.Send(message);
   }
 
  private:
   static constexpr int kProgressBatch = 10;
   void FlushLocked() {
     if (pending_ == 0) return;
-    SendMessage(fd_, {{"t", "progress"}, {"n", pending_}});
+    parent_.Send({{"t", "progress"}, {"n", pending_}});
     pending_ = 0;
   }
-  int fd_;
+  LineChannel& parent_;
   std::mutex mutex_;
   int pending_ = 0;
 };
 
 // The body of a worker process. Returns its exit status.
-int WorkerMain(int worker, int fd, const RunnerFactory& factory) {
-  SocketChannel channel(fd);
-  std::string inbox;
+int WorkerMain(int worker, LineChannel& parent, const RunnerFactory& factory) {
+  SocketChannel channel(parent);
   try {
     std::unique_ptr<EpisodeRunner> runner = factory(worker);
     channel.Send({{"t", "ready"}, {"info", runner->Start()}});
     while (true) {
       channel.Send({{"t", "next"}});
-      const std::optional<nlohmann::json> message = ReceiveMessage(fd, &inbox);
+      // only this thread reads the socket; runners' threads only write to it
+      const std::optional<nlohmann::json> message = parent.Receive();
       if (!message || message->at("t") != "episode") break;
       runner->Run(message->at("k").get<int>(), channel);
     }
@@ -162,9 +96,7 @@ int WorkerMain(int worker, int fd, const RunnerFactory& factory) {
 // The parent's view of one worker process.
 struct WorkerProcess {
   int worker = 0;
-  pid_t pid = -1;
-  int fd = -1;
-  std::string inbox;
+  ChildProcess child;  // killed and reaped if the scheduler leaves early (an exception)
   bool alive = true;
   bool reported_error = false;
   std::vector<int> in_hand;  // episodes given and not yet reported
@@ -186,18 +118,21 @@ class ProcessScheduler {
       std::vector<WorkerProcess*> owners;
       for (WorkerProcess& p : procs_) {
         if (!p.alive) continue;
-        fds.push_back({p.fd, POLLIN, 0});
+        fds.push_back({p.child.channel().in_fd(), POLLIN, 0});
         owners.push_back(&p);
       }
-      const int ready = poll(fds.data(), fds.size(), 100);
-      if (ready < 0 && errno != EINTR) throw RunError(std::string("poll: ") + std::strerror(errno));
+      // a stop ends the wait at once, until it has been forwarded
+      const WaitEnd end = WaitForInput(&fds, kBeatMs, /*watch_stop=*/forwarded_ == 0);
+      if (end == WaitEnd::kStop) ForwardStopSignal();
       // a heartbeat: the progress line stays alive while an episode makes no frames
       if (options_.on_progress) options_.on_progress(0);
-      for (size_t i = 0; ready > 0 && i < fds.size(); ++i) {
+      for (size_t i = 0; i < fds.size(); ++i) {
         if (fds[i].revents == 0) continue;
         WorkerProcess& p = *owners[i];
-        const bool open = ReadAvailable(p.fd, &p.inbox);
-        for (const nlohmann::json& message : TakeMessages(&p.inbox)) Handle(p, message);
+        const bool open = p.child.channel().ReadSome();
+        while (std::optional<nlohmann::json> message = p.child.channel().TakeMessage()) {
+          Handle(p, *message);
+        }
         if (!open) Reap(p);
       }
     }
@@ -206,51 +141,37 @@ class ProcessScheduler {
 
  private:
   void Spawn() {
-    std::fflush(stdout);
-    std::fflush(stderr);
-    const pid_t parent = getpid();
+    procs_.reserve(jobs_);
     for (int w = 0; w < jobs_; ++w) {
-      int sockets[2];
-      if (socketpair(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0, sockets) != 0) {
-        throw RunError(std::string("cannot create a worker socket: ") + std::strerror(errno));
-      }
-      const pid_t pid = fork();
-      if (pid < 0)
-        throw RunError(std::string("cannot start a worker process: ") + std::strerror(errno));
-      if (pid == 0) {
-        // The worker: its own process group, so a terminal's Ctrl-C reaches only the parent,
-        // which forwards it; and it dies with the parent, so none is ever orphaned.
-        setpgid(0, 0);
-        prctl(PR_SET_PDEATHSIG, SIGKILL);
-        if (getppid() != parent) _exit(1);  // the parent died before prctl
+      // The worker: its own process group, so a terminal's Ctrl-C reaches only the parent,
+      // which forwards it; and it dies with the parent, so none is ever orphaned (Fork).
+      ChildProcess child = ChildProcess::Fork([this, w](LineChannel& parent) {
         InstallStopSignals();
-        close(sockets[0]);
-        for (const WorkerProcess& other : procs_) close(other.fd);
-        const int status = WorkerMain(w, sockets[1], factory_);
-        std::fflush(stdout);
-        std::fflush(stderr);
-        _exit(status);
-      }
-      setpgid(pid, pid);  // also from this side, so a signal sent at once finds the group
-      close(sockets[1]);
+        for (WorkerProcess& other : procs_) other.child.channel().Close();
+        return WorkerMain(w, parent, factory_);
+      });
+      result_.pids.push_back(child.pid());
       WorkerProcess p;
       p.worker = w;
-      p.pid = pid;
-      p.fd = sockets[0];
+      p.child = std::move(child);
       procs_.push_back(std::move(p));
-      result_.pids.push_back(pid);
     }
   }
 
   // The first SIGINT/SIGTERM is passed to every worker, which ends its episode early.
   void ForwardStopSignal() {
     const int sig = StopSignal();
-    if (sig == 0 || forwarded_ != 0) return;
+    if (sig != 0) Stop(sig);
+  }
+
+  // Stops the run as interrupted by `sig` (SIGINT or SIGTERM), once.
+  void Stop(int sig) {
+    if (forwarded_ != 0) return;
     forwarded_ = sig;
     result_.signal = sig;
     stop_assigning_ = true;
     for (const WorkerProcess& p : procs_) {
-      if (p.alive) kill(p.pid, sig);
+      if (p.alive) p.child.Signal(sig);
     }
   }
 
@@ -263,9 +184,9 @@ class ProcessScheduler {
       if (!stop_assigning_ && next_ < options_.episodes.size()) {
         const int k = options_.episodes[next_++];
         p.in_hand.push_back(k);
-        SendMessage(p.fd, {{"t", "episode"}, {"k", k}});
+        p.child.channel().Send({{"t", "episode"}, {"k", k}});
       } else {
-        SendMessage(p.fd, {{"t", "quit"}});
+        p.child.channel().Send({{"t", "quit"}});
       }
     } else if (type == "progress") {
       if (options_.on_progress) options_.on_progress(message.at("n").get<int>());
@@ -293,19 +214,23 @@ class ProcessScheduler {
   }
 
   void Reap(WorkerProcess& p) {
-    close(p.fd);
-    p.fd = -1;
+    const pid_t pid = p.child.pid();
+    p.child.channel().Close();
     p.alive = false;
-    int status = 0;
-    while (waitpid(p.pid, &status, 0) < 0 && errno == EINTR) {
-    }
+    const ChildExit status = p.child.Wait();
     if (p.reported_error) return;
-    const bool clean = WIFEXITED(status) && WEXITSTATUS(status) == 0;
-    if (clean && p.in_hand.empty()) return;
-    std::string why = WIFSIGNALED(status)
-                          ? "died of " + SignalName(WTERMSIG(status))
-                          : "exited with status " + std::to_string(WEXITSTATUS(status));
-    Fail(p, "worker " + std::to_string(p.worker) + " (pid " + std::to_string(p.pid) + ") " + why,
+    if (status.ok() && p.in_hand.empty()) return;
+    if (status.interrupted()) {
+      // stopped from outside (a hangup, a stop signal before its handler was in place): the
+      // run is interrupted, not failed, and what it had in hand is missing. result.signal
+      // stays SIGINT or SIGTERM, which the commands name: a hangup stops as SIGTERM does.
+      p.in_hand.clear();
+      Stop(status.signal == SIGINT ? SIGINT : SIGTERM);
+      return;
+    }
+    Fail(p,
+         "worker " + std::to_string(p.worker) + " (pid " + std::to_string(pid) + ") " +
+             status.Describe(),
          false);
   }
 
@@ -456,20 +381,6 @@ int ResolveJobs(int jobs, int episodes) {
   return std::max(1, std::min(jobs == 0 ? cores : jobs, std::max(1, episodes)));
 }
 
-void AddJobsOptions(CLI::App* sub, int* jobs, std::string* mode) {
-  sub->add_option("-j,--jobs", *jobs,
-                  "Worker processes, each with its own environment, policy, GL context and "
-                  "encoders (0: one per usable core, affinity mask and cgroup quota counted); "
-                  "outputs are byte-identical to --jobs 1")
-      ->capture_default_str()
-      ->check(CLI::Range(0, 1024));
-  sub->add_option("--worker-mode", *mode,
-                  "process (default) or thread: threads share one process and so one GL driver, "
-                  "which serialises them on NVIDIA; kept for comparison (bench --what node)")
-      ->capture_default_str()
-      ->check(CLI::IsMember({"process", "thread"}));
-}
-
 WorkerMode ParseWorkerMode(const std::string& text) {
   if (text == "process") return WorkerMode::kProcess;
   if (text == "thread") return WorkerMode::kThread;
@@ -489,4 +400,4 @@ std::string DescribeFailures(const ScheduleResult& result) {
   return out;
 }
 
-}  // namespace fetchscope::cli
+}  // namespace fetchscope

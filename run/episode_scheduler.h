@@ -11,7 +11,6 @@
 
 #include <sys/types.h>
 
-#include <CLI/CLI.hpp>
 #include <functional>
 #include <map>
 #include <memory>
@@ -24,7 +23,7 @@
 #include "src/fetch_env.h"
 #include "src/policy.h"
 
-namespace fetchscope::cli {
+namespace fetchscope {
 
 /// What a runner tells the scheduler while it works. Thread-safe.
 class WorkerChannel {
@@ -95,10 +94,12 @@ struct ScheduleResult {
 
 /// Runs `options.episodes` over `options.jobs` workers made by `factory`. Installs the stop
 /// signals (InstallStopSignals) for the duration: SIGINT/SIGTERM end every worker's episode in
-/// progress (reported, shorter), then no new episode starts. After the first failure no new
-/// episode starts either; episodes in progress elsewhere still finish. Worker processes run in
-/// their own process group (a terminal's Ctrl-C reaches the parent, which forwards it) and die
-/// with the parent (PR_SET_PDEATHSIG), so none is left behind.
+/// progress (reported, shorter), then no new episode starts; the parent forwards the signal the
+/// moment it arrives (base/process.h's WaitForInput). A worker process killed by SIGINT, SIGTERM
+/// or SIGHUP stops the run the same way (result.signal), rather than failing it. After the first
+/// failure no new episode starts either; episodes in progress elsewhere still finish. Worker
+/// processes run in their own process group (a terminal's Ctrl-C reaches the parent, which forwards
+/// it) and die with the parent (PR_SET_PDEATHSIG), so none is left behind.
 ScheduleResult RunEpisodes(const ScheduleOptions& options, const RunnerFactory& factory);
 
 /// An environment and a policy that can start any episode of a run exactly as a sequential
@@ -128,13 +129,10 @@ class EpisodeSequence {
 /// `episodes` episodes.
 int ResolveJobs(int jobs, int episodes);
 
-/// Adds --jobs and --worker-mode to `sub`.
-void AddJobsOptions(CLI::App* sub, int* jobs, std::string* mode);
-
 /// Parses --worker-mode: process or thread. Throws UsageError.
 WorkerMode ParseWorkerMode(const std::string& text);
 
 /// A one-line account of the failures for an error message, e.g. "worker 1 (episode 3): ...".
 std::string DescribeFailures(const ScheduleResult& result);
 
-}  // namespace fetchscope::cli
+}  // namespace fetchscope

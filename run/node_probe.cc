@@ -1,15 +1,9 @@
 #include "run/node_probe.h"
 
-#include <fcntl.h>
-#include <sys/wait.h>
-#include <unistd.h>
-
-#include <cerrno>
-#include <cstdio>
-#include <cstring>
+#include <optional>
 
 #include "base/errors.h"
-#include "base/json_util.h"
+#include "base/process.h"
 #include "render/gl_context.h"
 
 namespace fetchscope::cli {
@@ -49,16 +43,7 @@ std::string TestDevices(const ViewOptions& view, GpuChoice* choice) {
 }  // namespace
 
 nlohmann::json RunInChild(const std::function<nlohmann::json()>& body) {
-  int pipe_fds[2];
-  if (pipe2(pipe_fds, O_CLOEXEC) != 0) {
-    throw RunError(std::string("cannot create a pipe: ") + std::strerror(errno));
-  }
-  std::fflush(stdout);
-  std::fflush(stderr);
-  const pid_t pid = fork();
-  if (pid < 0) throw RunError(std::string("cannot fork: ") + std::strerror(errno));
-  if (pid == 0) {
-    close(pipe_fds[0]);
+  ChildProcess child = ChildProcess::Fork([&body](LineChannel& parent) {
     nlohmann::json answer;
     try {
       answer = {{"ok", body()}};
@@ -67,41 +52,27 @@ nlohmann::json RunInChild(const std::function<nlohmann::json()>& body) {
     } catch (const std::exception& e) {
       answer = {{"error", e.what()}, {"usage", false}};
     }
-    const std::string text = DumpJson(answer, -1);
-    size_t done = 0;
-    while (done < text.size()) {
-      const ssize_t n = write(pipe_fds[1], text.data() + done, text.size() - done);
-      if (n < 0 && errno == EINTR) continue;
-      if (n <= 0) break;
-      done += static_cast<size_t>(n);
-    }
-    _exit(0);
+    parent.Send(answer);
+    return 0;
+  });
+  child.channel().CloseOutput();
+  std::optional<nlohmann::json> answer;
+  try {
+    answer = child.channel().Receive();  // nullopt when it died before a whole line
+  } catch (const nlohmann::json::exception&) {
   }
-  close(pipe_fds[1]);
-  std::string text;
-  char buffer[4096];
-  while (true) {
-    const ssize_t n = read(pipe_fds[0], buffer, sizeof(buffer));
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) break;
-    text.append(buffer, static_cast<size_t>(n));
-  }
-  close(pipe_fds[0]);
-  int status = 0;
-  while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
-  }
-  if (WIFSIGNALED(status)) {
-    throw RunError("the device probe died of signal " + std::to_string(WTERMSIG(status)) +
+  const ChildExit status = child.Wait();
+  if (status.signal) {
+    throw RunError("the device probe died of signal " + std::to_string(status.signal) +
                    " (a broken GL or CUDA driver?)");
   }
-  const nlohmann::json answer = nlohmann::json::parse(text, nullptr, /*allow_exceptions=*/false);
-  if (answer.is_discarded()) throw RunError("the device probe answered nothing");
-  if (answer.contains("error")) {
-    const std::string message = answer.at("error");
-    if (answer.value("usage", false)) throw UsageError(message);
+  if (!answer || !answer->is_object()) throw RunError("the device probe answered nothing");
+  if (answer->contains("error")) {
+    const std::string message = answer->at("error");
+    if (answer->value("usage", false)) throw UsageError(message);
     throw RunError(message);
   }
-  return answer.at("ok");
+  return answer->at("ok");
 }
 
 NodeProbe ProbeNode(const ViewOptions& view, const VideoOptions* video) {

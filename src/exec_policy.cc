@@ -1,12 +1,6 @@
 #include "src/exec_policy.h"
 
-#include <fcntl.h>
-#include <poll.h>
-#include <signal.h>
-#include <sys/prctl.h>
-#include <sys/wait.h>
-#include <unistd.h>
-
+#include <algorithm>
 #include <cerrno>
 #include <chrono>
 #include <cmath>
@@ -14,10 +8,12 @@
 #include <cstring>
 #include <functional>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <vector>
 
 #include "base/errors.h"
 #include "base/json_util.h"
+#include "base/process.h"
 #include "src/policy.h"
 
 namespace fetchscope {
@@ -58,58 +54,29 @@ class ExecPolicy : public Policy {
   // The child runs in its own process group, so a terminal's Ctrl-C (sent to fetchscope's
   // foreground group) reaches fetchscope, which stops the run, and not the child; and it dies
   // with the thread that made it (PR_SET_PDEATHSIG: the creating thread, which owns this policy
-  // and lives as long as it), so no child outlives its worker.
+  // and lives as long as it), so no child outlives its worker. The command is the user's shell
+  // text, so it runs under /bin/sh.
   ExecPolicy(std::string command, double timeout_s, std::function<bool()> stop_requested)
       : command_(std::move(command)),
         timeout_s_(timeout_s),
         stop_requested_(std::move(stop_requested)) {
-    int to_child[2], from_child[2];
-    if (pipe2(to_child, O_CLOEXEC) != 0 || pipe2(from_child, O_CLOEXEC) != 0) {
-      throw RunError("exec policy: cannot create pipes: " + std::string(std::strerror(errno)));
+    SpawnOptions options;
+    options.in = Stdio::kPipe;  // Spawn ignores SIGPIPE: a child that exits early is an EPIPE
+    options.out = Stdio::kPipe;
+    options.program = "/bin/sh";
+    options.env = ChildEnvironment();
+    try {
+      child_ = ChildProcess::Spawn({"sh", "-c", command_}, options);
+    } catch (const RunError& e) {
+      throw RunError(std::string("exec policy: ") + e.what());
     }
-    signal(SIGPIPE, SIG_IGN);  // a child that exits early must not kill us: we see EPIPE
-    // everything the child needs is made before fork: only async-signal-safe calls after it
-    const std::vector<std::string> env = ChildEnvironment();
-    std::vector<char*> envp;
-    for (const std::string& e : env) envp.push_back(const_cast<char*>(e.c_str()));
-    envp.push_back(nullptr);
-    const char* argv[] = {"sh", "-c", command_.c_str(), nullptr};
-    const pid_t parent = getpid();
-    pid_ = fork();
-    if (pid_ < 0) throw RunError("exec policy: fork failed: " + std::string(std::strerror(errno)));
-    if (pid_ == 0) {
-      setpgid(0, 0);
-      prctl(PR_SET_PDEATHSIG, SIGKILL);
-      if (getppid() != parent) _exit(127);  // the parent went before prctl
-      // a stop signal fetchscope ignores or handles must not be inherited as ignored
-      signal(SIGINT, SIG_DFL);
-      signal(SIGTERM, SIG_DFL);
-      signal(SIGPIPE, SIG_DFL);
-      dup2(to_child[0], STDIN_FILENO);
-      dup2(from_child[1], STDOUT_FILENO);
-      execve("/bin/sh", const_cast<char* const*>(argv), envp.data());
-      _exit(127);
-    }
-    setpgid(pid_, pid_);  // also from this side, so that the group exists when we return
-    close(to_child[0]);
-    close(from_child[1]);
-    in_ = to_child[1];
-    out_ = from_child[0];
   }
 
   ~ExecPolicy() override {
-    if (in_ >= 0) close(in_);
-    if (out_ >= 0) close(out_);
-    if (pid_ > 0) {
-      // give the child a moment to exit on EOF, then make sure it is gone
-      for (int i = 0; i < 20; ++i) {
-        if (waitpid(pid_, nullptr, WNOHANG) == pid_) return;
-        usleep(10000);
-      }
-      kill(-pid_, SIGKILL);  // the child's group: a shell's own children go too
-      kill(pid_, SIGKILL);
-      waitpid(pid_, nullptr, 0);
-    }
+    // close its input, give it a moment to exit on that, then make sure it is gone (the
+    // group: a shell's own children go too)
+    child_.channel().Close();
+    if (!child_.WaitFor(0.2)) child_.Kill();
   }
 
   Action Act(const Observation& obs, int t) override {
@@ -118,14 +85,7 @@ class ExecPolicy : public Policy {
     msg["observation"] = JsonVector(obs.observation.data(), obs.observation.size());
     msg["achieved_goal"] = JsonVector(obs.achieved_goal.data(), 3);
     msg["desired_goal"] = JsonVector(obs.desired_goal.data(), 3);
-    const std::string line = msg.dump() + "\n";
-    size_t done = 0;
-    while (done < line.size()) {
-      ssize_t n = write(in_, line.data() + done, line.size() - done);
-      if (n < 0 && errno == EINTR) continue;
-      if (n <= 0) throw RunError(Died(t));
-      done += static_cast<size_t>(n);
-    }
+    if (!child_.channel().WriteLine(msg.dump())) throw RunError(Died(t));
     const std::string answer = ReadLine(t);
     try {
       Action a;
@@ -145,16 +105,10 @@ class ExecPolicy : public Policy {
   // The child closed its output: it exited or died. While the run is being stopped that is an
   // interruption (PolicyInterrupted), whatever the child died of; otherwise a failure.
   std::string Died(int t) {
-    int status = 0;
     std::string how = "closed its output";
-    for (int i = 0; i < 50; ++i) {
-      if (waitpid(pid_, &status, WNOHANG) == pid_) {
-        pid_ = -1;
-        how = WIFEXITED(status) ? "exited with status " + std::to_string(WEXITSTATUS(status))
-                                : "was killed by signal " + std::to_string(WTERMSIG(status));
-        break;
-      }
-      usleep(10000);
+    if (const std::optional<ChildExit> status = child_.WaitFor(0.5)) {
+      how = status->exited() ? "exited with status " + std::to_string(status->code)
+                             : "was killed by signal " + std::to_string(status->signal);
     }
     if (stop_requested_ && stop_requested_()) {
       throw PolicyInterrupted("exec policy '" + command_ + "' " + how + " at step " +
@@ -165,17 +119,12 @@ class ExecPolicy : public Policy {
   }
 
   std::string ReadLine(int t) {
+    LineChannel& channel = child_.channel();
     const auto deadline =
         std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s_);
     while (true) {
-      size_t nl = buffer_.find('\n');
-      if (nl != std::string::npos) {
-        std::string line = buffer_.substr(0, nl);
-        buffer_.erase(0, nl + 1);
-        if (!line.empty() && line.back() == '\r') line.pop_back();
-        return line;
-      }
-      if (buffer_.size() > (1 << 16)) {
+      if (std::optional<std::string> line = channel.TakeLine()) return *line;
+      if (channel.buffered() > (1 << 16)) {
         throw RunError("exec policy '" + command_ + "' at step " + std::to_string(t) +
                        ": answer longer than 64 KiB without a newline");
       }
@@ -187,24 +136,19 @@ class ExecPolicy : public Policy {
                        std::to_string(t) + " within " + JsonDouble(timeout_s_).dump() +
                        " s (raise --exec-timeout)");
       }
-      pollfd p{out_, POLLIN, 0};
-      int r = poll(&p, 1, static_cast<int>(std::min<long long>(left, 1000)));
-      if (r < 0 && errno == EINTR) continue;
-      if (r <= 0) continue;
-      char buf[4096];
-      ssize_t n = read(out_, buf, sizeof(buf));
-      if (n < 0 && errno == EINTR) continue;
-      if (n <= 0) throw RunError(Died(t));
-      buffer_.append(buf, static_cast<size_t>(n));
+      // the answer's wait: a stop request does not cut it short (the episode ends at the next
+      // step, as it always has)
+      std::vector<pollfd> fds = {{channel.in_fd(), POLLIN, 0}};
+      const int wait_ms = static_cast<int>(std::min<long long>(left, 1000));
+      if (WaitForInput(&fds, wait_ms, /*watch_stop=*/false) != WaitEnd::kReady) continue;
+      if (!channel.ReadSome()) throw RunError(Died(t));
     }
   }
 
   std::string command_;
   double timeout_s_;
   std::function<bool()> stop_requested_;
-  pid_t pid_ = -1;
-  int in_ = -1, out_ = -1;
-  std::string buffer_;
+  ChildProcess child_;
 };
 
 }  // namespace
