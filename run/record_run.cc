@@ -92,7 +92,7 @@ nlohmann::json RecordRunner::Start() {
           {"readback", renderer_->readback_reason()}};
 }
 
-void RecordRunner::Run(int k, cli::WorkerChannel& channel) {
+void RecordRunner::Run(int k, WorkerChannel& channel) {
   // at most plan.encoders episodes encode at once: wait for the oldest beyond that
   while (!encoders_.empty() &&
          (encoders_.front()->finished() || static_cast<int>(encoders_.size()) >= plan_.encoders)) {
@@ -167,7 +167,7 @@ void RecordRunner::Run(int k, cli::WorkerChannel& channel) {
   encoders_.push_back(std::move(encoder));
 }
 
-void RecordRunner::Finish(cli::WorkerChannel& channel) {
+void RecordRunner::Finish(WorkerChannel& channel) {
   (void)channel;
   while (!encoders_.empty()) {
     encoders_.front()->Join();
@@ -179,7 +179,7 @@ void RecordRunner::Finish(cli::WorkerChannel& channel) {
 // for --from and the hindsight overlay, a replay of recorded actions (the recording's, or
 // those of a first pass run here without rendering) with the hindsight goals sampled first.
 EpisodeRecord RecordRunner::PlayEpisode(int k, const StepCallback& on_step,
-                                        cli::WorkerChannel& channel) {
+                                        WorkerChannel& channel) {
   hindsight_.reset();
   if (!plan_.from && !plan_.hindsight) return sequence_.Play(k, on_step);
   EpisodeRecord first_pass;
@@ -241,10 +241,10 @@ void RecordRunner::AddRelabelled(int t, FrameInfo* info) const {
   info->relabelled_successes = successes;
 }
 
-cli::ScheduleResult RecordEpisodes(const RecordPlan& plan, const cli::ScheduleOptions& schedule) {
+ScheduleResult RecordEpisodes(const RecordPlan& plan, const ScheduleOptions& schedule) {
   LimitLlvmpipeThreads(schedule.jobs);
-  return cli::RunEpisodes(
-      schedule, [&plan](int worker) { return std::make_unique<RecordRunner>(plan, worker); });
+  return RunEpisodes(schedule,
+                     [&plan](int worker) { return std::make_unique<RecordRunner>(plan, worker); });
 }
 
 void LimitLlvmpipeThreads(int jobs) {

@@ -70,7 +70,7 @@ size_t FramePoolSize(int encoders, int steps);
 /// rendering and then replayed with the relabelled goals known. Reports each episode's
 /// manifest entry (with "worker" and "hindsight") through the channel once its files are
 /// written.
-class RecordRunner : public cli::EpisodeRunner {
+class RecordRunner : public EpisodeRunner {
  public:
   /// Makes the environment and policy; `plan` must outlive the runner.
   RecordRunner(const RecordPlan& plan, int worker);
@@ -82,12 +82,12 @@ class RecordRunner : public cli::EpisodeRunner {
   nlohmann::json Start() override;
   /// Plays and renders episode k, handing its frames to a new encoder; returns once rendered
   /// (the encoding may go on), after waiting for the oldest encoder beyond plan.encoders.
-  void Run(int k, cli::WorkerChannel& channel) override;
+  void Run(int k, WorkerChannel& channel) override;
   /// Waits for every encoder.
-  void Finish(cli::WorkerChannel& channel) override;
+  void Finish(WorkerChannel& channel) override;
 
  private:
-  EpisodeRecord PlayEpisode(int k, const StepCallback& on_step, cli::WorkerChannel& channel);
+  EpisodeRecord PlayEpisode(int k, const StepCallback& on_step, WorkerChannel& channel);
   HindsightEpisode SampleEpisodeHindsight(int k, const std::vector<StepRecord>& steps);
   nlohmann::json HindsightCounts(const EpisodeRecord& episode);
   void AddRelabelled(int t, FrameInfo* info) const;
@@ -95,7 +95,7 @@ class RecordRunner : public cli::EpisodeRunner {
   const RecordPlan& plan_;
   const int worker_;
   const EpisodeSinkOptions sink_;
-  cli::EpisodeSequence sequence_;
+  EpisodeSequence sequence_;
   std::unique_ptr<FetchEnv> replay_env_;            // hindsight: the env the replay renders
   std::unique_ptr<cli::EpisodeReplayer> replayer_;  // --from, hindsight
   FetchEnv* render_env_ = nullptr;                  // the env being replayed, while it is
@@ -110,7 +110,7 @@ class RecordRunner : public cli::EpisodeRunner {
 
 /// Records `schedule.episodes` on `schedule.jobs` workers (LimitLlvmpipeThreads first), each
 /// a RecordRunner of `plan`: the scheduler's result, with each episode's manifest entry.
-cli::ScheduleResult RecordEpisodes(const RecordPlan& plan, const cli::ScheduleOptions& schedule);
+ScheduleResult RecordEpisodes(const RecordPlan& plan, const ScheduleOptions& schedule);
 
 /// llvmpipe starts one rasteriser thread per core in every context; with several workers that
 /// oversubscribes the cores, so with `jobs` > 1 each worker rasterises on its own thread instead

@@ -229,7 +229,7 @@ INSTANTIATE_TEST_SUITE_P(
 // ---- RecordRunner in-process (run/record_run.h), with a channel standing in for the scheduler
 
 // Collects what a runner reports, as the scheduler's channel would.
-class CollectingChannel : public cli::WorkerChannel {
+class CollectingChannel : public WorkerChannel {
  public:
   void Progress(int n) override { frames += n; }
   void Done(int episode, nlohmann::json result) override {
