@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include "src/trajectory.h"
+
 namespace fetchscope::cli {
 
 /// A record run as its manifest describes it.
@@ -28,15 +30,8 @@ RecordedRun ReadRunManifest(const std::filesystem::path& manifest_path);
 /// not a folder or holds no manifest.json (saying so when it holds shard manifests instead).
 RecordedRun ReadRunFolder(const std::string& dir);
 
-/// One step of a recorded trajectory, as the compare and report pages need it.
-struct TrajectoryStep {
-  std::vector<double> observation;
-  std::vector<double> achieved_goal;
-  std::vector<double> desired_goal;
-};
-
-/// The steps of the single episode in an episode_NNN.json trajectory file. Throws RunError naming
-/// the file when it is missing or malformed.
+/// The steps of the single episode in an episode_NNN.json trajectory file (ReadTrajectory).
+/// Throws RunError naming the file (and the key) when it is missing or malformed.
 std::vector<TrajectoryStep> ReadEpisodeTrajectory(const std::filesystem::path& path);
 
 /// One video file of an episode in one output format (record --format).
@@ -60,7 +55,7 @@ std::vector<std::string> OtherEpisodeVideos(const nlohmann::json& entry);
 const EpisodeVideo* PlayableVideo(const std::vector<EpisodeVideo>& videos,
                                   const std::filesystem::path& dir);
 
-/// Euclidean distance from achieved to desired goal.
+/// Euclidean distance from achieved to desired goal of a step.
 double GoalDistance(const TrajectoryStep& step);
 
 /// The run's provenance as {label, value} rows: env, seed, policy, assets and their hash, encoder,
