@@ -343,5 +343,65 @@ TEST(Trajectory, ReplayFilesAreTrajectoriesOnlyWhenTheyHoldOne) {
   }
 }
 
+// The sources: episodes played by EpisodeSequence, written, loaded as record --from loads them
+// and replayed by EpisodeReplayer come out the same; an edited reward is caught at its step.
+TEST(EpisodeSource, ARecordingReplaysExactlyAndAnEditIsCaught) {
+  TempDir tmp;
+  const EnvSpec& spec = FindEnvSpec("FetchReach-v4");
+  PolicyContext context;
+  context.seed = 11;
+  EpisodeSequence sequence(std::make_unique<FetchEnv>(spec, ResolveAssets("bundled")),
+                           MakePolicy("random", spec, context), 11, 5);
+  Trajectory written;
+  written.env_id = spec.id;
+  written.seed = 11;
+  written.policy = "random";
+  written.assets = sequence.env().assets();
+  written.episodes.push_back(sequence.Play(0));
+  written.episodes.push_back(sequence.Play(2));  // episode 1's reset is replayed in between
+  const fs::path file = tmp.path() / "run.json";
+  std::ofstream(file) << TrajectoryText(written);
+
+  const TrajectorySource source = LoadTrajectorySource(file.string());
+  EXPECT_EQ(source.env_id, "FetchReach-v4");
+  EXPECT_EQ(source.seed, 11u);
+  EXPECT_EQ(source.max_steps, 5);
+  ASSERT_EQ(source.episodes.size(), 2u);
+  EXPECT_EQ(source.episodes.at(2).file, file.string());
+  EXPECT_EQ(SourceAssets(source), "bundled");
+  FetchEnv env(spec, ResolveAssets("bundled"));
+  EXPECT_NO_THROW(VerifyRecording(env, source));
+  EpisodeReplayer replayer(env, 11);
+  const EpisodeRecord replayed = replayer.Replay(2, source.episodes.at(2).steps, true, "", nullptr);
+  Trajectory again = written;
+  again.episodes = {written.episodes[0], replayed};
+  EXPECT_EQ(TrajectoryText(again), TrajectoryText(written));
+
+  nlohmann::json j = nlohmann::json::parse(TrajectoryText(written));
+  j["episodes"][1]["steps"][4]["reward"] = 0.5;
+  std::ofstream(file) << j.dump();
+  try {
+    FetchEnv fresh(spec, ResolveAssets("bundled"));
+    VerifyRecording(fresh, LoadTrajectorySource(file.string()));
+    FAIL() << "the edit was not caught";
+  } catch (const ReplayMismatch& e) {
+    EXPECT_NE(std::string(e.what()).find(file.string() + ": episode 2 step 4: reward recorded 0.5"),
+              std::string::npos)
+        << e.what();
+  }
+  // two files of different runs are refused
+  const fs::path folder = tmp.path() / "mixed";
+  fs::create_directories(folder);
+  std::ofstream(folder / "episode_000.json") << TrajectoryText(written);
+  written.seed = 12;
+  std::ofstream(folder / "episode_001.json") << TrajectoryText(written);
+  try {
+    LoadTrajectorySource(folder.string());
+    FAIL() << "mixed runs accepted";
+  } catch (const RunError& e) {
+    EXPECT_NE(std::string(e.what()).find("one run at a time"), std::string::npos) << e.what();
+  }
+}
+
 }  // namespace
 }  // namespace fetchscope
