@@ -16,7 +16,6 @@
 #include "base/atomic_file.h"
 #include "base/errors.h"
 #include "base/json_util.h"
-#include "src/policy.h"
 
 namespace fetchscope::cli {
 
@@ -59,27 +58,6 @@ std::string JsonOutPath(const std::string& prefix, const std::string& suffix) {
 
 void WriteJson(const std::string& path, const nlohmann::json& json) {
   WriteFileAtomically(path, DumpJson(json) + "\n");
-}
-
-std::optional<std::vector<int>> ReplayedEpisodes(const std::string& policy, int episodes,
-                                                 const std::string& env_id, uint64_t seed,
-                                                 bool quiet) {
-  std::string file_env, file_seed;
-  std::optional<std::vector<int>> indices = ReplayTrajectoryEpisodes(policy, &file_env, &file_seed);
-  if (!indices) return std::nullopt;
-  if (episodes > 0 && episodes != static_cast<int>(indices->size())) {
-    throw UsageError("--episodes " + std::to_string(episodes) + " disagrees with " + policy +
-                     ", which holds " + std::to_string(indices->size()) +
-                     " episode(s): a trajectory JSON replays all its episodes; drop --episodes");
-  }
-  if (!quiet && (file_env != env_id || file_seed != std::to_string(seed))) {
-    std::fprintf(stderr,
-                 "fetchscope: warning: %s was recorded on %s with --seed %s, this run is %s with "
-                 "--seed %llu: the resets differ, so the recorded trajectory is not reproduced\n",
-                 policy.c_str() + 7, file_env.c_str(), file_seed.c_str(), env_id.c_str(),
-                 static_cast<unsigned long long>(seed));
-  }
-  return indices;
 }
 
 nlohmann::json VersionsJson() {

@@ -35,15 +35,6 @@ void WriteJson(const std::string& path, const nlohmann::json& json);
 /// Versions of fetchscope and MuJoCo, for every output.
 nlohmann::json VersionsJson();
 
-/// For `--policy replay:FILE.json` holding fetchscope's trajectory JSON: the file's episode
-/// indices, ascending, which a run replaying it plays (each under its own index, so with its own
-/// reset); nullopt for any other policy. `episodes` is --episodes when the user gave it
-/// (0: not given): a different count is a UsageError. Warns on stderr (unless `quiet`) when the
-/// file was recorded on another env or seed than `env_id` / `seed`.
-std::optional<std::vector<int>> ReplayedEpisodes(const std::string& policy, int episodes,
-                                                 const std::string& env_id, uint64_t seed,
-                                                 bool quiet);
-
 /// The command line as typed (set by main), recorded in manifests.
 std::string& CommandLine();
 

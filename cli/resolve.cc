@@ -1,6 +1,7 @@
 #include "cli/resolve.h"
 
 #include "base/stop_signal.h"
+#include "src/episode_source.h"
 
 namespace fetchscope::cli {
 
@@ -15,9 +16,9 @@ ResolvedEnv ResolveEnv(const EnvOptions& env, bool with_seed) {
 ResolvedRun ResolveRun(const EnvOptions& env, const EpisodeRequest& request) {
   ResolvedRun run;
   run.env = ResolveEnv(env);
-  if (auto replayed =
-          ReplayedEpisodes(request.policy, request.episodes_given ? request.episodes : 0,
-                           run.env.spec->id, run.env.seed, request.quiet)) {
+  if (auto replayed = ReplayedEpisodes(
+          request.policy, request.episodes_given ? request.episodes : 0, run.env.spec->id,
+          run.env.seed, request.quiet, &run.policy_context.replay_trajectory)) {
     run.episodes = *replayed;
   } else {
     for (int k = 0; k < request.episodes; ++k) run.episodes.push_back(k);

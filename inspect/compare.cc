@@ -33,7 +33,6 @@ using cli::ReadEpisodeTrajectory;
 using cli::ReadRunFolder;
 using cli::RecordedRun;
 using cli::RunProvenance;
-using cli::TrajectoryStep;
 
 std::string EpisodeName(int k) {
   char text[32];
@@ -49,9 +48,9 @@ std::string IndexList(const std::map<int, ManifestEpisode>& episodes) {
 
 // The state compared at a step: observation, achieved goal and desired goal, in that order.
 std::vector<double> StateVector(const TrajectoryStep& step) {
-  std::vector<double> v = step.observation;
-  v.insert(v.end(), step.achieved_goal.begin(), step.achieved_goal.end());
-  v.insert(v.end(), step.desired_goal.begin(), step.desired_goal.end());
+  std::vector<double> v = step.obs.observation;
+  v.insert(v.end(), step.obs.achieved_goal.begin(), step.obs.achieved_goal.end());
+  v.insert(v.end(), step.obs.desired_goal.begin(), step.obs.desired_goal.end());
   return v;
 }
 

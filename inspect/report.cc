@@ -33,23 +33,6 @@ std::string ReadText(const fs::path& path) {
   return text.str();
 }
 
-std::vector<double> Doubles(const json& array, const fs::path& file, const char* what) {
-  if (!array.is_array()) throw RunError("'" + file.string() + "': " + what + " is not a list");
-  std::vector<double> values;
-  values.reserve(array.size());
-  for (const json& v : array) {
-    if (v.is_number()) {
-      values.push_back(v.get<double>());
-    } else if (v.is_string()) {  // JsonDouble writes non-finite values as strings
-      const std::string s = v.get<std::string>();
-      values.push_back(s == "inf" ? HUGE_VAL : s == "-inf" ? -HUGE_VAL : std::nan(""));
-    } else {
-      throw RunError("'" + file.string() + "': " + what + " holds a non-number");
-    }
-  }
-  return values;
-}
-
 // Rounded for plotting: a micrometre is far below what a plot shows, and keeps the page small.
 json Micro(double value) {
   if (!std::isfinite(value)) return JsonDouble(value);
@@ -295,39 +278,13 @@ RecordedRun ReadRunFolder(const std::string& dir) {
 }
 
 std::vector<TrajectoryStep> ReadEpisodeTrajectory(const fs::path& path) {
-  json root;
-  try {
-    root = json::parse(ReadText(path));
-  } catch (const json::parse_error& e) {
-    throw RunError("'" + path.string() + "' is not JSON: " + e.what());
-  }
-  std::vector<TrajectoryStep> steps;
-  try {
-    const json& episodes = root.at("episodes");
-    if (!episodes.is_array() || episodes.empty()) {
-      throw RunError("'" + path.string() + "' holds no episode");
-    }
-    for (const json& s : episodes.at(0).at("steps")) {
-      TrajectoryStep step;
-      step.observation = Doubles(s.at("observation"), path, "observation");
-      step.achieved_goal = Doubles(s.at("achieved_goal"), path, "achieved_goal");
-      step.desired_goal = Doubles(s.at("desired_goal"), path, "desired_goal");
-      steps.push_back(std::move(step));
-    }
-  } catch (const json::exception& e) {
-    throw RunError("'" + path.string() + "' is not a trajectory file: " + e.what());
-  }
-  return steps;
+  Trajectory trajectory = ReadTrajectory(path.string());
+  if (trajectory.episodes.empty()) throw RunError(path.string() + ": holds no episode");
+  return std::move(trajectory.episodes.front().steps);
 }
 
 double GoalDistance(const TrajectoryStep& step) {
-  double sum = 0;
-  const size_t n = std::min(step.achieved_goal.size(), step.desired_goal.size());
-  for (size_t i = 0; i < n; ++i) {
-    const double d = step.achieved_goal[i] - step.desired_goal[i];
-    sum += d * d;
-  }
-  return std::sqrt(sum);
+  return fetchscope::GoalDistance(step.obs.achieved_goal, step.obs.desired_goal);
 }
 
 json ReportData(const RecordedRun& run) {

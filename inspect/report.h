@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "run/manifest.h"
+#include "src/trajectory.h"
 
 namespace fetchscope::cli {
 
@@ -30,15 +31,8 @@ RecordedRun ReadRunManifest(const std::filesystem::path& manifest_path);
 /// not a folder or holds no manifest.json (saying so when it holds shard manifests instead).
 RecordedRun ReadRunFolder(const std::string& dir);
 
-/// One step of a recorded trajectory, as the compare and report pages need it.
-struct TrajectoryStep {
-  std::vector<double> observation;
-  std::vector<double> achieved_goal;
-  std::vector<double> desired_goal;
-};
-
-/// The steps of the single episode in an episode_NNN.json trajectory file. Throws RunError naming
-/// the file when it is missing or malformed.
+/// The steps of the single episode in an episode_NNN.json trajectory file (ReadTrajectory).
+/// Throws RunError naming the file (and the key) when it is missing or malformed.
 std::vector<TrajectoryStep> ReadEpisodeTrajectory(const std::filesystem::path& path);
 
 /// Every other video file the entry names anywhere (such as per-layer videos of record
@@ -50,7 +44,7 @@ std::vector<std::string> OtherEpisodeVideos(const ManifestEpisode& entry);
 const EpisodeVideo* PlayableVideo(const std::vector<EpisodeVideo>& videos,
                                   const std::filesystem::path& dir);
 
-/// Euclidean distance from achieved to desired goal.
+/// Euclidean distance from achieved to desired goal of a step.
 double GoalDistance(const TrajectoryStep& step);
 
 /// The run's provenance as {label, value} rows: env, seed, policy, assets and their hash, encoder,

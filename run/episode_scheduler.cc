@@ -362,20 +362,6 @@ ScheduleResult RunEpisodes(const ScheduleOptions& options, const RunnerFactory& 
   return result;
 }
 
-EpisodeSequence::EpisodeSequence(std::unique_ptr<FetchEnv> env, std::unique_ptr<Policy> policy,
-                                 uint64_t seed, int steps)
-    : env_(std::move(env)), policy_(std::move(policy)), seed_(seed), steps_(steps) {}
-
-EpisodeRecord EpisodeSequence::Play(int k, const StepCallback& on_step) {
-  for (; next_ < k; ++next_) {
-    env_->Reset(next_ == 0 ? std::optional<uint64_t>(seed_) : std::nullopt);
-    policy_->SkipEpisode(steps_);
-  }
-  next_ = k + 1;
-  return RunEpisode(*env_, *policy_, k, k == 0 ? std::optional<uint64_t>(seed_) : std::nullopt,
-                    steps_, on_step);
-}
-
 int ResolveJobs(int jobs, int episodes) {
   const int cores = UsableCores().usable;
   return std::max(1, std::min(jobs == 0 ? cores : jobs, std::max(1, episodes)));

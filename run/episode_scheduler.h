@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "src/episode.h"
+#include "src/episode_source.h"
 #include "src/fetch_env.h"
 #include "src/policy.h"
 
@@ -101,29 +102,6 @@ struct ScheduleResult {
 /// processes run in their own process group (a terminal's Ctrl-C reaches the parent, which forwards
 /// it) and die with the parent (PR_SET_PDEATHSIG), so none is left behind.
 ScheduleResult RunEpisodes(const ScheduleOptions& options, const RunnerFactory& factory);
-
-/// An environment and a policy that can start any episode of a run exactly as a sequential
-/// run would reach it: before episode k it replays the resets and the policy's draws of the
-/// episodes between the last one played and k (a reset draws only from the env's generator).
-class EpisodeSequence {
- public:
-  /// `seed` seeds episode 0's reset; later episodes continue the generator.
-  EpisodeSequence(std::unique_ptr<FetchEnv> env, std::unique_ptr<Policy> policy, uint64_t seed,
-                  int steps);
-  /// Plays episode k (k greater than any played before), calling `on_step` as RunEpisode does.
-  EpisodeRecord Play(int k, const StepCallback& on_step = nullptr);
-
-  FetchEnv& env() { return *env_; }      ///< the environment
-  Policy& policy() { return *policy_; }  ///< the policy
-  int steps() const { return steps_; }   ///< steps per episode
-
- private:
-  std::unique_ptr<FetchEnv> env_;
-  std::unique_ptr<Policy> policy_;
-  uint64_t seed_;
-  int steps_;
-  int next_ = 0;  // the episode the generators stand at
-};
 
 /// The number of workers for --jobs `jobs` (0: one per usable core, UsableCores) and
 /// `episodes` episodes.

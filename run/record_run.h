@@ -52,7 +52,7 @@ struct RecordPlan {
   GpuChoice gpu;                     ///< EGL devices, worker w on devices[w % size]
   int encoders = 1;                  ///< episodes a worker encodes at once
   /// record --from: the episodes to replay (not owned); null: the policy plays them
-  const cli::TrajectorySource* from = nullptr;
+  const TrajectorySource* from = nullptr;
   bool hindsight = false;     ///< the hindsight overlay: run the episode first, then render it
   std::vector<Layer> layers;  ///< --layers beyond rgb (depth, segmentation), in the order given
 };
@@ -97,7 +97,7 @@ class RecordRunner : public EpisodeRunner {
   const EpisodeSinkOptions sink_;
   EpisodeSequence sequence_;
   std::unique_ptr<FetchEnv> replay_env_;            // hindsight: the env the replay renders
-  std::unique_ptr<cli::EpisodeReplayer> replayer_;  // --from, hindsight
+  std::unique_ptr<EpisodeReplayer> replayer_;  // --from, hindsight
   FetchEnv* render_env_ = nullptr;                  // the env being replayed, while it is
   std::optional<HindsightEpisode> hindsight_;  // this episode's relabelling (hindsight overlay)
   std::vector<uint8_t> depth_;                 // the depth layer's millimetres, reused

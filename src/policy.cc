@@ -7,7 +7,7 @@
 #include "src/replay_file.h"
 #include "src/rng.h"
 #include "src/scripted_policy.h"
-#include "src/trajectory_replay.h"
+#include "src/trajectory.h"
 
 namespace fetchscope {
 namespace {
@@ -59,21 +59,24 @@ class ReplayPolicy : public Policy {
 // A trajectory JSON's episodes, each played by its own index.
 class TrajectoryReplayPolicy : public Policy {
  public:
-  TrajectoryReplayPolicy(std::string spec, TrajectoryReplay replay)
-      : spec_(std::move(spec)), replay_(std::move(replay)) {}
-  void BeginEpisode(int episode, const Observation&) override {
-    actions_ = &replay_.episodes.at(episode).actions;
+  TrajectoryReplayPolicy(std::string spec, std::shared_ptr<const Trajectory> trajectory)
+      : spec_(std::move(spec)), trajectory_(std::move(trajectory)) {
+    for (const TrajectoryEpisode& e : trajectory_->episodes) episodes_[e.index] = &e;
   }
-  Action Act(const Observation&, int t) override { return actions_->at(static_cast<size_t>(t)); }
+  void BeginEpisode(int episode, const Observation&) override { episode_ = episodes_.at(episode); }
+  Action Act(const Observation&, int t) override {
+    return *episode_->steps.at(static_cast<size_t>(t) + 1).action;
+  }
   std::string name() const override { return spec_; }
 
  private:
   std::string spec_;
-  TrajectoryReplay replay_;
-  const std::vector<Action>* actions_ = nullptr;
+  std::shared_ptr<const Trajectory> trajectory_;
+  std::map<int, const TrajectoryEpisode*> episodes_;  // into trajectory_, by index
+  const TrajectoryEpisode* episode_ = nullptr;
 };
 
-std::string IndexList(const std::map<int, TrajectoryEpisode>& episodes) {
+std::string IndexList(const std::map<int, const TrajectoryEpisode*>& episodes) {
   std::string s;
   int shown = 0;
   for (const auto& [k, e] : episodes) {
@@ -84,13 +87,19 @@ std::string IndexList(const std::map<int, TrajectoryEpisode>& episodes) {
 }
 
 std::unique_ptr<Policy> MakeTrajectoryReplay(const std::string& spec, const std::string& path,
-                                             TrajectoryReplay replay,
+                                             std::shared_ptr<const Trajectory> trajectory,
                                              const PolicyContext& context) {
+  if (trajectory->episodes.empty()) {
+    throw RunError("replay file " + path + ": holds no episodes");
+  }
+  std::map<int, const TrajectoryEpisode*> episodes;
+  for (const TrajectoryEpisode& e : trajectory->episodes) episodes[e.index] = &e;
   if (!context.replay_dtype.empty()) {
-    for (const auto& [k, e] : replay.episodes) {
-      if (e.dtype != "none" && e.dtype != context.replay_dtype) {
+    for (const auto& [k, e] : episodes) {
+      const std::string dtype = ActionDtype(*e);
+      if (dtype != "none" && dtype != context.replay_dtype) {
         throw UsageError("--replay-dtype " + context.replay_dtype + ": replay file " + path +
-                         " records episode " + std::to_string(k) + " in " + e.dtype +
+                         " records episode " + std::to_string(k) + " in " + dtype +
                          " (its action_dtype); drop --replay-dtype, a trajectory JSON carries its "
                          "own precision");
       }
@@ -102,23 +111,24 @@ std::unique_ptr<Policy> MakeTrajectoryReplay(const std::string& spec, const std:
   }
   const size_t steps = static_cast<size_t>(context.steps_per_episode);
   for (int k : wanted) {
-    const auto it = replay.episodes.find(k);
-    if (it == replay.episodes.end()) {
-      throw RunError("replay file " + path + " holds episode(s) " + IndexList(replay.episodes) +
+    const auto it = episodes.find(k);
+    if (it == episodes.end()) {
+      throw RunError("replay file " + path + " holds episode(s) " + IndexList(episodes) +
                      " but this run plays episode " + std::to_string(k) +
                      " (a trajectory's episodes replay under their own index)");
     }
-    const TrajectoryEpisode& e = it->second;
-    if (e.actions.size() < steps) {
+    const TrajectoryEpisode& e = *it->second;
+    const size_t actions = e.steps.size() - 1;
+    if (actions < steps) {
       throw RunError("replay file " + path + ": episode " + std::to_string(k) + " has " +
-                     std::to_string(e.actions.size()) + " actions" +
+                     std::to_string(actions) + " actions" +
                      (e.complete ? "" : " (it is incomplete: interrupted while recording)") +
                      " but --steps " + std::to_string(steps) + " needs " + std::to_string(steps) +
-                     ": pass --steps " + std::to_string(e.actions.size()) +
+                     ": pass --steps " + std::to_string(actions) +
                      (e.complete ? "" : ", or record that episode again"));
     }
   }
-  return std::make_unique<TrajectoryReplayPolicy>(spec, std::move(replay));
+  return std::make_unique<TrajectoryReplayPolicy>(spec, std::move(trajectory));
 }
 
 // --replay-dtype on rows read from a file: float32 rounds CSV/JSON-lines values to float32;
@@ -149,18 +159,6 @@ void ApplyReplayDtype(std::vector<Action>* rows, const std::string& dtype,
 
 }  // namespace
 
-std::optional<std::vector<int>> ReplayTrajectoryEpisodes(const std::string& spec,
-                                                         std::string* env_id, std::string* seed) {
-  if (spec.rfind("replay:", 0) != 0) return std::nullopt;
-  const std::optional<TrajectoryReplay> replay = ReadTrajectoryReplay(spec.substr(7));
-  if (!replay) return std::nullopt;
-  std::vector<int> indices;
-  for (const auto& [k, e] : replay->episodes) indices.push_back(k);
-  if (env_id) *env_id = replay->env_id;
-  if (seed) *seed = replay->seed;
-  return indices;
-}
-
 std::unique_ptr<Policy> MakePolicy(const std::string& spec, const EnvSpec& env,
                                    const PolicyContext& context) {
   if (!context.replay_dtype.empty()) {
@@ -179,8 +177,12 @@ std::unique_ptr<Policy> MakePolicy(const std::string& spec, const EnvSpec& env,
   if (spec.rfind("replay:", 0) == 0) {
     const std::string path = spec.substr(7);
     if (path.empty()) throw UsageError("--policy replay: needs a file, e.g. replay:actions.csv");
-    if (std::optional<TrajectoryReplay> replay = ReadTrajectoryReplay(path)) {
-      return MakeTrajectoryReplay(spec, path, std::move(*replay), context);
+    if (context.replay_trajectory) {  // read once already (ReadReplayedEpisodes)
+      return MakeTrajectoryReplay(spec, path, context.replay_trajectory, context);
+    }
+    if (std::optional<Trajectory> trajectory = ReadReplayTrajectory(path)) {
+      return MakeTrajectoryReplay(
+          spec, path, std::make_shared<const Trajectory>(std::move(*trajectory)), context);
     }
     std::vector<Action> rows = ReadReplayFile(path);
     ApplyReplayDtype(&rows, context.replay_dtype, path);

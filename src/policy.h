@@ -14,6 +14,8 @@
 
 namespace fetchscope {
 
+struct Trajectory;
+
 /// Chooses an action from the current observation.
 class Policy {
  public:
@@ -50,19 +52,15 @@ struct PolicyContext {
   std::string replay_dtype;
   /// The episodes the run plays (replay checks the file has them); empty: 0 .. episodes-1.
   std::vector<int> episode_indices;
+  /// For replay:FILE.json: the trajectory already read (ReadReplayedEpisodes), so that the
+  /// file is parsed once; null: MakePolicy reads it.
+  std::shared_ptr<const Trajectory> replay_trajectory;
 };
 
 /// Builds a policy from `--policy`: random | zero | scripted | replay:FILE | exec:CMD.
 /// Throws UsageError for an unknown name (listing the accepted ones), RunError for a bad file.
 std::unique_ptr<Policy> MakePolicy(const std::string& spec, const EnvSpec& env,
                                    const PolicyContext& context);
-
-/// For `replay:FILE.json` holding fetchscope's trajectory JSON: the file's episode indices,
-/// ascending (a run replaying it plays those episodes, each with its own reset); nullopt for
-/// any other policy. Throws RunError for a malformed trajectory file.
-std::optional<std::vector<int>> ReplayTrajectoryEpisodes(const std::string& spec,
-                                                         std::string* env_id = nullptr,
-                                                         std::string* seed = nullptr);
 
 /// --replay-dtype's help.
 inline constexpr const char* kReplayDtypeHelp =

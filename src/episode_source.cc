@@ -1,0 +1,217 @@
+#include "src/episode_source.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <regex>
+
+namespace fetchscope {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string Num(double v) {
+  char buf[40];
+  std::snprintf(buf, sizeof(buf), "%.17g", v);
+  return buf;
+}
+
+void AddFile(const std::string& file, TrajectorySource* source, bool first) {
+  Trajectory trajectory;
+  try {
+    trajectory = ReadTrajectory(file);
+  } catch (const RunError& e) {
+    throw RunError(std::string("--from: ") + e.what());
+  }
+  if (first) {
+    source->env_id = trajectory.env_id;
+    source->seed = trajectory.seed;
+    source->policy = trajectory.policy;
+    source->assets = trajectory.assets;
+  } else if (trajectory.env_id != source->env_id || trajectory.seed != source->seed) {
+    throw RunError("--from: " + file + " is " + trajectory.env_id + " seed " +
+                   std::to_string(trajectory.seed) + ", the other files " + source->env_id +
+                   " seed " + std::to_string(source->seed) + ": one run at a time");
+  }
+  for (TrajectoryEpisode& episode : trajectory.episodes) {
+    const int index = episode.index;
+    if (source->episodes.count(index)) {
+      throw RunError("--from: episode " + std::to_string(index) + " appears twice (" +
+                     source->episodes[index].file + ", " + file + ")");
+    }
+    source->max_steps = std::max(source->max_steps, static_cast<int>(episode.steps.size()) - 1);
+    source->episodes.emplace(index, std::move(episode));
+  }
+}
+
+}  // namespace
+
+EpisodeSequence::EpisodeSequence(std::unique_ptr<FetchEnv> env, std::unique_ptr<Policy> policy,
+                                 uint64_t seed, int steps)
+    : env_(std::move(env)), policy_(std::move(policy)), seed_(seed), steps_(steps) {}
+
+EpisodeRecord EpisodeSequence::Play(int k, const StepCallback& on_step) {
+  for (; next_ < k; ++next_) {
+    env_->Reset(next_ == 0 ? std::optional<uint64_t>(seed_) : std::nullopt);
+    policy_->SkipEpisode(steps_);
+  }
+  next_ = k + 1;
+  return RunEpisode(*env_, *policy_, k, k == 0 ? std::optional<uint64_t>(seed_) : std::nullopt,
+                    steps_, on_step);
+}
+
+TrajectorySource LoadTrajectorySource(const std::string& path) {
+  TrajectorySource source;
+  source.path = path;
+  std::error_code ec;
+  if (fs::is_directory(path, ec)) {
+    std::vector<std::string> files;
+    const std::regex name("episode_[0-9]+\\.json");
+    for (const auto& entry : fs::directory_iterator(path, ec)) {
+      if (entry.is_regular_file() && std::regex_match(entry.path().filename().string(), name)) {
+        files.push_back(entry.path().string());
+      }
+    }
+    std::sort(files.begin(), files.end());
+    if (files.empty()) {
+      throw UsageError("--from '" + path +
+                       "' holds no episode_NNN.json; accepted: a run folder of record, or one "
+                       "trajectory JSON file");
+    }
+    for (size_t i = 0; i < files.size(); ++i) AddFile(files[i], &source, i == 0);
+  } else if (fs::is_regular_file(path, ec)) {
+    AddFile(path, &source, true);
+  } else {
+    throw UsageError("--from '" + path +
+                     "' does not exist; accepted: a run folder of record, or one trajectory JSON "
+                     "file");
+  }
+  if (source.episodes.empty()) throw RunError("--from: " + path + " holds no episodes");
+  return source;
+}
+
+std::string SourceAssets(const TrajectorySource& source) {
+  const std::string& kind = source.assets.kind;
+  if (kind.empty() || kind == "bundled") return "bundled";
+  return source.assets.root.empty() ? "bundled" : source.assets.root;
+}
+
+std::string FirstDifference(const StepRecord& replayed, const StepRecord& recorded) {
+  auto diff = [](const std::string& what, double a, double b) {
+    if (a == b || (std::isnan(a) && std::isnan(b))) return std::string();
+    return what + " recorded " + Num(b) + ", replayed " + Num(a) +
+           " (difference replayed - recorded " + Num(a - b) + ")";
+  };
+  const auto& ro = replayed.obs.observation;
+  const auto& co = recorded.obs.observation;
+  if (ro.size() != co.size()) {
+    return "observation has " + std::to_string(ro.size()) + " values replayed, " +
+           std::to_string(co.size()) + " recorded";
+  }
+  for (size_t i = 0; i < ro.size(); ++i) {
+    std::string d = diff("observation[" + std::to_string(i) + "]", ro[i], co[i]);
+    if (!d.empty()) return d;
+  }
+  for (int i = 0; i < 3; ++i) {
+    std::string d = diff("achieved_goal[" + std::to_string(i) + "]", replayed.obs.achieved_goal[i],
+                         recorded.obs.achieved_goal[i]);
+    if (!d.empty()) return d;
+    d = diff("desired_goal[" + std::to_string(i) + "]", replayed.obs.desired_goal[i],
+             recorded.obs.desired_goal[i]);
+    if (!d.empty()) return d;
+  }
+  if (replayed.reward && recorded.reward) {
+    std::string d = diff("reward", *replayed.reward, *recorded.reward);
+    if (!d.empty()) return d;
+  }
+  if (replayed.is_success != recorded.is_success) {
+    return std::string("is_success recorded ") + (recorded.is_success ? "true" : "false") +
+           ", replayed " + (replayed.is_success ? "true" : "false");
+  }
+  return "";
+}
+
+EpisodeRecord EpisodeReplayer::Replay(int k, const std::vector<StepRecord>& recorded,
+                                      bool recorded_complete, const std::string& check,
+                                      const StepCallback& on_step) {
+  if (k < next_) next_ = 0;  // start over from the seeded reset
+  for (; next_ < k; ++next_) env_.Reset(next_ == 0 ? std::optional<uint64_t>(seed_) : std::nullopt);
+  next_ = k + 1;
+  EpisodeRecord episode;
+  episode.index = k;
+  episode.complete = false;  // until the last recorded step is replayed
+  StepRecord row;
+  row.obs = env_.Reset(k == 0 ? std::optional<uint64_t>(seed_) : std::nullopt);
+  row.is_success = env_.IsSuccess(row.obs.achieved_goal, row.obs.desired_goal);
+  auto verify = [&](const StepRecord& replayed, size_t t) {
+    if (check.empty()) return;
+    const std::string d = FirstDifference(replayed, recorded[t]);
+    if (!d.empty()) {
+      throw ReplayMismatch("record --from: " + check + ": episode " + std::to_string(k) + " step " +
+                           std::to_string(t) + ": " + d + "; " +
+                           (t == 0 ? "the reset differs: another env, seed, assets or "
+                                     "fetchscope version?"
+                                   : "the recording was edited, or the physics differs"));
+    }
+  };
+  verify(row, 0);
+  episode.steps.push_back(row);
+  const bool whole = recorded_complete;
+  if (recorded.size() == 1) episode.complete = whole;
+  if (on_step && !on_step(episode.steps.back(), nullptr)) return episode;
+  for (size_t t = 1; t < recorded.size(); ++t) {
+    const Action& action = *recorded[t].action;
+    StepResult result = env_.Step(action);
+    StepRecord r;
+    r.t = static_cast<int>(t);
+    r.obs = result.obs;
+    r.action = action;
+    r.reward = result.reward;
+    r.is_success = result.is_success;
+    verify(r, t);
+    episode.episode_return += result.reward;
+    episode.steps.push_back(std::move(r));
+    if (t + 1 == recorded.size()) episode.complete = whole;
+    if (on_step && !on_step(episode.steps.back(), &result)) break;
+  }
+  return episode;
+}
+
+void VerifyRecording(FetchEnv& env, const TrajectorySource& source) {
+  EpisodeReplayer replayer(env, source.seed);
+  for (const auto& [k, episode] : source.episodes) {
+    replayer.Replay(k, episode.steps, episode.complete, episode.file, nullptr);
+  }
+}
+
+std::optional<std::vector<int>> ReplayedEpisodes(const std::string& policy, int episodes,
+                                                 const std::string& env_id, uint64_t seed,
+                                                 bool quiet,
+                                                 std::shared_ptr<const Trajectory>* trajectory) {
+  if (policy.rfind("replay:", 0) != 0) return std::nullopt;
+  const std::string path = policy.substr(7);
+  std::optional<Trajectory> read = ReadReplayTrajectory(path);
+  if (!read) return std::nullopt;
+  if (read->episodes.empty()) throw RunError("replay file " + path + ": holds no episodes");
+  std::vector<int> indices;
+  for (const TrajectoryEpisode& e : read->episodes) indices.push_back(e.index);
+  std::sort(indices.begin(), indices.end());
+  if (episodes > 0 && episodes != static_cast<int>(indices.size())) {
+    throw UsageError("--episodes " + std::to_string(episodes) + " disagrees with " + policy +
+                     ", which holds " + std::to_string(indices.size()) +
+                     " episode(s): a trajectory JSON replays all its episodes; drop --episodes");
+  }
+  if (!quiet && (read->env_id != env_id || read->seed != seed)) {
+    std::fprintf(stderr,
+                 "fetchscope: warning: %s was recorded on %s with --seed %llu, this run is %s "
+                 "with --seed %llu: the resets differ, so the recorded trajectory is not "
+                 "reproduced\n",
+                 path.c_str(), read->env_id.c_str(), static_cast<unsigned long long>(read->seed),
+                 env_id.c_str(), static_cast<unsigned long long>(seed));
+  }
+  if (trajectory) *trajectory = std::make_shared<const Trajectory>(std::move(*read));
+  return indices;
+}
+
+}  // namespace fetchscope

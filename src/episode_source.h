@@ -1,0 +1,114 @@
+// Where episodes come from: played live by a policy (EpisodeSequence), or replayed from a
+// recording (EpisodeReplayer over a TrajectorySource, record --from; the hindsight overlay
+// replays an episode it has just played). Every source starts episode k from the reset a
+// sequential run reaches there, so an episode is the same whichever worker plays it.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "base/errors.h"
+#include "src/episode.h"
+#include "src/fetch_env.h"
+#include "src/policy.h"
+#include "src/trajectory.h"
+
+namespace fetchscope {
+
+/// An environment and a policy that can start any episode of a run exactly as a sequential
+/// run would reach it: before episode k it replays the resets and the policy's draws of the
+/// episodes between the last one played and k (a reset draws only from the env's generator).
+class EpisodeSequence {
+ public:
+  /// `seed` seeds episode 0's reset; later episodes continue the generator.
+  EpisodeSequence(std::unique_ptr<FetchEnv> env, std::unique_ptr<Policy> policy, uint64_t seed,
+                  int steps);
+  /// Plays episode k (k greater than any played before), calling `on_step` as RunEpisode does.
+  EpisodeRecord Play(int k, const StepCallback& on_step = nullptr);
+
+  FetchEnv& env() { return *env_; }      ///< the environment
+  Policy& policy() { return *policy_; }  ///< the policy
+  int steps() const { return steps_; }   ///< steps per episode
+
+ private:
+  std::unique_ptr<FetchEnv> env_;
+  std::unique_ptr<Policy> policy_;
+  uint64_t seed_;
+  int steps_;
+  int next_ = 0;  // the episode the generators stand at
+};
+
+/// Recorded episodes to replay (record --from): one trajectory file, or every episode_NNN.json
+/// of a run folder, which must all be one run (one env id and seed).
+struct TrajectorySource {
+  std::string path;                           ///< as given
+  std::string env_id;                         ///< trajectory env_id
+  uint64_t seed = 0;                          ///< trajectory seed (episode 0's reset)
+  std::string policy;                         ///< the policy that made it (for the manifest)
+  AssetSource assets;                         ///< trajectory assets (kind, root, sha256, origin)
+  std::map<int, TrajectoryEpisode> episodes;  ///< by index; each names the file it came from
+  int max_steps = 0;                          ///< the longest episode's steps
+};
+
+/// Reads a trajectory JSON file, or every episode_NNN.json of a run folder. Throws UsageError
+/// for a path that is neither, RunError naming the file and key (ReadTrajectory) for content
+/// that is not a fetchscope trajectory, and for files that mix env ids or seeds or repeat an
+/// episode. Messages start with "--from".
+TrajectorySource LoadTrajectorySource(const std::string& path);
+
+/// The --assets value that reproduces `source`: "bundled" for bundled assets, else the
+/// recorded folder.
+std::string SourceAssets(const TrajectorySource& source);
+
+/// Replays recorded episodes on one environment: episode k starts from the reset the run made
+/// (episode 0's reset seeded with `seed`, the others continuing the generator: the resets in
+/// between are replayed, as EpisodeSequence does), then steps the recorded actions.
+class EpisodeReplayer {
+ public:
+  EpisodeReplayer(FetchEnv& env, uint64_t seed) : env_(env), seed_(seed) {}
+  /// Replays episode `k` with the actions of `recorded` (steps 1..), calling `on_step` as
+  /// RunEpisode does. With `check` set, each replayed observation, reward and success flag must
+  /// equal the recorded ones exactly; the first that does not throws ReplayMismatch naming
+  /// `check` (the file), the episode, the step, the value and the difference. The result is
+  /// complete only when `recorded_complete` and every recorded step was replayed (`on_step`
+  /// may stop it early).
+  EpisodeRecord Replay(int k, const std::vector<StepRecord>& recorded, bool recorded_complete,
+                       const std::string& check, const StepCallback& on_step);
+
+ private:
+  FetchEnv& env_;
+  uint64_t seed_;
+  int next_ = 0;  // the episode whose reset the generator stands before
+};
+
+/// The message of a replayed step that differs from the recording (see EpisodeReplayer); one
+/// line, which record prints alone.
+struct ReplayMismatch : RunError {
+  using RunError::RunError;
+};
+
+/// Where replay and recording differ first in one step, or "" when they agree: e.g.
+/// "observation[3] recorded 1.3, replayed 1.2 (difference replayed - recorded -0.1)".
+std::string FirstDifference(const StepRecord& replayed, const StepRecord& recorded);
+
+/// Replays every episode of `source` on `env` (no rendering) and checks each step as
+/// EpisodeReplayer does: an edited recording stops the run before anything is written. Throws
+/// ReplayMismatch.
+void VerifyRecording(FetchEnv& env, const TrajectorySource& source);
+
+/// For `--policy replay:FILE.json` holding a trajectory: the file's episode indices, ascending,
+/// which a run replaying it plays (each under its own index, so with its own reset); nullopt
+/// for any other policy. `episodes` is --episodes when the user gave it (0: not given): a
+/// different count is a UsageError. Warns on stderr (unless `quiet`) when the file was recorded
+/// on another env or seed than `env_id` / `seed`. With `trajectory`, the file as read goes
+/// there (for PolicyContext::replay_trajectory: one read of the file per run). Throws RunError
+/// naming the file and key for a malformed trajectory.
+std::optional<std::vector<int>> ReplayedEpisodes(
+    const std::string& policy, int episodes, const std::string& env_id, uint64_t seed, bool quiet,
+    std::shared_ptr<const Trajectory>* trajectory = nullptr);
+
+}  // namespace fetchscope
