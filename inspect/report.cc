@@ -25,14 +25,6 @@ namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-std::string ReadText(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw RunError("cannot read '" + path.string() + "'");
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
 // Rounded for plotting: a micrometre is far below what a plot shows, and keeps the page small.
 json Micro(double value) {
   if (!std::isfinite(value)) return JsonDouble(value);

@@ -10,7 +10,6 @@
 
 #include "base/cores.h"
 #include "base/suggest.h"
-#include "cli/record_from.h"  // transitional: TrajectorySource, EpisodeReplayer
 #include "render/layers.h"
 
 namespace fetchscope {
@@ -197,8 +196,8 @@ EpisodeRecord RecordRunner::PlayEpisode(int k, const StepCallback& on_step,
   if (plan_.hindsight) hindsight_ = SampleEpisodeHindsight(k, *script);
   if (!replayer_) {
     if (!plan_.from) replay_env_ = std::make_unique<FetchEnv>(*plan_.spec, plan_.assets);
-    replayer_ = std::make_unique<EpisodeReplayer>(plan_.from ? sequence_.env() : *replay_env_,
-                                                       plan_.seed);
+    replayer_ =
+        std::make_unique<EpisodeReplayer>(plan_.from ? sequence_.env() : *replay_env_, plan_.seed);
   }
   // the replay renders from the env of sequence_ (--from) or replay_env_ (hindsight)
   render_env_ = plan_.from ? &sequence_.env() : replay_env_.get();

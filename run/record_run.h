@@ -24,16 +24,11 @@
 #include "run/episode_scheduler.h"
 #include "src/assets.h"
 #include "src/env_spec.h"
+#include "src/episode_source.h"
 #include "src/hindsight.h"
 #include "src/policy.h"
 
 namespace fetchscope {
-
-// transitional: record --from's recording and replayer are still in cli/record_from.h
-namespace cli {
-struct TrajectorySource;
-class EpisodeReplayer;
-}  // namespace cli
 
 /// Everything the parent decided before the workers start; workers only read it.
 struct RecordPlan {
@@ -96,9 +91,9 @@ class RecordRunner : public EpisodeRunner {
   const int worker_;
   const EpisodeSinkOptions sink_;
   EpisodeSequence sequence_;
-  std::unique_ptr<FetchEnv> replay_env_;            // hindsight: the env the replay renders
+  std::unique_ptr<FetchEnv> replay_env_;       // hindsight: the env the replay renders
   std::unique_ptr<EpisodeReplayer> replayer_;  // --from, hindsight
-  FetchEnv* render_env_ = nullptr;                  // the env being replayed, while it is
+  FetchEnv* render_env_ = nullptr;             // the env being replayed, while it is
   std::optional<HindsightEpisode> hindsight_;  // this episode's relabelling (hindsight overlay)
   std::vector<uint8_t> depth_;                 // the depth layer's millimetres, reused
   // Lifetime order: the GL context outlives the renderer; encoders go first (they hold frames).
