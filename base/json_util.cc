@@ -4,6 +4,8 @@
 #include <cmath>
 #include <cstdlib>
 
+#include "base/atomic_file.h"
+
 namespace fetchscope {
 namespace {
 
@@ -123,6 +125,10 @@ std::string DumpJson(const nlohmann::json& value, int indent) {
   std::string out;
   Write(value, indent, 0, out);
   return out;
+}
+
+void WriteJson(const std::string& path, const nlohmann::json& json) {
+  WriteFileAtomically(path, DumpJson(json) + "\n");
 }
 
 }  // namespace fetchscope

@@ -27,4 +27,8 @@ std::string FormatDouble(double value);
 /// strings becomes U+FFFD rather than an exception. No trailing newline.
 std::string DumpJson(const nlohmann::json& value, int indent = 2);
 
+/// Writes `json` (DumpJson) with a trailing newline to `path` atomically: a temporary name, then a
+/// rename, so the file appears whole or not at all. Throws RunError naming the path.
+void WriteJson(const std::string& path, const nlohmann::json& json);
+
 }  // namespace fetchscope

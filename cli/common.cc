@@ -56,14 +56,6 @@ std::string JsonOutPath(const std::string& prefix, const std::string& suffix) {
   return prefix + "_" + suffix + ".json";
 }
 
-void WriteJson(const std::string& path, const nlohmann::json& json) {
-  WriteFileAtomically(path, DumpJson(json) + "\n");
-}
-
-nlohmann::json VersionsJson() {
-  return {{"fetchscope", FETCHSCOPE_VERSION}, {"mujoco", mj_versionString()}};
-}
-
 std::string& CommandLine() {
   static std::string line;
   return line;

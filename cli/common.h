@@ -9,7 +9,9 @@
 #include <vector>
 
 #include "base/cores.h"
+#include "base/json_util.h"
 #include "base/stop_signal.h"
+#include "src/versions.h"
 
 namespace fetchscope::cli {
 
@@ -28,12 +30,6 @@ uint64_t ParseSeed(const std::string& text);
 
 /// `--json-out P` naming: P itself if it ends in .json, else P + "_" + suffix + ".json".
 std::string JsonOutPath(const std::string& prefix, const std::string& suffix);
-
-/// Writes JSON atomically (temporary name, then rename) with a trailing newline.
-void WriteJson(const std::string& path, const nlohmann::json& json);
-
-/// Versions of fetchscope and MuJoCo, for every output.
-nlohmann::json VersionsJson();
 
 /// The command line as typed (set by main), recorded in manifests.
 std::string& CommandLine();

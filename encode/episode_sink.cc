@@ -19,9 +19,6 @@ double Since(Clock::time_point t) {
 }
 
 // JSON as every output writes it: atomically, with a trailing newline.
-void WriteJsonFile(const std::string& path, const nlohmann::json& json) {
-  WriteFileAtomically(path, DumpJson(json) + "\n");
-}
 
 }  // namespace
 
@@ -182,7 +179,7 @@ void EpisodeEncoder::Finalize() {
                                {"policy", o.policy},
                                {"assets", AssetsJson(o.assets)},
                                {"episodes", nlohmann::json::array({EpisodeJson(episode_)})}};
-  WriteJsonFile((fs::path(o.out) / (name_ + ".json")).string(), trajectory);
+  WriteJson((fs::path(o.out) / (name_ + ".json")).string(), trajectory);
   const nlohmann::json layers = FinishLayers();
   const double write_s = Since(t0);
   const bool success = episode_.steps.back().is_success;
@@ -244,7 +241,7 @@ nlohmann::json EpisodeEncoder::FinishLayers() {
     }
     if (layer == Layer::kSegmentation) {
       const std::string legend = name_ + "_segmentation_legend.json";
-      WriteJsonFile((fs::path(options_.out) / legend).string(), legend_);
+      WriteJson((fs::path(options_.out) / legend).string(), legend_);
       entry["legend"] = legend;
     }
     layers[LayerName(layer)] = std::move(entry);

@@ -556,7 +556,7 @@ void WriteAnatomyCard(const std::string& dir, const AnatomyCardOptions& o, GlCon
       {"image", "ch01_anatomy.png"},   {"width", card_width},     {"height", h},
       {"text_pixels", st.text_pixels}, {"line_width", st.leader}, {"panels", panels_json},
       {"labels", labels_json},         {"markers", markers_json}};
-  WriteFileAtomically(sidecar, DumpJson(labels) + "\n");
+  WriteJson(sidecar, labels);
   std::printf("wrote %s\nwrote %s\n", png.c_str(), sidecar.c_str());
 }
 

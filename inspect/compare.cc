@@ -24,15 +24,6 @@ namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
 // report and the HTML pages are still in namespace cli
-using cli::EmbeddedUplotVersion;
-using cli::GoalDistance;
-using cli::HtmlPage;
-using cli::PageKind;
-using cli::PlayableVideo;
-using cli::ReadEpisodeTrajectory;
-using cli::ReadRunFolder;
-using cli::RecordedRun;
-using cli::RunProvenance;
 
 std::string EpisodeName(int k) {
   char text[32];

@@ -31,10 +31,6 @@ namespace {
 constexpr char kStateLayer[] = "state differs (physics or model)";
 constexpr char kPixelLayer[] = "state equal, pixels differ (renderer or camera)";
 
-void WriteJson(const std::string& path, const nlohmann::json& json) {
-  WriteFileAtomically(path, DumpJson(json) + "\n");
-}
-
 bool HoldsAssets(const fs::path& dir) {
   std::error_code ec;
   return fs::is_regular_file(dir / "fetch" / "reach.xml", ec);

@@ -9,7 +9,7 @@
 #include "web_uplot_css.h"
 #include "web_uplot_js.h"
 
-namespace fetchscope::cli {
+namespace fetchscope {
 namespace {
 
 std::string Text(const unsigned char* bytes, std::size_t size) {
@@ -95,4 +95,4 @@ std::string HtmlPage(PageKind kind, const std::string& title, const nlohmann::js
   return html;
 }
 
-}  // namespace fetchscope::cli
+}  // namespace fetchscope

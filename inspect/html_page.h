@@ -7,7 +7,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-namespace fetchscope::cli {
+namespace fetchscope {
 
 /// Which script draws the page from its data.
 enum class PageKind { kReport, kCompare };
@@ -22,4 +22,4 @@ const char* EmbeddedUplotVersion();
 /// Returns {low, high}; {0, 1} when n is 0.
 std::pair<double, double> WilsonInterval(int successes, int n, double z = 1.959963984540054);
 
-}  // namespace fetchscope::cli
+}  // namespace fetchscope

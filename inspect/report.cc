@@ -19,7 +19,7 @@
 #include "run/run_files.h"
 #include "src/env_spec.h"
 
-namespace fetchscope::cli {
+namespace fetchscope {
 namespace {
 
 namespace fs = std::filesystem;
@@ -481,4 +481,4 @@ void WriteRunReportOrWarn(const fs::path& manifest_path, bool quiet) {
   }
 }
 
-}  // namespace fetchscope::cli
+}  // namespace fetchscope

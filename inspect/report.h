@@ -11,7 +11,7 @@
 #include "run/manifest.h"
 #include "src/trajectory.h"
 
-namespace fetchscope::cli {
+namespace fetchscope {
 
 /// A record run as its manifest describes it.
 struct RecordedRun {
@@ -62,4 +62,4 @@ std::filesystem::path WriteRunReport(const RecordedRun& run);
 /// on stderr ("fetchscope: warning: ..."), never a failed run. Prints the path unless quiet.
 void WriteRunReportOrWarn(const std::filesystem::path& manifest_path, bool quiet);
 
-}  // namespace fetchscope::cli
+}  // namespace fetchscope

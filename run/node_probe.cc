@@ -6,7 +6,7 @@
 #include "base/process.h"
 #include "render/gl_context.h"
 
-namespace fetchscope::cli {
+namespace fetchscope {
 namespace {
 
 // True when resolving `view`'s GPU request touches EGL devices at all.
@@ -107,4 +107,4 @@ NodeProbe ProbeNode(const ViewOptions& view, const VideoOptions* video) {
   return node;
 }
 
-}  // namespace fetchscope::cli
+}  // namespace fetchscope

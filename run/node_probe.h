@@ -11,7 +11,7 @@
 #include "encode/video_writer.h"
 #include "render/view.h"
 
-namespace fetchscope::cli {
+namespace fetchscope {
 
 /// The node facts a run decides once, in the parent.
 struct NodeProbe {
@@ -31,4 +31,4 @@ NodeProbe ProbeNode(const ViewOptions& view, const VideoOptions* video);
 /// RunError naming the signal.
 nlohmann::json RunInChild(const std::function<nlohmann::json()>& body);
 
-}  // namespace fetchscope::cli
+}  // namespace fetchscope

@@ -7,7 +7,7 @@
 
 #include "base/errors.h"
 
-namespace fetchscope::cli {
+namespace fetchscope {
 namespace {
 
 double SteadySeconds() {
@@ -114,4 +114,4 @@ void ProgressReporter::Done(const std::string& summary) {
   std::fflush(o_.out);
 }
 
-}  // namespace fetchscope::cli
+}  // namespace fetchscope

@@ -15,7 +15,7 @@
 #include <functional>
 #include <string>
 
-namespace fetchscope::cli {
+namespace fetchscope {
 
 class ProgressReporter {
  public:
@@ -60,4 +60,4 @@ class ProgressReporter {
   int logged_percent_ = 0;  // log mode: the last multiple of log_percent_step printed
 };
 
-}  // namespace fetchscope::cli
+}  // namespace fetchscope

@@ -43,12 +43,12 @@ TEST(ProgressReporterTest, LogLinesEveryTenPercentAndEveryThirtySeconds) {
   std::FILE* out = std::tmpfile();
   ASSERT_NE(out, nullptr);
   double now = 100;
-  cli::ProgressReporter::Options o;
+  ProgressReporter::Options o;
   o.label = "record";
   o.episodes = 20;
   o.frames_per_episode = 51;
   o.out = out;
-  cli::ProgressReporter progress(o, [&] { return now; });
+  ProgressReporter progress(o, [&] { return now; });
   // episode 1 of 20 is 5%: no line; episode 2 is 10%: a line
   now += 1;
   progress.Frames(51);
@@ -92,12 +92,12 @@ TEST(ProgressReporterTest, TerminalRedrawsOneLineAndQuietPrintsNothing) {
   std::FILE* out = std::tmpfile();
   ASSERT_NE(out, nullptr);
   double now = 0;
-  cli::ProgressReporter::Options o;
+  ProgressReporter::Options o;
   o.episodes = 2;
   o.frames_per_episode = 10;
   o.terminal = true;
   o.out = out;
-  cli::ProgressReporter progress(o, [&] { return now; });
+  ProgressReporter progress(o, [&] { return now; });
   now = 1;
   progress.Frames(10);
   progress.EpisodeDone();
@@ -114,7 +114,7 @@ TEST(ProgressReporterTest, TerminalRedrawsOneLineAndQuietPrintsNothing) {
   o.quiet = true;
   o.terminal = false;
   o.out = quiet_out;
-  cli::ProgressReporter quiet(o, [&] { return now; });
+  ProgressReporter quiet(o, [&] { return now; });
   quiet.Frames(20);
   quiet.EpisodeDone();
   quiet.EpisodeDone();

@@ -62,16 +62,16 @@ double Distance(const json& step) {
 
 TEST(WilsonIntervalTest, MatchesPublishedValues) {
   // Wilson (1927) / Newcombe (1998) table: 8 of 10 -> 0.4902 .. 0.9433; 0 of 10 -> 0 .. 0.2775
-  auto [lo, hi] = cli::WilsonInterval(8, 10);
+  auto [lo, hi] = WilsonInterval(8, 10);
   EXPECT_NEAR(lo, 0.4902, 5e-5);
   EXPECT_NEAR(hi, 0.9433, 5e-5);
-  std::tie(lo, hi) = cli::WilsonInterval(0, 10);
+  std::tie(lo, hi) = WilsonInterval(0, 10);
   EXPECT_DOUBLE_EQ(lo, 0.0);
   EXPECT_NEAR(hi, 0.2775, 5e-5);
-  std::tie(lo, hi) = cli::WilsonInterval(10, 10);
+  std::tie(lo, hi) = WilsonInterval(10, 10);
   EXPECT_NEAR(lo, 0.7225, 5e-5);
   EXPECT_DOUBLE_EQ(hi, 1.0);
-  std::tie(lo, hi) = cli::WilsonInterval(0, 0);
+  std::tie(lo, hi) = WilsonInterval(0, 0);
   EXPECT_EQ(lo, 0.0);
   EXPECT_EQ(hi, 1.0);
 }
@@ -165,7 +165,7 @@ TEST_F(ReportTest, RecordWritesAPageWhoseDataIsTheManifestsAndTrajectories) {
   }
   EXPECT_EQ(data["summary"]["successes"], successes);
   EXPECT_EQ(data["summary"]["complete"], 3);
-  const auto [lo, hi] = cli::WilsonInterval(successes, 3);
+  const auto [lo, hi] = WilsonInterval(successes, 3);
   EXPECT_DOUBLE_EQ(data["summary"]["wilson_low"].get<double>(), lo);
   EXPECT_DOUBLE_EQ(data["summary"]["wilson_high"].get<double>(), hi);
   EXPECT_EQ(data["running_success"]["n"].size(), 3u);

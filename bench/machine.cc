@@ -5,10 +5,10 @@
 #include <fstream>
 #include <string>
 
-#include "cli/bench.h"
-#include "cli/common.h"
+#include "base/cores.h"
+#include "bench/bench.h"
 
-namespace fetchscope::cli {
+namespace fetchscope::bench {
 
 nlohmann::json MachineJson() {
   std::string cpu = "unknown";
@@ -36,4 +36,4 @@ nlohmann::json MachineJson() {
           {"kernel", u.release}};
 }
 
-}  // namespace fetchscope::cli
+}  // namespace fetchscope::bench

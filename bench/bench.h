@@ -6,7 +6,7 @@
 
 #include "src/assets.h"
 
-namespace fetchscope::cli {
+namespace fetchscope::bench {
 
 /// Peak resident set size of this process so far, MiB.
 double PeakRssMiB();
@@ -34,4 +34,4 @@ nlohmann::json BenchNode(const AssetSource& assets, const std::string& backends,
 nlohmann::json BenchSoak(const AssetSource& assets, const std::string& backends, int target_frames,
                          double interval_s);
 
-}  // namespace fetchscope::cli
+}  // namespace fetchscope::bench
