@@ -173,13 +173,14 @@ void EpisodeEncoder::Finalize() {
   const SheetImage sheet = MakeContactSheet(title, tiles_);
   WritePng((fs::path(o.out) / (name_ + "_sheet.png")).string(), sheet.width, sheet.height, 3, 8,
            sheet.rgb.data());
-  // the trajectory's env fields come from the spec and assets, as TrajectoryJson writes them
-  nlohmann::json trajectory = {{"env_id", o.env_id},
-                               {"seed", o.seed},
-                               {"policy", o.policy},
-                               {"assets", AssetsJson(o.assets)},
-                               {"episodes", nlohmann::json::array({EpisodeJson(episode_)})}};
-  WriteJson((fs::path(o.out) / (name_ + ".json")).string(), trajectory);
+  // the episode's trajectory file, through the one trajectory writer
+  Trajectory trajectory;
+  trajectory.env_id = o.env_id;
+  trajectory.seed = o.seed;
+  trajectory.policy = o.policy;
+  trajectory.assets = o.assets;
+  trajectory.episodes = {episode_};
+  WriteFileAtomically((fs::path(o.out) / (name_ + ".json")).string(), TrajectoryText(trajectory));
   const nlohmann::json layers = FinishLayers();
   const double write_s = Since(t0);
   const bool success = episode_.steps.back().is_success;

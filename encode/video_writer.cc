@@ -17,6 +17,9 @@
 #include "base/errors.h"
 #include "base/suggest.h"
 #include "encode/av_handles.h"
+#include "encode/av_log.h"
+#include "encode/video_files.h"
+#include "encode/video_options.h"
 
 extern "C" {
 #include <libavfilter/avfilter.h>
@@ -32,176 +35,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr int kMaxDimension = 8192;
-constexpr int kMaxFps = 1000;
-constexpr const char* kAcceptedCodecs = "auto, libx264, h264_nvenc";
-constexpr int kMaxGifFps = 50;
-constexpr int kMinGifWidth = 16;
-constexpr int kMaxGifWidth = 4096;
-constexpr std::array<const char*, 10> kX264Presets = {
-    "ultrafast", "superfast", "veryfast", "faster",   "fast",
-    "medium",    "slow",      "slower",   "veryslow", "placebo"};
-// The nearest NVENC preset (p1 fastest .. p7 best) for each x264 name above.
-constexpr std::array<const char*, 10> kNvencPresets = {"p1", "p1", "p2", "p3", "p3",
-                                                       "p4", "p5", "p6", "p7", "p7"};
-
-// FFmpeg logs through a process-wide callback. Ours prints nothing (encoders
-// and the muxer are chatty) and keeps the last error line of each thread, so
-// a failure can quote FFmpeg's own reason. It must not throw: C calls it.
-thread_local char t_last_av_error[512];
-
-void CaptureAvLog(void* context, int level, const char* format, va_list args) noexcept {
-  if (level > AV_LOG_ERROR) return;
-  char line[sizeof(t_last_av_error)];
-  int print_prefix = 0;
-  if (av_log_format_line2(context, level, format, args, line, sizeof(line), &print_prefix) < 0) {
-    return;
-  }
-  std::size_t length = std::strlen(line);
-  while (length > 0 && (line[length - 1] == '\n' || line[length - 1] == ' ')) line[--length] = '\0';
-  if (length > 0) std::memcpy(t_last_av_error, line, length + 1);
-}
-
-void InstallAvLogCapture() {
-  static std::once_flag once;
-  std::call_once(once, [] { av_log_set_callback(CaptureAvLog); });
-}
-
-// Forgets earlier messages so the next one quoted belongs to this failure.
-void ClearLastAvError() { t_last_av_error[0] = '\0'; }
-
-// FFmpeg's last logged error for this thread when there is one (it says
-// more, e.g. "Cannot load libcuda.so.1"), else the text for `code`.
-std::string DescribeAvError(int code) {
-  if (t_last_av_error[0] != '\0') return t_last_av_error;
-  char buffer[AV_ERROR_MAX_STRING_SIZE] = {};
-  av_strerror(code, buffer, sizeof(buffer));
-  return buffer;
-}
-
 std::string Quoted(const std::string& s) { return "'" + s + "'"; }
-
-int PresetIndex(const std::string& preset) {
-  for (std::size_t i = 0; i < kX264Presets.size(); ++i) {
-    if (preset == kX264Presets[i]) return static_cast<int>(i);
-  }
-  return -1;
-}
-
-void ValidateOptions(const VideoOptions& options) {
-  auto in_range = [](int value, int low, int high) { return value >= low && value <= high; };
-  if (!in_range(options.width, 1, kMaxDimension) || !in_range(options.height, 1, kMaxDimension)) {
-    throw UsageError(
-        "video size " + std::to_string(options.width) + "x" + std::to_string(options.height) +
-        " is out of range: width and height must be 1.." + std::to_string(kMaxDimension));
-  }
-  if (!in_range(options.fps, 1, kMaxFps)) {
-    throw UsageError("video fps " + std::to_string(options.fps) + " is out of range: accepted 1.." +
-                     std::to_string(kMaxFps));
-  }
-  if (options.codec != "auto" && options.codec != "libx264" && options.codec != "h264_nvenc") {
-    throw UsageError("unknown video codec " + Quoted(options.codec) + ": accepted " +
-                     kAcceptedCodecs);
-  }
-  if (!in_range(options.crf, 0, 51)) {
-    throw UsageError(
-        "video crf " + std::to_string(options.crf) +
-        " is out of range: accepted 0..51 (lower is better quality, 23 is the default)");
-  }
-  if (options.format != "mp4" && options.format != "webm" && options.format != "gif") {
-    throw UsageError("unknown video format " + Quoted(options.format) + ": accepted " +
-                     kVideoFormats);
-  }
-  if (!in_range(options.gif_fps, 1, kMaxGifFps)) {
-    throw UsageError("GIF fps " + std::to_string(options.gif_fps) +
-                     " is out of range: accepted 1.." + std::to_string(kMaxGifFps) +
-                     " (GIF delays are whole centiseconds; browsers slow anything faster)");
-  }
-  if (!in_range(options.gif_width, kMinGifWidth, kMaxGifWidth)) {
-    throw UsageError("GIF width " + std::to_string(options.gif_width) +
-                     " is out of range: accepted " + std::to_string(kMinGifWidth) + ".." +
-                     std::to_string(kMaxGifWidth) + " pixels");
-  }
-  for (const auto& [key, value] : options.metadata) {
-    if (key.empty() || key.find_first_of("=;\n") != std::string::npos) {
-      throw UsageError("video metadata key " + Quoted(key) +
-                       " is not usable: give a non-empty name without '=', ';' or newlines");
-    }
-  }
-  if (!options.preset.empty() && PresetIndex(options.preset) < 0) {
-    std::string accepted;
-    for (const char* name : kX264Presets)
-      accepted += (accepted.empty() ? "" : ", ") + std::string(name);
-    throw UsageError("unknown video preset " + Quoted(options.preset) + ": accepted " + accepted);
-  }
-}
-
-// The folder that holds `path` ("." for a bare file name).
-fs::path FolderOf(const fs::path& path) {
-  return path.parent_path().empty() ? fs::path(".") : path.parent_path();
-}
-
-// Fails early, with the folder named, when the output folder cannot take the file.
-void CheckOutputFolder(const fs::path& final_path) {
-  const fs::path folder = FolderOf(final_path);
-  std::error_code error;
-  const fs::file_status status = fs::status(folder, error);
-  if (!fs::exists(status)) {
-    throw RunError("cannot write video " + Quoted(final_path.string()) + ": folder " +
-                   Quoted(folder.string()) + " does not exist");
-  }
-  if (!fs::is_directory(status)) {
-    throw RunError("cannot write video " + Quoted(final_path.string()) + ": " +
-                   Quoted(folder.string()) + " is not a folder");
-  }
-  if (fs::is_directory(final_path, error)) {
-    throw RunError("cannot write video " + Quoted(final_path.string()) + ": it is a folder");
-  }
-}
-
-// ".<stem>.partial.<ext>" beside the final file: hidden, and never mistaken for
-// a finished video by a glob on "*_000.mp4".
-fs::path TemporaryPathFor(const fs::path& final_path, const std::string& format) {
-  return final_path.parent_path() /
-         ("." + final_path.stem().string() + ".partial." + VideoFormatExtension(format));
-}
-
-// The GIF form of the tags: one comment, "key=value; key=value".
-std::string GifComment(const std::vector<std::pair<std::string, std::string>>& metadata) {
-  std::string comment;
-  for (const auto& [key, value] : metadata) {
-    comment += (comment.empty() ? "" : "; ") + key + "=" + value;
-  }
-  return comment;
-}
-
-// Inserts a GIF89a comment extension holding `comment` after the header, the logical screen
-// descriptor and the global colour table of the GIF file at `path` (FFmpeg's GIF muxer writes
-// no comment; its demuxer, and so ffprobe, reads one as the tag "comment").
-void InsertGifComment(const fs::path& path, const std::string& comment) {
-  std::ifstream in(path, std::ios::binary);
-  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  in.close();
-  if (bytes.size() < 13 || bytes.compare(0, 6, "GIF89a") != 0) {
-    throw RunError("cannot tag GIF " + Quoted(path.string()) + ": not a GIF89a file");
-  }
-  const auto flags = static_cast<unsigned char>(bytes[10]);
-  const std::size_t table = (flags & 0x80) ? 3u << ((flags & 7) + 1) : 0;
-  const std::size_t at = 13 + table;
-  if (at > bytes.size()) throw RunError("cannot tag GIF " + Quoted(path.string()) + ": truncated");
-  std::string block = "\x21\xfe";  // extension introducer, comment label
-  for (std::size_t i = 0; i < comment.size(); i += 255) {
-    const std::string piece = comment.substr(i, 255);
-    block += static_cast<char>(piece.size());
-    block += piece;
-  }
-  block += '\0';  // block terminator
-  bytes.insert(at, block);
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-  out.close();
-  if (!out) throw RunError("cannot write GIF " + Quoted(path.string()));
-}
 
 // Frees a filter graph and every filter in it.
 struct FilterGraphDeleter {
@@ -287,7 +121,7 @@ VideoWriter::Impl::Impl(const std::string& path, const VideoOptions& opts)
       options(opts),
       encoded_width((opts.width + 1) & ~1),
       encoded_height((opts.height + 1) & ~1) {
-  ValidateOptions(options);
+  ValidateVideoOptions(options);
   if (options.preset.empty()) options.preset = kDefaultVideoPreset;
   if (path.empty()) {
     throw UsageError("video path is empty: give a file name ending in ." +
@@ -416,7 +250,7 @@ bool VideoWriter::Impl::TryOpenEncoder(const std::string& name, std::string* fai
   if (name == "h264_nvenc") {
     // Constant-quality VBR is NVENC's nearest match to x264's crf (cq 0 means
     // "automatic" there, so crf 0 asks for the best fixed quality instead).
-    codec_options.Set("preset", kNvencPresets[preset_index]);
+    codec_options.Set("preset", NvencPresetFor(preset_index));
     codec_options.Set("rc", "vbr");
     codec_options.Set("cq", std::to_string(std::max(options.crf, 1)));
     context->bit_rate = 0;
@@ -718,43 +552,8 @@ int VideoWriter::encoded_width() const { return impl_->encoded_width; }
 int VideoWriter::encoded_height() const { return impl_->encoded_height; }
 const std::string& VideoWriter::path() const { return impl_->final_path; }
 
-void ValidateVideoOptions(const VideoOptions& options) { ValidateOptions(options); }
-
-std::vector<std::string> ParseVideoFormats(const std::string& list) {
-  static const std::vector<std::string> kKnown = {"mp4", "webm", "gif"};
-  std::vector<std::string> formats;
-  for (const std::string& entry : SplitCommaList(list)) {  // "mp4, gif" as "mp4,gif"
-    if (std::find(kKnown.begin(), kKnown.end(), entry) == kKnown.end()) {
-      throw UsageError("unknown --format " + Quoted(entry) + " in " + Quoted(list) +
-                       DidYouMean(entry, kKnown) + ": accepted a comma list of " + kVideoFormats);
-    }
-    if (std::find(formats.begin(), formats.end(), entry) != formats.end()) {
-      throw UsageError("--format " + Quoted(list) + " names " + entry +
-                       " twice: give each format once");
-    }
-    formats.push_back(entry);
-  }
-  return formats;
-}
-
-std::string VideoFormatExtension(const std::string& format) {
-  return format == "webm" ? "webm" : format == "gif" ? "gif" : "mp4";
-}
-
-int GifFrameCount(int frames, int fps, int gif_fps) {
-  if (frames <= 0) return 0;
-  if (gif_fps >= fps) return frames;
-  // frames 0 and the first at or after each later 1/gif_fps tick: ticks 0 .. floor((N-1) G / F)
-  return static_cast<int>(static_cast<long>(frames - 1) * gif_fps / fps) + 1;
-}
-
-bool NvidiaDevicePresent() {
-  std::error_code error;
-  return fs::exists("/dev/nvidiactl", error);
-}
-
 VideoCodecDecision DecideVideoCodec(const VideoOptions& options) {
-  ValidateOptions(options);
+  ValidateVideoOptions(options);
   if (options.codec == "libx264") return {"libx264", "requested"};
   if (options.codec == "auto" && !NvidiaDevicePresent()) {
     return {"libx264", "auto: no NVIDIA GPU here (no /dev/nvidiactl), so no NVENC"};
