@@ -20,19 +20,22 @@
 namespace fetchscope::cli {
 
 void AddEnvOptions(CLI::App* sub, EnvOptions* options, bool with_seed) {
-  sub->add_option("--env-id", options->env_id,
-                  "FetchReach-v4, FetchReachDense-v4, FetchPush[Dense]-v4, "
-                  "FetchPickAndPlace[Dense]-v4, FetchSlide[Dense]-v4, or auto (FetchReachDense-v4)")
-      ->capture_default_str();
+  options->env_id_option =
+      sub->add_option(
+             "--env-id", options->env_id,
+             "FetchReach-v4, FetchReachDense-v4, FetchPush[Dense]-v4, "
+             "FetchPickAndPlace[Dense]-v4, FetchSlide[Dense]-v4, or auto (FetchReachDense-v4)")
+          ->capture_default_str();
   sub->add_option("--assets", options->assets,
                   "bundled (our models/), auto ($FETCHSCOPE_ASSETS, else an installed "
                   "gymnasium_robotics, else bundled), or a Gymnasium-Robotics envs/assets folder")
       ->capture_default_str();
   if (with_seed) {
-    sub->add_option("--seed", options->seed,
-                    "env.reset(seed=S) for the first episode (later episodes continue the "
-                    "generator) and action_space.seed(S) for the random policy")
-        ->capture_default_str();
+    options->seed_option =
+        sub->add_option("--seed", options->seed,
+                        "env.reset(seed=S) for the first episode (later episodes continue the "
+                        "generator) and action_space.seed(S) for the random policy")
+            ->capture_default_str();
   }
 }
 

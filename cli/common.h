@@ -20,6 +20,10 @@ struct EnvOptions {
   std::string env_id = "auto";     ///< a v4 id or auto (FetchReachDense-v4)
   std::string assets = "bundled";  ///< bundled | auto | DIR
   std::string seed = "0";          ///< non-negative integer, parsed by ParseSeed
+  /// The options as added by AddEnvOptions (null where not added): whether the command line
+  /// named them, once parsed (a replayed trajectory JSON brings its own env and seed).
+  const CLI::Option* env_id_option = nullptr;
+  const CLI::Option* seed_option = nullptr;
 };
 
 /// Adds --env-id/--assets (and --seed when with_seed) to `sub`.

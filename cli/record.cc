@@ -22,6 +22,7 @@
 #include "cli/common.h"
 #include "cli/jobs_options.h"
 #include "cli/record_from.h"
+#include "cli/resolve.h"
 #include "cli/view_options.h"
 #include "encode/episode_sink.h"
 #include "encode/video_writer.h"
@@ -505,6 +506,7 @@ Command AddRecord(CLI::App& app) {
   return {sub, [o, sub] {
             o->episodes_given = sub->count("--episodes") > 0;
             if (!o->from.empty()) return RunRecordFrom(*o, *sub, CommandLine());
+            ApplyReplayedEnv(o->policy, &o->env);  // replay:FILE.json brings its env and seed
             return RunRecord(*o, CommandLine());
           }};
 }

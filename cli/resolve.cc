@@ -5,6 +5,14 @@
 
 namespace fetchscope::cli {
 
+void ApplyReplayedEnv(const std::string& policy, EnvOptions* env) {
+  if (policy.rfind("replay:", 0) != 0) return;
+  const std::optional<Trajectory> file = ReadReplayTrajectory(policy.substr(7));
+  if (!file) return;  // a CSV, .npy or JSON-lines action file: no env of its own
+  if (!env->env_id_option || env->env_id_option->count() == 0) env->env_id = file->env_id;
+  if (!env->seed_option || env->seed_option->count() == 0) env->seed = std::to_string(file->seed);
+}
+
 ResolvedEnv ResolveEnv(const EnvOptions& env, bool with_seed) {
   ResolvedEnv resolved;
   resolved.spec = &FindEnvSpec(env.env_id);
@@ -13,7 +21,9 @@ ResolvedEnv ResolveEnv(const EnvOptions& env, bool with_seed) {
   return resolved;
 }
 
-ResolvedRun ResolveRun(const EnvOptions& env, const EpisodeRequest& request) {
+ResolvedRun ResolveRun(const EnvOptions& options, const EpisodeRequest& request) {
+  EnvOptions env = options;
+  ApplyReplayedEnv(request.policy, &env);
   ResolvedRun run;
   run.env = ResolveEnv(env);
   if (auto replayed = ReplayedEpisodes(

@@ -13,6 +13,12 @@
 
 namespace fetchscope::cli {
 
+/// For `--policy replay:FILE.json` holding fetchscope's trajectory JSON: the env and seed the file
+/// was recorded with replace --env-id and --seed where the command line does not name them, so
+/// the replay reproduces the recording. Where it names others, ReplayedEpisodes refuses the run
+/// naming both. Any other policy leaves `env` as it is.
+void ApplyReplayedEnv(const std::string& policy, EnvOptions* env);
+
 /// --env-id, --seed and --assets, resolved (bad values are UsageError/RunError naming them).
 struct ResolvedEnv {
   const EnvSpec* spec = nullptr;  ///< the v4 id (auto: FetchReachDense-v4)

@@ -202,13 +202,13 @@ std::optional<std::vector<int>> ReplayedEpisodes(const std::string& policy, int 
                      ", which holds " + std::to_string(indices.size()) +
                      " episode(s): a trajectory JSON replays all its episodes; drop --episodes");
   }
-  if (!quiet && (read->env_id != env_id || read->seed != seed)) {
-    std::fprintf(stderr,
-                 "fetchscope: warning: %s was recorded on %s with --seed %llu, this run is %s "
-                 "with --seed %llu: the resets differ, so the recorded trajectory is not "
-                 "reproduced\n",
-                 path.c_str(), read->env_id.c_str(), static_cast<unsigned long long>(read->seed),
-                 env_id.c_str(), static_cast<unsigned long long>(seed));
+  (void)quiet;  // a different env or seed changes the result: refused, never a warning
+  if (read->env_id != env_id || read->seed != seed) {
+    throw UsageError(path + " was recorded on " + read->env_id + " with --seed " +
+                     std::to_string(read->seed) + ", but this run names --env-id " + env_id +
+                     " --seed " + std::to_string(seed) +
+                     ": a trajectory JSON replays its own env and seed; drop --env-id and --seed "
+                     "(or name the file's)");
   }
   if (trajectory) *trajectory = std::make_shared<const Trajectory>(std::move(*read));
   return indices;

@@ -103,8 +103,9 @@ void VerifyRecording(FetchEnv& env, const TrajectorySource& source);
 /// For `--policy replay:FILE.json` holding a trajectory: the file's episode indices, ascending,
 /// which a run replaying it plays (each under its own index, so with its own reset); nullopt
 /// for any other policy. `episodes` is --episodes when the user gave it (0: not given): a
-/// different count is a UsageError. Warns on stderr (unless `quiet`) when the file was recorded
-/// on another env or seed than `env_id` / `seed`. With `trajectory`, the file as read goes
+/// different count is a UsageError, and so is a file recorded on another env or seed than
+/// `env_id` / `seed` (it would not reproduce the recording; `quiet` hides nothing). With
+/// `trajectory`, the file as read goes
 /// there (for PolicyContext::replay_trajectory: one read of the file per run). Throws RunError
 /// naming the file and key for a malformed trajectory.
 std::optional<std::vector<int>> ReplayedEpisodes(
