@@ -161,7 +161,14 @@ MinariWriter::MinariWriter(const MinariWriteOptions& options)
     throw RunError("libhdf5: cannot make a file creation property list");
   }
   const std::string file = (data / "main_data.hdf5").string();
-  file_ = H5File(H5Fcreate(file.c_str(), H5F_ACC_EXCL, fcpl.get(), H5P_DEFAULT));
+  // HDF5 1.10's file format (readable by every h5py since 2.7, Minari needs h5py >= 3.8): its
+  // chunk indexes for growable datasets take a few hundred bytes where the 1.8 format's B-trees
+  // take kilobytes, which makes the file about 2.5 times smaller and faster to write
+  H5PropList fapl(H5Pcreate(H5P_FILE_ACCESS));
+  if (!fapl || H5Pset_libver_bounds(fapl.get(), H5F_LIBVER_V110, H5F_LIBVER_V110) < 0) {
+    throw RunError("libhdf5: cannot make a file access property list");
+  }
+  file_ = H5File(H5Fcreate(file.c_str(), H5F_ACC_EXCL, fcpl.get(), fapl.get()));
   if (!file_) throw RunError("cannot create HDF5 file '" + file + "'");
 }
 

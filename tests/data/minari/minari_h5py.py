@@ -10,6 +10,9 @@ dataset/_storages/hdf5_storage.py, serialization.py) and gymnasium 1.x EnvSpec.t
       options/minari_autoseed attribute, an empty infos group, float32 sparse rewards, the
       episode statistics attributes) leave it; `tiny` is one short episode in small contiguous
       datasets (the fuzzer's seeds). OUT.json receives the values written.
+  minari_h5py.py fuzz-seeds DIR
+      the seed corpus of fuzz/fuzz_minari.cc: one-episode files in small compact datasets (under
+      libFuzzer's 4096-byte -max_len), a wrong-length one, and a metadata.json.
   minari_h5py.py check ROOT ID EXPECTED.json
       check a dataset fetchscope wrote against Minari's format, as Minari 0.5.3's loader reads it.
 """
@@ -261,10 +264,53 @@ def check(root, dataset_id, expected_path):
     print("ok")
 
 
+def compact(group, name, data):
+    data = np.asarray(data)
+    dcpl = h5py.h5p.create(h5py.h5p.DATASET_CREATE)
+    dcpl.set_layout(h5py.h5d.COMPACT)
+    dset = h5py.h5d.create(group.id, name.encode(), h5py.h5t.py_create(data.dtype, logical=True),
+                           h5py.h5s.create_simple(data.shape), dcpl=dcpl)
+    dset.write(h5py.h5s.ALL, h5py.h5s.ALL, data)
+
+
+def fuzz_seeds(folder):
+    os.makedirs(folder, exist_ok=True)
+    rng = np.random.default_rng(11)
+    for name, width, seed, reward, action_rows, with_success in [
+            ("reach_seeded.hdf5", 10, 2**64 - 1, np.float64, 1, True),
+            ("push_unseeded.hdf5", 25, None, np.float32, 1, False),
+            ("wrong_length.hdf5", 10, 5, np.float64, 2, False)]:
+        with h5py.File(os.path.join(folder, name), "w", track_order=True, libver="latest") as f:
+            g = f.create_group("episode_0")
+            g.attrs["id"] = 0
+            if seed is not None:
+                g.attrs["seed"] = seed
+            g.attrs["total_steps"] = 1
+            obs = g.create_group("observations")
+            compact(obs, "observation", rng.normal(size=(2, width)))
+            compact(obs, "achieved_goal", rng.normal(size=(2, 3)))
+            compact(obs, "desired_goal", rng.normal(size=(2, 3)))
+            compact(g, "actions", rng.uniform(-1, 1, size=(action_rows, 4)).astype(np.float32))
+            compact(g, "rewards", np.array([-1], dtype=reward))
+            compact(g, "terminations", np.zeros(1, dtype=bool))
+            compact(g, "truncations", np.ones(1, dtype=bool))
+            infos = g.create_group("infos")
+            if with_success:
+                compact(infos, "is_success", np.array([0, 1], dtype=np.float32))
+    obs_space, act_space = spaces("FetchPush-v4")
+    with open(os.path.join(folder, "metadata.json"), "w") as f:
+        json.dump({"total_episodes": 1, "total_steps": 1, "data_format": "hdf5",
+                   "observation_space": obs_space, "action_space": act_space,
+                   "env_spec": env_spec_json("FetchPush-v4"), "dataset_id": "fuzz/seed-v0",
+                   "minari_version": "0.5.3", "dataset_size": 0.0}, f)
+
+
 if __name__ == "__main__":
     if sys.argv[1] == "write":
         write(*sys.argv[2:7])
+    elif sys.argv[1] == "fuzz-seeds":
+        fuzz_seeds(sys.argv[2])
     elif sys.argv[1] == "check":
         check(*sys.argv[2:5])
     else:
-        sys.exit("usage: minari_h5py.py write|check ...")
+        sys.exit("usage: minari_h5py.py write|fuzz-seeds|check ...")
