@@ -16,8 +16,13 @@
 #include "base/errors.h"
 #include "dataset/hdf5_handles.h"
 #include "dataset/minari_reader.h"
+#include "dataset/minari_trajectory.h"
 #include "dataset/minari_writer.h"
+#include "src/assets.h"
 #include "src/env_spec.h"
+#include "src/episode.h"
+#include "src/fetch_env.h"
+#include "src/policy.h"
 #include "tests/test_util.h"
 
 namespace fetchscope {
@@ -288,6 +293,60 @@ TEST(MinariReader, ReadsDatasetsInMinarisOwnLayout) {
       for (bool b : w["truncations"]) truncations.push_back(b);
       EXPECT_EQ(e.truncations, truncations);
       EXPECT_TRUE(e.is_success.empty());  // Minari's writers store no is_success for Fetch
+    }
+  }
+}
+
+// Played episodes (random: float32 actions; scripted: float64, unclipped) go through the dataset
+// and come back with every observation, reward and success bit, and the actions as the env
+// applied them (clipped, float32).
+TEST(MinariTrajectory, PlayedEpisodesComeBackBitForBit) {
+  for (const char* policy_name : {"random", "scripted"}) {
+    SCOPED_TRACE(policy_name);
+    TempDir tmp;
+    const EnvSpec& spec = FindEnvSpec("FetchPickAndPlace-v4");
+    FetchEnv env(spec, ResolveAssets("bundled"));
+    PolicyContext context;
+    context.seed = 5;
+    auto policy = MakePolicy(policy_name, spec, context);
+    std::vector<EpisodeRecord> played;
+    for (int k = 0; k < 3; ++k) {
+      played.push_back(RunEpisode(
+          env, *policy, k, k == 0 ? std::optional<uint64_t>(5) : std::nullopt, k == 2 ? 20 : 50));
+    }
+    MinariWriteOptions options = Options(tmp.path(), "played/episodes-v0", spec);
+    {
+      MinariWriter writer(options);
+      for (const EpisodeRecord& e : played) {
+        writer.Add(
+            ToMinariEpisode(e, e.index == 0 ? std::optional<uint64_t>(5) : std::nullopt, 25));
+      }
+      writer.Commit();
+    }
+    const MinariDataset d = ReadMinariDataset("played/episodes-v0", tmp.path());
+    ASSERT_EQ(d.episodes.size(), played.size());
+    for (size_t k = 0; k < played.size(); ++k) {
+      const MinariEpisode& m = d.episodes[k];
+      const EpisodeRecord& e = played[k];
+      ASSERT_EQ(m.steps() + 1, static_cast<int>(e.steps.size()));
+      EXPECT_EQ(m.seed.has_value(), k == 0);
+      EXPECT_EQ(m.truncations.back(), 1);
+      for (size_t t = 0; t < e.steps.size(); ++t) {
+        const StepRecord& s = e.steps[t];
+        EXPECT_EQ(std::memcmp(&m.observation[t * 25], s.obs.observation.data(), 25 * 8), 0) << t;
+        EXPECT_EQ(std::memcmp(&m.achieved_goal[t * 3], s.obs.achieved_goal.data(), 24), 0) << t;
+        EXPECT_EQ(std::memcmp(&m.desired_goal[t * 3], s.obs.desired_goal.data(), 24), 0) << t;
+        EXPECT_EQ(m.is_success[t], s.is_success ? 1.0f : 0.0f);
+        if (t == 0) continue;
+        EXPECT_EQ(std::memcmp(&m.rewards[t - 1], &*s.reward, 8), 0) << t;
+        for (int i = 0; i < 4; ++i) {
+          const double applied = std::clamp(s.action->value[i], -1.0, 1.0);
+          EXPECT_EQ(m.actions[(t - 1) * 4 + i], static_cast<float>(applied));
+          if (s.action->is_float32) {  // the float32 path loses nothing
+            EXPECT_EQ(static_cast<double>(m.actions[(t - 1) * 4 + i]), applied);
+          }
+        }
+      }
     }
   }
 }
