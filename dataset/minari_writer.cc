@@ -129,6 +129,20 @@ fs::path DatasetFolder(const MinariWriteOptions& options) {
 
 }  // namespace
 
+void CheckMinariDestination(const MinariWriteOptions& options) {
+  const fs::path final_path = DatasetFolder(options);
+  std::error_code ec;
+  if (!fs::exists(fs::symlink_status(final_path, ec))) return;
+  if (!options.overwrite) {
+    throw UsageError("Minari dataset '" + options.dataset_id + "' already exists at " +
+                     final_path.string() + "; pass --overwrite to replace it");
+  }
+  if (!fs::is_directory(final_path / "data", ec)) {
+    throw UsageError(final_path.string() +
+                     " is not a Minari dataset (no data/ folder); not replacing it");
+  }
+}
+
 MinariWriter::MinariWriter(const MinariWriteOptions& options)
     : options_(options),
       final_path_(DatasetFolder(options)),
@@ -136,17 +150,8 @@ MinariWriter::MinariWriter(const MinariWriteOptions& options)
       parents_(final_path_.string()) {
   if (!options_.spec) throw RunError("MinariWriter: no env spec");
   SilenceHdf5Errors();
+  CheckMinariDestination(options_);
   std::error_code ec;
-  if (fs::exists(fs::symlink_status(final_path_, ec))) {
-    if (!options_.overwrite) {
-      throw UsageError("Minari dataset '" + options_.dataset_id + "' already exists at " +
-                       final_path_.string() + "; pass --overwrite to replace it");
-    }
-    if (!fs::is_directory(final_path_ / "data", ec)) {
-      throw UsageError(final_path_.string() +
-                       " is not a Minari dataset (no data/ folder); not replacing it");
-    }
-  }
   const fs::path data = temp_path_ / "data";
   if (!fs::create_directories(data, ec) || ec) {
     throw RunError("cannot create folder '" + data.string() + "': " + ec.message());

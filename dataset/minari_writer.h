@@ -26,6 +26,10 @@ struct MinariWriteOptions {
   std::string description;            ///< metadata `description` (omitted when empty)
 };
 
+/// Checks the id and refuses an existing dataset unless `overwrite` (UsageError naming the
+/// folder), without writing anything: a command calls it before a long run, MinariWriter again.
+void CheckMinariDestination(const MinariWriteOptions& options);
+
 /// One dataset being written. It is written under a hidden temporary folder beside the final
 /// one (`.<name>.tmp-<pid>-<n>`, which Minari's listing skips) and renamed into place by
 /// Commit(), so it appears complete or not at all; destruction without Commit() removes it.
