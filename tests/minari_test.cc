@@ -16,6 +16,7 @@
 #include "base/errors.h"
 #include "dataset/hdf5_handles.h"
 #include "dataset/minari_reader.h"
+#include "dataset/minari_replay.h"
 #include "dataset/minari_trajectory.h"
 #include "dataset/minari_writer.h"
 #include "src/assets.h"
@@ -349,6 +350,46 @@ TEST(MinariTrajectory, PlayedEpisodesComeBackBitForBit) {
       }
     }
   }
+}
+
+// Replaying a dataset: float32 episodes (random policy) replay bit for bit, the first from its
+// seed and the others continuing the generator; float64 ones (scripted) were stored rounded to
+// float32 and drift after the reset; an edited observation is found at its row and index.
+TEST(MinariReplay, FindsTheFirstDivergence) {
+  const EnvSpec& spec = FindEnvSpec("FetchPush-v4");
+  for (const char* policy_name : {"random", "scripted"}) {
+    SCOPED_TRACE(policy_name);
+    FetchEnv env(spec, ResolveAssets("bundled"));
+    PolicyContext context;
+    context.seed = 8;
+    auto policy = MakePolicy(policy_name, spec, context);
+    std::vector<MinariEpisode> episodes;
+    for (int k = 0; k < 3; ++k) {
+      const std::optional<uint64_t> seed = k == 0 ? std::optional<uint64_t>(8) : std::nullopt;
+      episodes.push_back(ToMinariEpisode(RunEpisode(env, *policy, k, seed, 30), seed, 25));
+    }
+    FetchEnv replay(spec, ResolveAssets("bundled"));
+    for (size_t k = 0; k < episodes.size(); ++k) {
+      const MinariDivergence d = ReplayMinariEpisode(replay, episodes[k], 0.0);
+      EXPECT_EQ(d.reset, k == 0 ? "seed" : "continued");
+      if (std::string(policy_name) == "random") {
+        EXPECT_EQ(d.first_step, -1) << k << " " << d.where << " " << d.difference;
+        EXPECT_EQ(d.max_difference, 0.0);
+      } else {
+        EXPECT_GE(d.first_step, 1) << k;  // the reset itself is exact
+        EXPECT_LT(d.max_difference, 1e-3) << k;
+      }
+    }
+  }
+  FetchEnv env(spec, ResolveAssets("bundled"));
+  PolicyContext context;
+  auto policy = MakePolicy("random", spec, context);
+  MinariEpisode e = ToMinariEpisode(RunEpisode(env, *policy, 0, 3, 20), 3, 25);
+  e.observation[7 * 25 + 3] += 1e-3;
+  const MinariDivergence d = ReplayMinariEpisode(env, e, 1e-6);
+  EXPECT_EQ(d.first_step, 7);
+  EXPECT_EQ(d.where, "observation[3]");
+  EXPECT_NEAR(d.difference, -1e-3, 1e-12);
 }
 
 // Every bad input: one line, starting with the file it is about, saying what is wrong, and
