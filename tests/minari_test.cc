@@ -377,7 +377,6 @@ TEST(MinariReplay, FindsTheFirstDivergence) {
         EXPECT_EQ(d.max_difference, 0.0);
       } else {
         EXPECT_GE(d.first_step, 1) << k;  // the reset itself is exact
-        EXPECT_LT(d.max_difference, 1e-3) << k;
       }
     }
   }
