@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -24,6 +25,7 @@
 #include "src/episode.h"
 #include "src/fetch_env.h"
 #include "src/policy.h"
+#include "src/trajectory.h"
 #include "tests/test_util.h"
 
 namespace fetchscope {
@@ -33,6 +35,7 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 using testing::ReadFile;
 using testing::RunCommand;
+using testing::RunFetchscope;
 using testing::SourceDir;
 using testing::TempDir;
 
@@ -495,6 +498,69 @@ TEST_F(MinariBadInput, NotAnHdf5FileAtAll) {
 TEST_F(MinariBadInput, StepsThatDoNotAddUp) {
   EditMetadata("\"total_steps\": 107", "\"total_steps\": 100");
   ExpectOneLine(Metadata(), "total_steps is 100 but the episodes hold 107 steps");
+}
+
+// The commands: rollout --minari writes the episodes of its trajectory JSON, bit for bit (actions
+// as applied: clipped, float32); --jobs 2 writes the same bytes; export of the trajectory JSON
+// or of a run folder of episode files writes the same HDF5 bytes; an existing id is refused.
+TEST(MinariCommands, RolloutAndExportRoundTrip) {
+  TempDir tmp;
+  const fs::path root = tmp.path() / "datasets";
+  const std::string run =
+      "rollout --env-id FetchPush-v4 --policy random --episodes 3 --steps 12 "
+      "--seed 4 --minari-root " +
+      root.string() + " ";
+  auto r = RunFetchscope(run + "--minari rt/one-v0 --json-out " + (tmp.path() / "t.json").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("wrote Minari dataset rt/one-v0 at " + (root / "rt/one-v0").string()),
+            std::string::npos)
+      << r.output;
+  const Trajectory t = ReadTrajectory((tmp.path() / "t.json").string());
+  const MinariDataset d = ReadMinariDataset("rt/one-v0", root);
+  EXPECT_EQ(d.metadata.env_id, "FetchPush-v4");
+  EXPECT_EQ(d.metadata.algorithm_name, "random");
+  ASSERT_EQ(d.episodes.size(), t.episodes.size());
+  for (size_t k = 0; k < t.episodes.size(); ++k) {
+    SCOPED_TRACE(k);
+    ExpectSameEpisode(
+        d.episodes[k],
+        ToMinariEpisode(t.episodes[k], k == 0 ? std::optional<uint64_t>(4) : std::nullopt, 25));
+  }
+  // --jobs 2, worker processes: the same bytes
+  r = RunFetchscope(run + "--jobs 2 --minari rt/two-v0");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(ReadFile(root / "rt/one-v0/data/main_data.hdf5") ==
+              ReadFile(root / "rt/two-v0/data/main_data.hdf5"));
+  std::string metadata = ReadFile(root / "rt/two-v0/data/metadata.json");  // but for the id
+  metadata.replace(metadata.find("rt/two-v0"), 9, "rt/one-v0");
+  EXPECT_EQ(ReadFile(root / "rt/one-v0/data/metadata.json"), metadata);
+  // an existing id: refused before the run, replaced with --overwrite
+  r = RunFetchscope(run + "--minari rt/one-v0");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("already exists"), std::string::npos) << r.output;
+  r = RunFetchscope(run + "--minari rt/one-v0 --overwrite");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  // export: the trajectory JSON, and a run folder of one file per episode
+  r = RunFetchscope("export " + (tmp.path() / "t.json").string() +
+                    " --minari rt/export-v0 --minari-root " + root.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const fs::path folder = tmp.path() / "run";
+  fs::create_directories(folder);
+  for (const TrajectoryEpisode& e : t.episodes) {
+    Trajectory one = t;
+    one.episodes = {e};
+    char name[32];
+    std::snprintf(name, sizeof name, "episode_%03d.json", e.index);
+    WriteText(folder / name, TrajectoryText(one));
+  }
+  r = RunCommand("MINARI_DATASETS_PATH=" + root.string() + " " FETCHSCOPE_BIN " export " +
+                 folder.string() + " --minari rt/folder-v0 2>&1");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const std::string hdf5 = ReadFile(root / "rt/one-v0/data/main_data.hdf5");
+  EXPECT_TRUE(hdf5 == ReadFile(root / "rt/export-v0/data/main_data.hdf5"));
+  EXPECT_TRUE(hdf5 == ReadFile(root / "rt/folder-v0/data/main_data.hdf5"));
+  r = RunFetchscope("export " + (tmp.path() / "nothing").string() + " --minari rt/x-v0");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
 }
 
 }  // namespace
