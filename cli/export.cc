@@ -68,31 +68,21 @@ Trajectory ReadInput(const std::string& input) {
 }
 
 int RunExport(const ExportOptions& o) {
-  Trajectory t = ReadInput(o.input);
-  std::sort(
-      t.episodes.begin(), t.episodes.end(),
-      [](const TrajectoryEpisode& a, const TrajectoryEpisode& b) { return a.index < b.index; });
+  const Trajectory t = ReadInput(o.input);
   const EnvSpec& spec = FindEnvSpec(t.env_id);
   MinariWriteOptions w;
   w.dataset_id = o.minari;
   w.root = MinariRoot(o.minari_root);
   w.overwrite = o.overwrite;
-  w.spec = &spec;
   w.algorithm_name = t.policy.empty() ? "unknown" : t.policy;
   w.code_permalink = "fetchscope " FETCHSCOPE_VERSION " export " + o.input;
   w.description = spec.id + " episodes recorded by fetchscope (policy " + w.algorithm_name +
                   ", seed " + std::to_string(t.seed) + ")";
-  MinariWriter writer(w);
-  const int width = spec.has_object ? 25 : 10;
-  for (const TrajectoryEpisode& e : t.episodes) {
-    // episode 0 was reset with the run's seed; the others continued its generator
-    writer.Add(
-        ToMinariEpisode(e, e.index == 0 ? std::optional<uint64_t>(t.seed) : std::nullopt, width));
-  }
-  const fs::path path = writer.Commit();
-  std::printf("%s: %lld episode(s), %lld steps\nwrote Minari dataset %s at %s\n", spec.id.c_str(),
-              static_cast<long long>(writer.total_episodes()),
-              static_cast<long long>(writer.total_steps()), o.minari.c_str(), path.c_str());
+  const fs::path path = WriteMinariDataset(t, w);
+  size_t steps = 0;
+  for (const TrajectoryEpisode& e : t.episodes) steps += e.steps.size() - 1;
+  std::printf("%s: %zu episode(s), %zu steps\nwrote Minari dataset %s at %s\n", spec.id.c_str(),
+              t.episodes.size(), steps, o.minari.c_str(), path.c_str());
   return 0;
 }
 

@@ -47,4 +47,21 @@ MinariEpisode ToMinariEpisode(const EpisodeRecord& episode, std::optional<uint64
   return m;
 }
 
+std::filesystem::path WriteMinariDataset(const Trajectory& trajectory, MinariWriteOptions options) {
+  options.spec = &FindEnvSpec(trajectory.env_id);
+  std::vector<const TrajectoryEpisode*> episodes;
+  for (const TrajectoryEpisode& e : trajectory.episodes) episodes.push_back(&e);
+  std::sort(
+      episodes.begin(), episodes.end(),
+      [](const TrajectoryEpisode* a, const TrajectoryEpisode* b) { return a->index < b->index; });
+  MinariWriter writer(options);
+  const int width = options.spec->has_object ? 25 : 10;
+  for (const TrajectoryEpisode* e : episodes) {
+    const std::optional<uint64_t> seed =
+        e->index == 0 ? std::optional<uint64_t>(trajectory.seed) : std::nullopt;
+    writer.Add(ToMinariEpisode(*e, seed, width));
+  }
+  return writer.Commit();
+}
+
 }  // namespace fetchscope

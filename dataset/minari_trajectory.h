@@ -2,10 +2,13 @@
 #pragma once
 
 #include <cstdint>
+#include <filesystem>
 #include <optional>
 
 #include "dataset/minari_format.h"
+#include "dataset/minari_writer.h"
 #include "src/episode.h"
+#include "src/trajectory.h"
 
 namespace fetchscope {
 
@@ -16,5 +19,10 @@ namespace fetchscope {
 /// reset the same way); is_success of every row; `seed` where its reset was seeded.
 MinariEpisode ToMinariEpisode(const EpisodeRecord& episode, std::optional<uint64_t> seed,
                               int obs_dim);
+
+/// Writes the episodes of `trajectory` (a run: episode 0 reset with its seed, the others
+/// continuing the generator), in index order, as the dataset `options` names (its spec is the
+/// trajectory's env). Returns the dataset folder.
+std::filesystem::path WriteMinariDataset(const Trajectory& trajectory, MinariWriteOptions options);
 
 }  // namespace fetchscope

@@ -563,5 +563,39 @@ TEST(MinariCommands, RolloutAndExportRoundTrip) {
   EXPECT_EQ(r.exit_code, 2) << r.output;
 }
 
+// record --minari: the run folder's episodes as a dataset, the bytes export makes of the same
+// folder, and replaying it on the env: bit for bit (random policy: float32 actions). A shard
+// holds part of a run and is refused.
+TEST(MinariCommands, RecordMinariReplaysBitForBit) {
+  unsetenv("DISPLAY");
+  TempDir tmp;
+  const fs::path root = tmp.path() / "datasets", out = tmp.path() / "run";
+  const std::string record =
+      "record --quiet --env-id FetchReach-v4 --width 32 --height 32 "
+      "--steps 6 --episodes 2 --seed 3 --policy random --minari-root " +
+      root.string() + " --out " + out.string() + " ";
+  auto r = RunFetchscope(record + "--minari rec/run-v0");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("wrote Minari dataset rec/run-v0"), std::string::npos) << r.output;
+  r = RunFetchscope("export " + out.string() + " --minari rec/export-v0 --minari-root " +
+                    root.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(ReadFile(root / "rec/run-v0/data/main_data.hdf5") ==
+              ReadFile(root / "rec/export-v0/data/main_data.hdf5"));
+  const MinariDataset d = ReadMinariDataset("rec/run-v0", root);
+  ASSERT_EQ(d.episodes.size(), 2u);
+  EXPECT_EQ(d.episodes[0].seed, std::optional<uint64_t>(3));
+  EXPECT_FALSE(d.episodes[1].seed.has_value());
+  FetchEnv env(FindEnvSpec("FetchReach-v4"), ResolveAssets("bundled"));
+  for (const MinariEpisode& e : d.episodes) {
+    const MinariDivergence divergence = ReplayMinariEpisode(env, e, 0.0);
+    EXPECT_EQ(divergence.first_step, -1) << divergence.where;
+    EXPECT_EQ(divergence.max_difference, 0.0);
+  }
+  r = RunFetchscope(record + "--shard 0/2 --overwrite --minari rec/shard-v0");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("a shard records part of the run"), std::string::npos) << r.output;
+}
+
 }  // namespace
 }  // namespace fetchscope
