@@ -23,6 +23,7 @@ Command AddRewardCheck(CLI::App& parent);
 Command AddRandomEpisodes(CLI::App& parent);
 Command AddAnatomy(CLI::App& parent);
 Command AddRollout(CLI::App& parent);
+Command AddExport(CLI::App& parent);
 Command AddRender(CLI::App& parent);
 Command AddListCameras(CLI::App& parent);
 Command AddRecord(CLI::App& parent);
@@ -36,9 +37,8 @@ Command AddCompare(CLI::App& parent);
 
 /// Every subcommand, in the order `fetchscope --help` lists them.
 inline constexpr AddCommandFn kCommands[] = {
-    AddListEnvs, AddDescribe, AddRewardCheck,  AddRandomEpisodes,
-    AddAnatomy,  AddRollout,  AddRender,       AddListCameras,
-    AddRecord,   AddBench,    AddProbeActions, AddMergeManifests,
-    AddGolden,   AddListGpus, AddReport,       AddCompare};
+    AddListEnvs,       AddDescribe, AddRewardCheck, AddRandomEpisodes, AddAnatomy, AddRollout,
+    AddExport,         AddRender,   AddListCameras, AddRecord,         AddBench,   AddProbeActions,
+    AddMergeManifests, AddGolden,   AddListGpus,    AddReport,         AddCompare};
 
 }  // namespace fetchscope::cli

@@ -24,6 +24,8 @@
 #include "cli/record_from.h"
 #include "cli/resolve.h"
 #include "cli/view_options.h"
+#include "dataset/minari_trajectory.h"
+#include "dataset/minari_writer.h"
 #include "encode/episode_sink.h"
 #include "encode/video_writer.h"
 #include "inspect/report.h"
@@ -36,6 +38,8 @@
 #include "run/record_run.h"
 #include "run/run_folder.h"
 #include "run/shard.h"
+#include "src/episode_source.h"
+#include "src/trajectory.h"
 
 namespace fetchscope::cli {
 namespace {
@@ -75,6 +79,8 @@ struct RecordOptions {
   bool no_report = false;       // no index.html (inspect/report.h)
   std::string from;             // record --from: a run folder or trajectory JSON
   std::string layers = "rgb";   // --layers: rgb plus depth, segmentation
+  std::string minari;           // --minari: also write the run as this Minari dataset
+  std::string minari_root;      // --minari-root
 };
 
 // ", 1 incomplete (as recorded)" for the summary line when episodes are incomplete.
@@ -197,6 +203,23 @@ int RunRecord(const RecordOptions& options, const std::string& command_line,
   plan.sheet_every = o.sheet_every;
   const Shard shard = ResolveShard(o.shard, o.shard_count);
   const WorkerMode mode = ParseWorkerMode(o.worker_mode);
+  MinariWriteOptions minari;
+  if (!o.minari.empty()) {
+    if (shard.sharded()) {
+      throw UsageError(
+          "record --minari: a shard records part of the run; once every shard is "
+          "done, `fetchscope export " +
+          o.out + " --minari " + o.minari + "`");
+    }
+    minari.dataset_id = o.minari;
+    minari.root = MinariRoot(o.minari_root);
+    minari.spec = plan.spec;
+    minari.algorithm_name = o.policy;
+    minari.code_permalink = "fetchscope " FETCHSCOPE_VERSION " " + command_line;
+    minari.description = plan.spec->id + " episodes recorded by fetchscope (policy " + o.policy +
+                         ", seed " + o.env.seed + ")";
+    CheckMinariDestination(minari);  // an existing id fails now, not after the run
+  }
   plan.video.fps = o.fps;
   plan.video.codec = o.codec;
   plan.video.crf = o.crf;
@@ -422,6 +445,16 @@ int RunRecord(const RecordOptions& options, const std::string& command_line,
     throw RunError(DescribeFailures(result) + "; the manifest lists the missing episodes (" +
                    std::to_string(result.missing.size()) + "): --resume records them");
   }
+  if (!o.minari.empty()) {  // the run folder's episode files, read back as export reads them
+    const TrajectorySource run = LoadTrajectorySource(o.out);
+    Trajectory t;
+    t.env_id = run.env_id;
+    t.seed = run.seed;
+    t.policy = run.policy;
+    for (const auto& [k, episode] : run.episodes) t.episodes.push_back(episode);
+    const fs::path path = WriteMinariDataset(t, minari);
+    std::printf("wrote Minari dataset %s at %s\n", o.minari.c_str(), path.c_str());
+  }
   return 0;
 }
 
@@ -483,6 +516,11 @@ Command AddRecord(CLI::App& app) {
       ->check(CLI::Range(0, 1000));
   sub->add_option("--out", o->out, "Output folder")->capture_default_str();
   sub->add_flag("-q,--quiet", o->quiet, "No progress or summary on stderr");
+  sub->add_option("--minari", o->minari,
+                  "Also write the recorded episodes as a Minari dataset of this id (README: "
+                  "Datasets); an existing one is refused (export --overwrite replaces it)");
+  sub->add_option("--minari-root", o->minari_root,
+                  "Datasets root (default $MINARI_DATASETS_PATH, else ~/.minari/datasets)");
   sub->add_flag("--overwrite", o->overwrite,
                 "Replace the record run already in --out (its manifest, report and episode "
                 "files; other files stay). The earlier run is kept aside until the new one has "

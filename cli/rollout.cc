@@ -10,9 +10,12 @@
 #include "cli/common.h"
 #include "cli/jobs_options.h"
 #include "cli/resolve.h"
+#include "dataset/minari_trajectory.h"
+#include "dataset/minari_writer.h"
 #include "run/episode_scheduler.h"
 #include "src/episode.h"
 #include "src/fetch_env.h"
+#include "src/trajectory.h"
 
 namespace fetchscope::cli {
 namespace {
@@ -28,7 +31,29 @@ struct RolloutOptions {
   std::string replay_dtype;
   int jobs = 1;
   std::string worker_mode = "process";
+  std::string minari;       // --minari: a Minari dataset id to write
+  std::string minari_root;  // --minari-root
+  bool overwrite = false;   // --overwrite: replace an existing dataset of that id
 };
+
+// The played episodes (their trajectory JSON entries, by index) as a Minari dataset; returns
+// its folder. Each goes through the trajectory reader on its own, so memory stays one episode.
+std::string WriteMinari(const RolloutOptions& o, const MinariWriteOptions& options,
+                        const AssetSource& assets, uint64_t seed,
+                        const std::map<int, nlohmann::json>& episodes) {
+  MinariWriter writer(options);
+  const int width = options.spec->has_object ? 25 : 10;
+  for (const auto& [k, episode] : episodes) {
+    const Trajectory one =
+        ParseTrajectory(DumpJson(TrajectoryJson(*options.spec, assets, seed, o.policy,
+                                                nlohmann::json::array({episode}))),
+                        "rollout");
+    // episode 0 was reset with the run's seed; the others continued its generator
+    writer.Add(ToMinariEpisode(one.episodes.front(),
+                               k == 0 ? std::optional<uint64_t>(seed) : std::nullopt, width));
+  }
+  return writer.Commit().string();
+}
 
 // Plays episodes and reports each as its trajectory JSON entry.
 class RolloutRunner : public EpisodeRunner {
@@ -65,6 +90,19 @@ int RunRollout(const RolloutOptions& o) {
   const std::vector<int>& indices = run.episodes;
   const PolicyContext& context = run.policy_context;
   { FetchEnv check(spec, assets); }  // bad assets fail here, before any worker starts
+  MinariWriteOptions minari;
+  if (!o.minari.empty()) {
+    minari.dataset_id = o.minari;
+    minari.root = MinariRoot(o.minari_root);
+    minari.overwrite = o.overwrite;
+    minari.spec = &spec;
+    minari.algorithm_name = o.policy;
+    minari.code_permalink = "fetchscope " FETCHSCOPE_VERSION " rollout --env-id " + spec.id +
+                            " --policy " + o.policy + " --seed " + std::to_string(seed) +
+                            " --steps " + std::to_string(o.steps);
+    minari.description = spec.id + " episodes played by fetchscope's " + o.policy + " policy";
+    CheckMinariDestination(minari);  // an existing id fails now, not after the run
+  }
   ScheduleOptions schedule;
   schedule.episodes = indices;
   const int count = static_cast<int>(indices.size());
@@ -82,23 +120,29 @@ int RunRollout(const RolloutOptions& o) {
                  result.signal == SIGINT ? "SIGINT" : "SIGTERM");
     return 128 + result.signal;
   }
+  const std::string dataset =
+      o.minari.empty() ? "" : WriteMinari(o, minari, assets, seed, result.results);
   nlohmann::json episodes = nlohmann::json::array();
   int successes = 0;
   for (const auto& [k, episode] : result.results) {
     successes += episode.at("is_success").get<bool>();
     episodes.push_back(episode);
   }
-  const nlohmann::json j = TrajectoryJson(spec, assets, seed, o.policy, std::move(episodes));
-  if (o.json_out.empty()) {
+  if (o.json_out.empty() && dataset.empty()) {
+    const nlohmann::json j = TrajectoryJson(spec, assets, seed, o.policy, std::move(episodes));
     std::printf("%s\n", DumpJson(j).c_str());
     return 0;
   }
-  const std::string path = JsonOutPath(o.json_out, "rollout");
-  WriteJson(path, j);
-  std::printf(
-      "%s: %d episode(s) of %d steps, policy %s, seed %s: success %d/%d (%.0f%%)\nwrote %s\n",
-      spec.id.c_str(), count, o.steps, o.policy.c_str(), o.env.seed.c_str(), successes, count,
-      100.0 * successes / count, path.c_str());
+  std::string wrote;
+  if (!o.json_out.empty()) {
+    const std::string path = JsonOutPath(o.json_out, "rollout");
+    WriteJson(path, TrajectoryJson(spec, assets, seed, o.policy, std::move(episodes)));
+    wrote += "wrote " + path + "\n";
+  }
+  if (!dataset.empty()) wrote += "wrote Minari dataset " + o.minari + " at " + dataset + "\n";
+  std::printf("%s: %d episode(s) of %d steps, policy %s, seed %s: success %d/%d (%.0f%%)\n%s",
+              spec.id.c_str(), count, o.steps, o.policy.c_str(), o.env.seed.c_str(), successes,
+              count, 100.0 * successes / count, wrote.c_str());
   return 0;
 }
 
@@ -123,6 +167,13 @@ Command AddRollout(CLI::App& app) {
   sub->add_option("--replay-dtype", o->replay_dtype, kReplayDtypeHelp);
   sub->add_option("--json-out", o->json_out,
                   "Write F (.json) or F_rollout.json; without it JSON goes to stdout");
+  sub->add_option("--minari", o->minari,
+                  "Also write the episodes as a Minari dataset of this id, e.g. "
+                  "fetchscope/FetchPush/scripted-v0 (README: Datasets); without --json-out no "
+                  "JSON is printed");
+  sub->add_option("--minari-root", o->minari_root,
+                  "Datasets root (default $MINARI_DATASETS_PATH, else ~/.minari/datasets)");
+  sub->add_flag("--overwrite", o->overwrite, "Replace an existing Minari dataset of that id");
   AddJobsOptions(sub, &o->jobs, &o->worker_mode);
   return {sub, [o, sub] {
             o->episodes_given = sub->count("--episodes") > 0;

@@ -10,9 +10,9 @@ packages=(cmake g++ make pkg-config
   libmujoco-dev libqhull-dev
   libegl-dev libegl1 libegl-mesa0 libgl1-mesa-dri libosmesa6-dev
   libeigen3-dev libpng-dev libavcodec-dev libavformat-dev libavutil-dev libswscale-dev
-  libavfilter-dev libssl-dev libfreetype-dev libfontconfig-dev fonts-dejavu-core
+  libavfilter-dev libssl-dev libfreetype-dev libfontconfig-dev fonts-dejavu-core libhdf5-dev
   libcli11-dev nlohmann-json3-dev libgtest-dev
-  ffmpeg python3 python3-numpy
+  ffmpeg python3 python3-numpy python3-h5py
   binutils xz-utils ccache
   chromium)
 # Node.js and npm: Debian's, unless a Node.js (e.g. NodeSource's, which bundles npm) is present

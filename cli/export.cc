@@ -1,0 +1,106 @@
+// fetchscope export: a run folder's episode_NNN.json files, or a trajectory JSON (rollout
+// --json-out), written as a Minari dataset (dataset/minari_writer.h).
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <regex>
+
+#include "base/errors.h"
+#include "cli/command.h"
+#include "dataset/minari_trajectory.h"
+#include "dataset/minari_writer.h"
+#include "src/env_spec.h"
+#include "src/trajectory.h"
+
+namespace fetchscope::cli {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct ExportOptions {
+  std::string input;        // RUN_DIR or TRAJ.json
+  std::string minari;       // the dataset id
+  std::string minari_root;  // --minari-root
+  bool overwrite = false;
+};
+
+// The trajectory of a file, or of every episode_NNN.json of a run folder (one env id and seed)
+Trajectory ReadInput(const std::string& input) {
+  std::error_code ec;
+  if (!fs::is_directory(input, ec)) {
+    if (!fs::exists(input, ec)) throw UsageError("export: no such file or folder '" + input + "'");
+    return ReadTrajectory(input);
+  }
+  static const std::regex kEpisodeFile(R"(episode_\d+\.json)");
+  std::vector<fs::path> files;
+  for (const auto& entry : fs::directory_iterator(input, ec)) {
+    const std::string name = entry.path().filename().string();
+    if (entry.is_regular_file() && std::regex_match(name, kEpisodeFile)) {
+      files.push_back(entry.path());
+    }
+  }
+  if (files.empty()) {
+    throw UsageError("export: folder '" + input + "' holds no episode_NNN.json trajectory");
+  }
+  std::sort(files.begin(), files.end());
+  Trajectory all;
+  std::map<int, TrajectoryEpisode> episodes;
+  for (size_t i = 0; i < files.size(); ++i) {
+    Trajectory t = ReadTrajectory(files[i].string());
+    if (i == 0) {
+      all = t;
+      all.episodes.clear();
+    } else if (t.env_id != all.env_id || t.seed != all.seed) {
+      throw RunError("export: " + files[i].string() + " is from another run (" + t.env_id +
+                     ", seed " + std::to_string(t.seed) + ") than " + files[0].string());
+    }
+    for (TrajectoryEpisode& e : t.episodes) {
+      const int index = e.index;
+      if (!episodes.emplace(index, std::move(e)).second) {
+        throw RunError("export: episode " + std::to_string(index) + " is in two files");
+      }
+    }
+  }
+  for (auto& [index, e] : episodes) all.episodes.push_back(std::move(e));
+  return all;
+}
+
+int RunExport(const ExportOptions& o) {
+  const Trajectory t = ReadInput(o.input);
+  const EnvSpec& spec = FindEnvSpec(t.env_id);
+  MinariWriteOptions w;
+  w.dataset_id = o.minari;
+  w.root = MinariRoot(o.minari_root);
+  w.overwrite = o.overwrite;
+  w.algorithm_name = t.policy.empty() ? "unknown" : t.policy;
+  w.code_permalink = "fetchscope " FETCHSCOPE_VERSION " export " + o.input;
+  w.description = spec.id + " episodes recorded by fetchscope (policy " + w.algorithm_name +
+                  ", seed " + std::to_string(t.seed) + ")";
+  const fs::path path = WriteMinariDataset(t, w);
+  size_t steps = 0;
+  for (const TrajectoryEpisode& e : t.episodes) steps += e.steps.size() - 1;
+  std::printf("%s: %zu episode(s), %zu steps\nwrote Minari dataset %s at %s\n", spec.id.c_str(),
+              t.episodes.size(), steps, o.minari.c_str(), path.c_str());
+  return 0;
+}
+
+}  // namespace
+
+Command AddExport(CLI::App& app) {
+  auto o = std::make_shared<ExportOptions>();
+  CLI::App* sub = app.add_subcommand(
+      "export", "Write a run folder or trajectory JSON as a Minari dataset (README: Datasets)");
+  sub->add_option("input", o->input, "A run folder (its episode_NNN.json) or a trajectory JSON")
+      ->required();
+  sub->add_option("--minari", o->minari,
+                  "Minari dataset id, (namespace/)name-vN, e.g. fetchscope/FetchPush/scripted-v0")
+      ->required();
+  sub->add_option("--minari-root", o->minari_root,
+                  "Datasets root (default $MINARI_DATASETS_PATH, else ~/.minari/datasets)");
+  sub->add_flag("--overwrite", o->overwrite, "Replace an existing dataset of that id");
+  return {sub, [o] { return RunExport(*o); }};
+}
+
+}  // namespace fetchscope::cli

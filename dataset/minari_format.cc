@@ -1,0 +1,156 @@
+#include "dataset/minari_format.h"
+
+#include <hdf5.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <regex>
+
+#include "base/errors.h"
+
+namespace fetchscope {
+namespace {
+
+// Gymnasium-Robotics' module and class for each task's MuJoCo (v4) env
+const char* EntryPoint(Task task) {
+  switch (task) {
+    case Task::kReach:
+      return "gymnasium_robotics.envs.fetch.reach:MujocoFetchReachEnv";
+    case Task::kPush:
+      return "gymnasium_robotics.envs.fetch.push:MujocoFetchPushEnv";
+    case Task::kPickAndPlace:
+      return "gymnasium_robotics.envs.fetch.pick_and_place:MujocoFetchPickAndPlaceEnv";
+    case Task::kSlide:
+      return "gymnasium_robotics.envs.fetch.slide:MujocoFetchSlideEnv";
+  }
+  return "";
+}
+
+// n copies of `value` as a Python list: "[v, v, v]"
+std::string RepeatList(const std::string& value, int n) {
+  std::string s = "[";
+  for (int i = 0; i < n; ++i) s += (i ? ", " : "") + value;
+  return s + "]";
+}
+
+// serialize_space(Box): type, dtype, shape, low, high, in that order
+std::string BoxJson(const std::string& dtype, int n, const std::string& low,
+                    const std::string& high) {
+  return "{\"type\": \"Box\", \"dtype\": \"" + dtype + "\", \"shape\": [" + std::to_string(n) +
+         "], \"low\": " + RepeatList(low, n) + ", \"high\": " + RepeatList(high, n) + "}";
+}
+
+}  // namespace
+
+bool IsSupportedMinariVersion(const std::string& version) {
+  static const char* const kVersions[] = {"0.4.0", "0.4.1", "0.4.2", "0.4.3",
+                                          "0.5.0", "0.5.1", "0.5.2", "0.5.3"};
+  for (const char* v : kVersions) {
+    if (version == v) return true;
+  }
+  return false;
+}
+
+void ValidateMinariDatasetId(const std::string& id) {
+  // Minari's DATASET_ID_RE, ASCII \w, with the -vN its parse_dataset_id needs
+  static const std::regex kId(R"(^(?:([-_\w][-_\w/]*[-_\w]+)/)?([-_\w]+?)-v(\d+)$)");
+  std::smatch m;
+  bool ok = std::regex_match(id, m, kId);
+  // no empty folder between slashes: "a//b-v0" would name the folder "a/b-v0"
+  if (ok && id.find("//") != std::string::npos) ok = false;
+  if (!ok) {
+    throw UsageError("--minari: '" + id +
+                     "' is not a Minari dataset id: expected (namespace/)name-vN of letters, "
+                     "digits, '-' and '_', e.g. fetchscope/FetchPush/scripted-v0");
+  }
+}
+
+std::filesystem::path MinariRoot(const std::string& flag) {
+  if (!flag.empty()) return flag;
+  if (const char* env = std::getenv("MINARI_DATASETS_PATH"); env && *env) return env;
+  const char* home = std::getenv("HOME");
+  if (!home || !*home) {
+    throw UsageError(
+        "no datasets root: HOME is not set; give --minari-root DIR or set MINARI_DATASETS_PATH");
+  }
+  return std::filesystem::path(home) / ".minari" / "datasets";
+}
+
+std::string MinariNamespace(const std::string& id) {
+  const size_t slash = id.rfind('/');
+  return slash == std::string::npos ? std::string() : id.substr(0, slash);
+}
+
+std::string FetchObservationSpaceJson(int obs_dim) {
+  const std::string goal = BoxJson("float64", 3, "-Infinity", "Infinity");
+  return "{\"type\": \"Dict\", \"subspaces\": {\"achieved_goal\": " + goal +
+         ", \"desired_goal\": " + goal +
+         ", \"observation\": " + BoxJson("float64", obs_dim, "-Infinity", "Infinity") + "}}";
+}
+
+std::string FetchActionSpaceJson() { return BoxJson("float32", 4, "-1.0", "1.0"); }
+
+std::string FetchEnvSpecJson(const EnvSpec& spec) {
+  // dataclasses.asdict(EnvSpec) in field order, less namespace/name/version (gymnasium 1.x)
+  return "{\"id\": " + PythonJsonString(spec.id) + ", \"entry_point\": \"" + EntryPoint(spec.task) +
+         "\", \"reward_threshold\": null, \"nondeterministic\": false, \"max_episode_steps\": " +
+         std::to_string(spec.max_episode_steps) +
+         ", \"order_enforce\": true, \"disable_env_checker\": false, \"kwargs\": "
+         "{\"reward_type\": \"" +
+         (spec.dense ? "dense" : "sparse") +
+         "\"}, \"additional_wrappers\": [], \"vector_entry_point\": null}";
+}
+
+std::string PythonJsonString(const std::string& s) {
+  // nlohmann's ensure_ascii escaping is Python's: \" \\ \b \f \n \r \t, \u00xx, \uXXXX pairs
+  return nlohmann::json(s).dump(-1, ' ', true, nlohmann::json::error_handler_t::replace);
+}
+
+nlohmann::json ParsePythonJson(const std::string& text) {
+  std::string out;
+  out.reserve(text.size() + 16);
+  bool in_string = false;
+  for (size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (in_string) {
+      out += c;
+      if (c == '\\' && i + 1 < text.size()) {
+        out += text[++i];
+      } else if (c == '"') {
+        in_string = false;
+      }
+      continue;
+    }
+    if (c == '"') {
+      in_string = true;
+      out += c;
+    } else if (text.compare(i, 9, "-Infinity") == 0) {
+      out += "\"-Infinity\"";
+      i += 8;
+    } else if (text.compare(i, 8, "Infinity") == 0) {
+      out += "\"Infinity\"";
+      i += 7;
+    } else if (text.compare(i, 3, "NaN") == 0) {
+      out += "\"NaN\"";
+      i += 2;
+    } else {
+      out += c;
+    }
+  }
+  return nlohmann::json::parse(out);
+}
+
+std::optional<double> PythonJsonNumber(const nlohmann::json& value) {
+  if (value.is_number()) return value.get<double>();
+  if (value.is_string()) {
+    const std::string& s = value.get_ref<const std::string&>();
+    if (s == "Infinity") return HUGE_VAL;
+    if (s == "-Infinity") return -HUGE_VAL;
+    if (s == "NaN") return std::nan("");
+  }
+  return std::nullopt;
+}
+
+void SilenceHdf5Errors() { H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr); }
+
+}  // namespace fetchscope

@@ -1,0 +1,67 @@
+#include "dataset/minari_trajectory.h"
+
+#include <algorithm>
+
+#include "base/errors.h"
+
+namespace fetchscope {
+
+MinariEpisode ToMinariEpisode(const EpisodeRecord& episode, std::optional<uint64_t> seed,
+                              int obs_dim) {
+  MinariEpisode m;
+  m.id = episode.index;
+  m.seed = seed;
+  m.obs_dim = obs_dim;
+  const size_t rows = episode.steps.size();
+  if (rows == 0) throw RunError("episode " + std::to_string(episode.index) + " has no reset");
+  m.observation.reserve(rows * obs_dim);
+  m.achieved_goal.reserve(rows * 3);
+  m.desired_goal.reserve(rows * 3);
+  m.actions.reserve((rows - 1) * 4);
+  for (size_t i = 0; i < rows; ++i) {
+    const StepRecord& s = episode.steps[i];
+    if (static_cast<int>(s.obs.observation.size()) != obs_dim) {
+      throw RunError("episode " + std::to_string(episode.index) + " step " + std::to_string(i) +
+                     ": " + std::to_string(s.obs.observation.size()) +
+                     " observation values, expected " + std::to_string(obs_dim));
+    }
+    m.observation.insert(m.observation.end(), s.obs.observation.begin(), s.obs.observation.end());
+    m.achieved_goal.insert(m.achieved_goal.end(), s.obs.achieved_goal.begin(),
+                           s.obs.achieved_goal.end());
+    m.desired_goal.insert(m.desired_goal.end(), s.obs.desired_goal.begin(),
+                          s.obs.desired_goal.end());
+    m.is_success.push_back(s.is_success ? 1.0f : 0.0f);
+    if (i == 0) continue;
+    if (!s.action || !s.reward) {
+      throw RunError("episode " + std::to_string(episode.index) + " step " + std::to_string(i) +
+                     " has no action or reward");
+    }
+    for (double v : s.action->value) {
+      m.actions.push_back(static_cast<float>(std::clamp(v, -1.0, 1.0)));
+    }
+    m.rewards.push_back(*s.reward);
+  }
+  m.terminations.assign(rows - 1, 0);
+  m.truncations.assign(rows - 1, 0);
+  if (rows > 1) m.truncations.back() = 1;
+  return m;
+}
+
+std::filesystem::path WriteMinariDataset(const Trajectory& trajectory, MinariWriteOptions options) {
+  options.spec = &FindEnvSpec(trajectory.env_id);
+  std::vector<const TrajectoryEpisode*> episodes;
+  for (const TrajectoryEpisode& e : trajectory.episodes) episodes.push_back(&e);
+  std::sort(
+      episodes.begin(), episodes.end(),
+      [](const TrajectoryEpisode* a, const TrajectoryEpisode* b) { return a->index < b->index; });
+  MinariWriter writer(options);
+  const int width = options.spec->has_object ? 25 : 10;
+  for (const TrajectoryEpisode* e : episodes) {
+    const std::optional<uint64_t> seed =
+        e->index == 0 ? std::optional<uint64_t>(trajectory.seed) : std::nullopt;
+    writer.Add(ToMinariEpisode(*e, seed, width));
+  }
+  return writer.Commit();
+}
+
+}  // namespace fetchscope

@@ -1,0 +1,601 @@
+// Minari datasets in and out (dataset/): what MinariWriter writes is checked with Debian's
+// python3-h5py against Minari 0.5's format (not with our reader); datasets written in exactly
+// Minari's layout by h5py (as create_dataset_from_buffers and DataCollector leave them) are read
+// by MinariReader; every bad input is one line naming the file. The Python side is
+// tests/data/minari/minari_h5py.py.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "base/errors.h"
+#include "dataset/hdf5_handles.h"
+#include "dataset/minari_reader.h"
+#include "dataset/minari_replay.h"
+#include "dataset/minari_trajectory.h"
+#include "dataset/minari_writer.h"
+#include "src/assets.h"
+#include "src/env_spec.h"
+#include "src/episode.h"
+#include "src/fetch_env.h"
+#include "src/policy.h"
+#include "src/trajectory.h"
+#include "tests/test_util.h"
+
+namespace fetchscope {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+using testing::ReadFile;
+using testing::RunCommand;
+using testing::RunFetchscope;
+using testing::SourceDir;
+using testing::TempDir;
+
+// a python3 that imports h5py: the one on PATH, else Debian's (a pyenv python may lack it)
+std::string PythonWithH5py() {
+  for (const char* py : {"python3", "/usr/bin/python3"}) {
+    if (RunCommand(std::string(py) + " -c 'import h5py, numpy' 2>/dev/null").exit_code == 0) {
+      return py;
+    }
+  }
+  return "";
+}
+
+std::string Script() { return (SourceDir() / "tests/data/minari/minari_h5py.py").string(); }
+
+void WriteText(const fs::path& path, const std::string& text) {
+  std::ofstream(path, std::ios::binary) << text;
+}
+
+// a synthetic episode of `steps` steps with values that use every bit of a double
+MinariEpisode MakeEpisode(int steps, int obs_dim, std::optional<uint64_t> seed, double base) {
+  MinariEpisode e;
+  e.seed = seed;
+  e.obs_dim = obs_dim;
+  const auto value = [&](int i) { return std::sin(base + 0.37 * i) * 1.2345678901234567; };
+  for (int i = 0; i < (steps + 1) * obs_dim; ++i) e.observation.push_back(value(i));
+  for (int i = 0; i < (steps + 1) * 3; ++i) e.achieved_goal.push_back(value(1000 + i));
+  for (int i = 0; i < (steps + 1) * 3; ++i) e.desired_goal.push_back(value(2000 + i % 3));
+  for (int i = 0; i < steps * 4; ++i) e.actions.push_back(static_cast<float>(value(3000 + i)));
+  for (int i = 0; i < steps; ++i) e.rewards.push_back(i % 3 ? -1.0 : -0.0);
+  e.terminations.assign(steps, 0);
+  e.truncations.assign(steps, 0);
+  e.truncations.back() = 1;
+  for (int i = 0; i <= steps; ++i) e.is_success.push_back(i % 3 ? 0.0f : 1.0f);
+  return e;
+}
+
+std::vector<MinariEpisode> SomeEpisodes(int obs_dim) {
+  return {MakeEpisode(50, obs_dim, 0, 0.1), MakeEpisode(7, obs_dim, uint64_t{1} << 63, 0.2),
+          MakeEpisode(50, obs_dim, std::nullopt, 0.3)};
+}
+
+MinariWriteOptions Options(const fs::path& root, const std::string& id, const EnvSpec& spec) {
+  MinariWriteOptions o;
+  o.dataset_id = id;
+  o.root = root;
+  o.spec = &spec;
+  o.algorithm_name = "scripted";
+  o.code_permalink = "fetchscope test";
+  o.description = "minari_test";
+  return o;
+}
+
+fs::path Write(const MinariWriteOptions& options, const std::vector<MinariEpisode>& episodes) {
+  MinariWriter writer(options);
+  for (const MinariEpisode& e : episodes) writer.Add(e);
+  return writer.Commit();
+}
+
+// the episodes as minari_h5py.py's `check` expects them
+json Expected(const std::string& env_id, const std::vector<MinariEpisode>& episodes) {
+  json j = {{"env_id", env_id}, {"algorithm_name", "scripted"}, {"episodes", json::array()}};
+  for (const MinariEpisode& e : episodes) {
+    const auto rows = [](const std::vector<double>& v, int cols) {
+      json out = json::array();
+      for (size_t r = 0; r < v.size() / cols; ++r) {
+        out.push_back(std::vector<double>(v.begin() + r * cols, v.begin() + (r + 1) * cols));
+      }
+      return out;
+    };
+    std::vector<double> actions(e.actions.begin(), e.actions.end());
+    std::vector<bool> truncations(e.truncations.begin(), e.truncations.end());
+    j["episodes"].push_back({{"seed", e.seed ? json(*e.seed) : json()},
+                             {"observation", rows(e.observation, e.obs_dim)},
+                             {"achieved_goal", rows(e.achieved_goal, 3)},
+                             {"desired_goal", rows(e.desired_goal, 3)},
+                             {"actions", rows(actions, 4)},
+                             {"rewards", e.rewards},
+                             {"truncations", truncations},
+                             {"is_success", e.is_success}});
+  }
+  return j;
+}
+
+void ExpectSameEpisode(const MinariEpisode& a, const MinariEpisode& b) {
+  EXPECT_EQ(a.seed, b.seed);
+  EXPECT_EQ(a.obs_dim, b.obs_dim);
+  // bit for bit: memcmp-equal vectors (== on doubles would pass -0.0 for 0.0)
+  const auto same = [](const auto& x, const auto& y) {
+    return x.size() == y.size() && std::memcmp(x.data(), y.data(), x.size() * sizeof(x[0])) == 0;
+  };
+  EXPECT_TRUE(same(a.observation, b.observation));
+  EXPECT_TRUE(same(a.achieved_goal, b.achieved_goal));
+  EXPECT_TRUE(same(a.desired_goal, b.desired_goal));
+  EXPECT_TRUE(same(a.actions, b.actions));
+  EXPECT_TRUE(same(a.rewards, b.rewards));
+  EXPECT_EQ(a.terminations, b.terminations);
+  EXPECT_EQ(a.truncations, b.truncations);
+  EXPECT_TRUE(same(a.is_success, b.is_success));
+}
+
+TEST(MinariWriter, LayoutAndMetadataAreMinarisReadWithH5py) {
+  const std::string py = PythonWithH5py();
+  if (py.empty()) GTEST_SKIP() << "python3-h5py is not installed";
+  for (const char* env_id : {"FetchPush-v4", "FetchReachDense-v4"}) {
+    SCOPED_TRACE(env_id);
+    TempDir tmp;
+    const EnvSpec& spec = FindEnvSpec(env_id);
+    const int width = spec.has_object ? 25 : 10;
+    const std::string id = "fetchscope/Fetch/scripted-v0";
+    const auto episodes = SomeEpisodes(width);
+    EXPECT_EQ(Write(Options(tmp.path(), id, spec), episodes), tmp.path() / id);
+    WriteText(tmp.path() / "expected.json", Expected(env_id, episodes).dump());
+    const auto r = RunCommand(py + " " + Script() + " check " + tmp.path().string() + " " + id +
+                              " " + (tmp.path() / "expected.json").string() + " 2>&1");
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_EQ(r.output, "ok\n");
+  }
+}
+
+TEST(MinariWriter, SameEpisodesGiveTheSameBytes) {
+  TempDir tmp;
+  const EnvSpec& spec = FindEnvSpec("FetchPush-v4");
+  const fs::path a = Write(Options(tmp.path() / "a", "xy/same-v1", spec), SomeEpisodes(25));
+  const fs::path b = Write(Options(tmp.path() / "b", "xy/same-v1", spec), SomeEpisodes(25));
+  for (const char* file : {"data/main_data.hdf5", "data/metadata.json"}) {
+    const std::string bytes = ReadFile(a / file);
+    EXPECT_GT(bytes.size(), 100u) << file;
+    EXPECT_TRUE(bytes == ReadFile(b / file)) << file << " differs between two identical writes";
+  }
+}
+
+TEST(MinariWriter, RefusesAnExistingIdUnlessOverwrite) {
+  TempDir tmp;
+  const EnvSpec& spec = FindEnvSpec("FetchSlide-v4");
+  auto options = Options(tmp.path(), "ns/FetchSlide/test-v0", spec);
+  Write(options, SomeEpisodes(25));
+  try {
+    MinariWriter again(options);
+    FAIL() << "an existing id was not refused";
+  } catch (const UsageError& e) {
+    EXPECT_NE(std::string(e.what()).find("already exists"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("--overwrite"), std::string::npos) << e.what();
+  }
+  options.overwrite = true;
+  Write(options, {MakeEpisode(3, 25, 9, 0.5)});
+  const MinariDataset d = ReadMinariDataset("ns/FetchSlide/test-v0", tmp.path());
+  ASSERT_EQ(d.episodes.size(), 1u);
+  EXPECT_EQ(d.episodes[0].steps(), 3);
+  // nothing but the dataset and the namespace metadata is left in the namespace folder
+  std::vector<std::string> names;
+  for (const auto& entry : fs::directory_iterator(tmp.path() / "ns/FetchSlide")) {
+    names.push_back(entry.path().filename().string());
+  }
+  std::sort(names.begin(), names.end());
+  EXPECT_EQ(names, (std::vector<std::string>{"namespace_metadata.json", "test-v0"}));
+  // --overwrite replaces datasets only, never another folder
+  fs::create_directories(tmp.path() / "plain-v0");
+  options.dataset_id = "plain-v0";
+  EXPECT_THROW(MinariWriter{options}, UsageError);
+}
+
+TEST(MinariWriter, AnUnfinishedDatasetLeavesNothing) {
+  TempDir tmp;
+  const EnvSpec& spec = FindEnvSpec("FetchPush-v4");
+  {
+    MinariWriter writer(Options(tmp.path() / "root", "deep/name/space/gone-v0", spec));
+    writer.Add(MakeEpisode(5, 25, 1, 0.1));
+  }  // no Commit: an error or an interrupt
+  EXPECT_FALSE(fs::exists(tmp.path() / "root" / "deep"));
+}
+
+TEST(MinariWriter, RejectsIdsMinariCannotLoad) {
+  TempDir tmp;
+  const EnvSpec& spec = FindEnvSpec("FetchPush-v4");
+  for (const char* id : {"noversion", "../up-v0", "a//b-v0", "/abs-v0", "sp ace-v0", "x-v"}) {
+    SCOPED_TRACE(id);
+    EXPECT_THROW(MinariWriter{Options(tmp.path(), id, spec)}, UsageError);
+  }
+  EXPECT_TRUE(fs::is_empty(tmp.path()));
+}
+
+TEST(MinariReader, ReadsWhatTheWriterWroteBitForBit) {
+  TempDir tmp;
+  const EnvSpec& spec = FindEnvSpec("FetchPickAndPlace-v4");
+  const auto episodes = SomeEpisodes(25);
+  const fs::path dir = Write(Options(tmp.path(), "fetchscope/rt-v2", spec), episodes);
+  // by id, by dataset folder, by data folder and by file
+  for (const std::string& what :
+       {std::string("fetchscope/rt-v2"), dir.string(), (dir / "data").string(),
+        (dir / "data/main_data.hdf5").string()}) {
+    SCOPED_TRACE(what);
+    const MinariDataset d = ReadMinariDataset(what, tmp.path());
+    EXPECT_EQ(d.metadata.dataset_id, "fetchscope/rt-v2");
+    EXPECT_EQ(d.metadata.env_id, "FetchPickAndPlace-v4");
+    EXPECT_EQ(d.metadata.reward_type, "sparse");
+    EXPECT_EQ(d.metadata.max_episode_steps, 50);
+    EXPECT_EQ(d.metadata.algorithm_name, "scripted");
+    EXPECT_EQ(d.metadata.total_steps, 107);
+    ASSERT_EQ(d.episodes.size(), episodes.size());
+    for (size_t i = 0; i < episodes.size(); ++i) ExpectSameEpisode(d.episodes[i], episodes[i]);
+  }
+  const MinariDataset some = ReadMinariDataset("fetchscope/rt-v2", tmp.path(), {2, 0});
+  ASSERT_EQ(some.episodes.size(), 2u);
+  EXPECT_EQ(some.episodes[0].id, 2);
+  ExpectSameEpisode(some.episodes[0], episodes[2]);
+  EXPECT_THROW(ReadMinariDataset("fetchscope/rt-v2", tmp.path(), {3}), UsageError);
+  EXPECT_THROW(ReadMinariDataset("fetchscope/none-v0", tmp.path()), UsageError);
+}
+
+// datasets as Minari's own writers leave them, from the Python side
+TEST(MinariReader, ReadsDatasetsInMinarisOwnLayout) {
+  const std::string py = PythonWithH5py();
+  if (py.empty()) GTEST_SKIP() << "python3-h5py is not installed";
+  struct Case {
+    const char* mode;
+    const char* env_id;
+    bool seeded;
+  } cases[] = {{"buffers", "FetchPushDense-v4", true},
+               {"collector", "FetchPush-v4", false},
+               {"tiny", "FetchReach-v4", true}};
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.mode);
+    TempDir tmp;
+    const std::string id = std::string("minari/") + c.mode + "-v0";
+    const fs::path out = tmp.path() / "values.json";
+    const auto r = RunCommand(py + " " + Script() + " write " + tmp.path().string() + " " + id +
+                              " " + c.env_id + " " + c.mode + " " + out.string() + " 2>&1");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    const json want = json::parse(ReadFile(out));
+    const MinariDataset d = ReadMinariDataset(id, tmp.path());
+    EXPECT_EQ(d.metadata.env_id, c.env_id);
+    EXPECT_EQ(d.metadata.minari_version, "0.5.3");
+    ASSERT_EQ(d.episodes.size(), want["episodes"].size());
+    for (size_t i = 0; i < d.episodes.size(); ++i) {
+      const MinariEpisode& e = d.episodes[i];
+      const json& w = want["episodes"][i];
+      EXPECT_EQ(e.seed.has_value(), c.seeded);
+      if (c.seeded) {
+        EXPECT_EQ(*e.seed, w["seed"].get<uint64_t>());
+      }
+      std::vector<double> flat;
+      for (const auto& row : w["observation"]) {
+        for (double v : row) flat.push_back(v);
+      }
+      EXPECT_EQ(e.observation, flat);
+      flat.clear();
+      for (const auto& row : w["desired_goal"]) {
+        for (double v : row) flat.push_back(v);
+      }
+      EXPECT_EQ(e.desired_goal, flat);
+      std::vector<float> actions;
+      for (const auto& row : w["actions"]) {
+        for (double v : row) actions.push_back(static_cast<float>(v));
+      }
+      EXPECT_EQ(e.actions, actions);
+      EXPECT_EQ(e.rewards, w["rewards"].get<std::vector<double>>());  // float32 or float64
+      std::vector<uint8_t> truncations;
+      for (bool b : w["truncations"]) truncations.push_back(b);
+      EXPECT_EQ(e.truncations, truncations);
+      EXPECT_TRUE(e.is_success.empty());  // Minari's writers store no is_success for Fetch
+    }
+  }
+}
+
+// Played episodes (random: float32 actions; scripted: float64, unclipped) go through the dataset
+// and come back with every observation, reward and success bit, and the actions as the env
+// applied them (clipped, float32).
+TEST(MinariTrajectory, PlayedEpisodesComeBackBitForBit) {
+  for (const char* policy_name : {"random", "scripted"}) {
+    SCOPED_TRACE(policy_name);
+    TempDir tmp;
+    const EnvSpec& spec = FindEnvSpec("FetchPickAndPlace-v4");
+    FetchEnv env(spec, ResolveAssets("bundled"));
+    PolicyContext context;
+    context.seed = 5;
+    auto policy = MakePolicy(policy_name, spec, context);
+    std::vector<EpisodeRecord> played;
+    for (int k = 0; k < 3; ++k) {
+      played.push_back(RunEpisode(
+          env, *policy, k, k == 0 ? std::optional<uint64_t>(5) : std::nullopt, k == 2 ? 20 : 50));
+    }
+    MinariWriteOptions options = Options(tmp.path(), "played/episodes-v0", spec);
+    {
+      MinariWriter writer(options);
+      for (const EpisodeRecord& e : played) {
+        writer.Add(
+            ToMinariEpisode(e, e.index == 0 ? std::optional<uint64_t>(5) : std::nullopt, 25));
+      }
+      writer.Commit();
+    }
+    const MinariDataset d = ReadMinariDataset("played/episodes-v0", tmp.path());
+    ASSERT_EQ(d.episodes.size(), played.size());
+    for (size_t k = 0; k < played.size(); ++k) {
+      const MinariEpisode& m = d.episodes[k];
+      const EpisodeRecord& e = played[k];
+      ASSERT_EQ(m.steps() + 1, static_cast<int>(e.steps.size()));
+      EXPECT_EQ(m.seed.has_value(), k == 0);
+      EXPECT_EQ(m.truncations.back(), 1);
+      for (size_t t = 0; t < e.steps.size(); ++t) {
+        const StepRecord& s = e.steps[t];
+        EXPECT_EQ(std::memcmp(&m.observation[t * 25], s.obs.observation.data(), 25 * 8), 0) << t;
+        EXPECT_EQ(std::memcmp(&m.achieved_goal[t * 3], s.obs.achieved_goal.data(), 24), 0) << t;
+        EXPECT_EQ(std::memcmp(&m.desired_goal[t * 3], s.obs.desired_goal.data(), 24), 0) << t;
+        EXPECT_EQ(m.is_success[t], s.is_success ? 1.0f : 0.0f);
+        if (t == 0) continue;
+        EXPECT_EQ(std::memcmp(&m.rewards[t - 1], &*s.reward, 8), 0) << t;
+        for (int i = 0; i < 4; ++i) {
+          const double applied = std::clamp(s.action->value[i], -1.0, 1.0);
+          EXPECT_EQ(m.actions[(t - 1) * 4 + i], static_cast<float>(applied));
+          if (s.action->is_float32) {  // the float32 path loses nothing
+            EXPECT_EQ(static_cast<double>(m.actions[(t - 1) * 4 + i]), applied);
+          }
+        }
+      }
+    }
+  }
+}
+
+// Replaying a dataset: float32 episodes (random policy) replay bit for bit, the first from its
+// seed and the others continuing the generator; float64 ones (scripted) were stored rounded to
+// float32 and drift after the reset; an edited observation is found at its row and index.
+TEST(MinariReplay, FindsTheFirstDivergence) {
+  const EnvSpec& spec = FindEnvSpec("FetchPush-v4");
+  for (const char* policy_name : {"random", "scripted"}) {
+    SCOPED_TRACE(policy_name);
+    FetchEnv env(spec, ResolveAssets("bundled"));
+    PolicyContext context;
+    context.seed = 8;
+    auto policy = MakePolicy(policy_name, spec, context);
+    std::vector<MinariEpisode> episodes;
+    for (int k = 0; k < 3; ++k) {
+      const std::optional<uint64_t> seed = k == 0 ? std::optional<uint64_t>(8) : std::nullopt;
+      episodes.push_back(ToMinariEpisode(RunEpisode(env, *policy, k, seed, 30), seed, 25));
+    }
+    FetchEnv replay(spec, ResolveAssets("bundled"));
+    for (size_t k = 0; k < episodes.size(); ++k) {
+      const MinariDivergence d = ReplayMinariEpisode(replay, episodes[k], 0.0);
+      EXPECT_EQ(d.reset, k == 0 ? "seed" : "continued");
+      if (std::string(policy_name) == "random") {
+        EXPECT_EQ(d.first_step, -1) << k << " " << d.where << " " << d.difference;
+        EXPECT_EQ(d.max_difference, 0.0);
+      } else {
+        EXPECT_GE(d.first_step, 1) << k;  // the reset itself is exact
+      }
+    }
+  }
+  FetchEnv env(spec, ResolveAssets("bundled"));
+  PolicyContext context;
+  auto policy = MakePolicy("random", spec, context);
+  MinariEpisode e = ToMinariEpisode(RunEpisode(env, *policy, 0, 3, 20), 3, 25);
+  e.observation[7 * 25 + 3] += 1e-3;
+  const MinariDivergence d = ReplayMinariEpisode(env, e, 1e-6);
+  EXPECT_EQ(d.first_step, 7);
+  EXPECT_EQ(d.where, "observation[3]");
+  EXPECT_NEAR(d.difference, -1e-3, 1e-12);
+}
+
+// Every bad input: one line, starting with the file it is about, saying what is wrong, and
+// nothing printed by libhdf5 itself.
+class MinariBadInput : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ =
+        Write(Options(tmp_.path(), "bad/input-v0", FindEnvSpec("FetchPush-v4")), SomeEpisodes(25));
+    metadata_ = ReadFile(dir_ / "data/metadata.json");
+  }
+  fs::path Hdf5() const { return dir_ / "data/main_data.hdf5"; }
+  fs::path Metadata() const { return dir_ / "data/metadata.json"; }
+  void EditMetadata(const std::string& from, const std::string& to) {
+    const size_t at = metadata_.find(from);
+    ASSERT_NE(at, std::string::npos) << from;
+    WriteText(Metadata(), metadata_.substr(0, at) + to + metadata_.substr(at + from.size()));
+  }
+  // replaces episode_1's actions with a dataset of `rows` rows (or none)
+  void ReplaceActions(hsize_t rows) {
+    const H5File file(H5Fopen(Hdf5().c_str(), H5F_ACC_RDWR, H5P_DEFAULT));
+    ASSERT_TRUE(file.valid());
+    ASSERT_GE(H5Ldelete(file.get(), "episode_1/actions", H5P_DEFAULT), 0);
+    if (rows == 0) return;
+    const hsize_t dims[2] = {rows, 4};
+    const H5Dataspace space(H5Screate_simple(2, dims, nullptr));
+    const H5Dataset dset(H5Dcreate2(file.get(), "episode_1/actions", H5T_IEEE_F32LE, space.get(),
+                                    H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT));
+    ASSERT_TRUE(dset.valid());
+    std::vector<float> zeros(rows * 4, 0.0f);
+    ASSERT_GE(H5Dwrite(dset.get(), H5T_NATIVE_FLOAT, H5S_ALL, H5S_ALL, H5P_DEFAULT, zeros.data()),
+              0);
+  }
+  void ExpectOneLine(const fs::path& file, const std::string& what) {
+    ::testing::internal::CaptureStderr();
+    std::string message;
+    try {
+      ReadMinariDataset(dir_.string(), tmp_.path());
+    } catch (const RunError& e) {
+      message = e.what();
+    }
+    const std::string printed = ::testing::internal::GetCapturedStderr();
+    EXPECT_EQ(message.rfind(file.string() + ": ", 0), 0u) << message;
+    EXPECT_NE(message.find(what), std::string::npos) << message;
+    EXPECT_EQ(message.find('\n'), std::string::npos) << message;
+    EXPECT_EQ(printed, "") << "libhdf5 printed on its own";
+  }
+
+  TempDir tmp_;
+  fs::path dir_;
+  std::string metadata_;
+};
+
+TEST_F(MinariBadInput, MissingMetadataKey) {
+  EditMetadata("\"minari_version\": \"0.5.0\", ", "");
+  ExpectOneLine(Metadata(), "missing key 'minari_version'");
+}
+
+TEST_F(MinariBadInput, MissingEpisodeKey) {
+  ReplaceActions(0);
+  ExpectOneLine(Hdf5(), "episode_1: missing key 'actions'");
+}
+
+TEST_F(MinariBadInput, EpisodeOfTheWrongLength) {
+  ReplaceActions(6);
+  ExpectOneLine(Hdf5(),
+                "episode_1: episodes of the wrong length: 'actions' has 6 rows, "
+                "expected 7");
+}
+
+TEST_F(MinariBadInput, NotAFetchSpace) {
+  const std::string box =
+      "{\\\"type\\\": \\\"Box\\\", \\\"dtype\\\": \\\"float64\\\", \\\"shape\\\": [17], "
+      "\\\"low\\\": [-Infinity], \\\"high\\\": [Infinity]}";
+  const size_t begin = metadata_.find("\"observation_space\": \"") + 22;
+  const size_t end = metadata_.find("\", \"action_space\"");
+  EditMetadata(metadata_.substr(begin, end - begin), box);
+  ExpectOneLine(Metadata(), "observation_space is not a Fetch space");
+}
+
+TEST_F(MinariBadInput, NotAFetchEnvId) {
+  EditMetadata("{\\\"id\\\": \\\"FetchPush-v4\\\"", "{\\\"id\\\": \\\"HalfCheetah-v5\\\"");
+  ExpectOneLine(Metadata(), "env_spec id 'HalfCheetah-v5' is not a Fetch environment");
+}
+
+TEST_F(MinariBadInput, UnsupportedMinariVersion) {
+  for (const char* version : {"0.3.1", "~=0.4", "0.6.0"}) {
+    EditMetadata("\"minari_version\": \"0.5.0\"",
+                 std::string("\"minari_version\": \"") + version + "\"");
+    ExpectOneLine(Metadata(), std::string("unsupported minari_version '") + version + "'");
+  }
+}
+
+TEST_F(MinariBadInput, TruncatedHdf5File) {
+  fs::resize_file(Hdf5(), fs::file_size(Hdf5()) / 2);
+  ExpectOneLine(Hdf5(), "truncated HDF5 file");
+}
+
+TEST_F(MinariBadInput, NotAnHdf5FileAtAll) {
+  WriteText(Hdf5(), "{\"this is\": \"json\"}\n");
+  ExpectOneLine(Hdf5(), "not a readable HDF5 file");
+}
+
+TEST_F(MinariBadInput, StepsThatDoNotAddUp) {
+  EditMetadata("\"total_steps\": 107", "\"total_steps\": 100");
+  ExpectOneLine(Metadata(), "total_steps is 100 but the episodes hold 107 steps");
+}
+
+// The commands: rollout --minari writes the episodes of its trajectory JSON, bit for bit (actions
+// as applied: clipped, float32); --jobs 2 writes the same bytes; export of the trajectory JSON
+// or of a run folder of episode files writes the same HDF5 bytes; an existing id is refused.
+TEST(MinariCommands, RolloutAndExportRoundTrip) {
+  TempDir tmp;
+  const fs::path root = tmp.path() / "datasets";
+  const std::string run =
+      "rollout --env-id FetchPush-v4 --policy random --episodes 3 --steps 12 "
+      "--seed 4 --minari-root " +
+      root.string() + " ";
+  auto r = RunFetchscope(run + "--minari rt/one-v0 --json-out " + (tmp.path() / "t.json").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("wrote Minari dataset rt/one-v0 at " + (root / "rt/one-v0").string()),
+            std::string::npos)
+      << r.output;
+  const Trajectory t = ReadTrajectory((tmp.path() / "t.json").string());
+  const MinariDataset d = ReadMinariDataset("rt/one-v0", root);
+  EXPECT_EQ(d.metadata.env_id, "FetchPush-v4");
+  EXPECT_EQ(d.metadata.algorithm_name, "random");
+  ASSERT_EQ(d.episodes.size(), t.episodes.size());
+  for (size_t k = 0; k < t.episodes.size(); ++k) {
+    SCOPED_TRACE(k);
+    ExpectSameEpisode(
+        d.episodes[k],
+        ToMinariEpisode(t.episodes[k], k == 0 ? std::optional<uint64_t>(4) : std::nullopt, 25));
+  }
+  // --jobs 2, worker processes: the same bytes
+  r = RunFetchscope(run + "--jobs 2 --minari rt/two-v0");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(ReadFile(root / "rt/one-v0/data/main_data.hdf5") ==
+              ReadFile(root / "rt/two-v0/data/main_data.hdf5"));
+  std::string metadata = ReadFile(root / "rt/two-v0/data/metadata.json");  // but for the id
+  metadata.replace(metadata.find("rt/two-v0"), 9, "rt/one-v0");
+  EXPECT_EQ(ReadFile(root / "rt/one-v0/data/metadata.json"), metadata);
+  // an existing id: refused before the run, replaced with --overwrite
+  r = RunFetchscope(run + "--minari rt/one-v0");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("already exists"), std::string::npos) << r.output;
+  r = RunFetchscope(run + "--minari rt/one-v0 --overwrite");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  // export: the trajectory JSON, and a run folder of one file per episode
+  r = RunFetchscope("export " + (tmp.path() / "t.json").string() +
+                    " --minari rt/export-v0 --minari-root " + root.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const fs::path folder = tmp.path() / "run";
+  fs::create_directories(folder);
+  for (const TrajectoryEpisode& e : t.episodes) {
+    Trajectory one = t;
+    one.episodes = {e};
+    char name[32];
+    std::snprintf(name, sizeof name, "episode_%03d.json", e.index);
+    WriteText(folder / name, TrajectoryText(one));
+  }
+  r = RunCommand("MINARI_DATASETS_PATH=" + root.string() + " " FETCHSCOPE_BIN " export " +
+                 folder.string() + " --minari rt/folder-v0 2>&1");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const std::string hdf5 = ReadFile(root / "rt/one-v0/data/main_data.hdf5");
+  EXPECT_TRUE(hdf5 == ReadFile(root / "rt/export-v0/data/main_data.hdf5"));
+  EXPECT_TRUE(hdf5 == ReadFile(root / "rt/folder-v0/data/main_data.hdf5"));
+  r = RunFetchscope("export " + (tmp.path() / "nothing").string() + " --minari rt/x-v0");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+}
+
+// record --minari: the run folder's episodes as a dataset, the bytes export makes of the same
+// folder, and replaying it on the env: bit for bit (random policy: float32 actions). A shard
+// holds part of a run and is refused.
+TEST(MinariCommands, RecordMinariReplaysBitForBit) {
+  unsetenv("DISPLAY");
+  TempDir tmp;
+  const fs::path root = tmp.path() / "datasets", out = tmp.path() / "run";
+  const std::string record =
+      "record --quiet --env-id FetchReach-v4 --width 32 --height 32 "
+      "--steps 6 --episodes 2 --seed 3 --policy random --minari-root " +
+      root.string() + " --out " + out.string() + " ";
+  auto r = RunFetchscope(record + "--minari rec/run-v0");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("wrote Minari dataset rec/run-v0"), std::string::npos) << r.output;
+  r = RunFetchscope("export " + out.string() + " --minari rec/export-v0 --minari-root " +
+                    root.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(ReadFile(root / "rec/run-v0/data/main_data.hdf5") ==
+              ReadFile(root / "rec/export-v0/data/main_data.hdf5"));
+  const MinariDataset d = ReadMinariDataset("rec/run-v0", root);
+  ASSERT_EQ(d.episodes.size(), 2u);
+  EXPECT_EQ(d.episodes[0].seed, std::optional<uint64_t>(3));
+  EXPECT_FALSE(d.episodes[1].seed.has_value());
+  FetchEnv env(FindEnvSpec("FetchReach-v4"), ResolveAssets("bundled"));
+  for (const MinariEpisode& e : d.episodes) {
+    const MinariDivergence divergence = ReplayMinariEpisode(env, e, 0.0);
+    EXPECT_EQ(divergence.first_step, -1) << divergence.where;
+    EXPECT_EQ(divergence.max_difference, 0.0);
+  }
+  r = RunFetchscope(record + "--shard 0/2 --overwrite --minari rec/shard-v0");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("a shard records part of the run"), std::string::npos) << r.output;
+}
+
+}  // namespace
+}  // namespace fetchscope
