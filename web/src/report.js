@@ -1,5 +1,5 @@
 // The report page of one record run (fetchscope report DIR): drawn from FS.data, see
-// cli/report.cc ReportData for its fields.
+// inspect/report.cc ReportData and inspect/viewer.h AddEpisodeViewers for its fields.
 (() => {
   const {data, colors, el, num, percent} = FS;
   const page = document.getElementById('page');
@@ -86,8 +86,27 @@
   const numeric = (v) => (typeof v === 'number' ? v : null);
   const status = (e) => (e.status === 'missing' ? el('span', {}, 'missing') :
       el('span', {class: e.success ? 'ok' : 'fail'}, e.success ? 'success' : 'failure'));
+  const outcome = (e) => (e.status === 'missing' ? 'missing' : e.success ? 'success' : 'failure');
+  // the first and last frame: their tiles of the contact sheet, loaded once the row is on screen
+  const thumbObserver = new IntersectionObserver((entries) => {
+    for (const entry of entries) {
+      if (!entry.isIntersecting) continue;
+      entry.target.style.backgroundImage = `url("${entry.target.dataset.sheet}")`;
+      thumbObserver.unobserve(entry.target);
+    }
+  }, {rootMargin: '200px'});
+  const thumb = (e, which) => {
+    const th = e.thumbs, scale = 64 / th.tile[0];
+    const t = which === 'first' ? 0 : e.frames - 1;
+    const box = el('a', {class: 'thumb', href: `#episode=${e.index}&t=${t}`, 'data-sheet': e.sheet, title: `frame ${t}`,
+        style: `width:64px;height:${Math.round(th.tile[1] * scale)}px;background-size:${th.sheet[0] * scale}px ${th.sheet[1] * scale}px;` +
+               `background-position:${-th[which][0] * scale}px ${-th[which][1] * scale}px`});
+    thumbObserver.observe(box);
+    return box;
+  };
   const columns = [
-    {label: 'episode', value: (e) => e.index, render: (e) => el('a', {href: `#episode-${e.label}`}, e.label), numeric: true},
+    {label: 'episode', value: (e) => e.index, numeric: true,
+     render: (e) => (e.status === 'missing' ? e.label : el('a', {href: `#episode=${e.index}`, title: 'open in the viewer'}, e.label))},
     {label: 'success', value: (e) => (e.status === 'missing' ? null : e.success ? 1 : 0), render: status},
     {label: 'return', value: (e) => numeric(e.return), render: (e) => num(e.return, 3), numeric: true},
     {label: 'final distance (m)', value: (e) => numeric(e.final_distance), render: (e) => num(e.final_distance, 4), numeric: true},
@@ -101,6 +120,8 @@
     columns.push({label: 'original successes', value: (e) => (e.hindsight ? e.hindsight.original_successes : null),
                   render: (e) => (e.hindsight ? String(e.hindsight.original_successes) : '—'), numeric: true});
   }
+  columns.push({label: 'first / last frame', value: () => null,
+                render: (e) => (e.thumbs && e.sheet ? el('span', {class: 'thumbs'}, thumb(e, 'first'), thumb(e, 'last')) : '')});
   // a per-layer video "episode_000_segmentation.mp4" is linked as "segmentation.mp4"
   const shortName = (e, file) => file.replace(/^.*\//, '').replace(`episode_${e.label}_`, '');
   columns.push({label: 'files', value: () => null, render: (e) => (e.status === 'missing' ? '' : [
@@ -111,14 +132,55 @@
     ...e.other_videos.flatMap((file) => [el('a', {href: file, class: 'video-link'}, shortName(e, file)), ' ']),
     e.sheet ? el('a', {href: e.sheet}, 'sheet') : null, ' ',
     e.trajectory ? el('a', {href: e.trajectory}, 'json') : null])});
-  const table = FS.sortableTable(columns, episodes, (e) => (e.status === 'missing' ? 'missing' : null));
+  let viewer = null;
+  const table = FS.sortableTable(columns, episodes,
+      (e) => [e.status === 'missing' ? 'missing' : null, viewer && viewer.episode === e.index ? 'current' : null].filter(Boolean).join(' ') || null,
+      (e) => ({'data-episode': e.index, 'data-outcome': outcome(e)}));
   table.id = 'episode-table';
-  page.append(FS.scrolling(table));
+  table.dataset.filter = 'all';
+  // filter: every episode, the successes or the failures (the others' rows are hidden)
+  const filter = el('div', {class: 'episode-filter', id: 'episode-filter', role: 'group', 'aria-label': 'show episodes'}, 'Show: ');
+  for (const [value, text] of [['all', 'all'], ['success', 'successes'], ['failure', 'failures']]) {
+    filter.append(el('button', {type: 'button', 'data-filter': value, 'aria-pressed': value === 'all' ? 'true' : 'false', onclick: () => {
+      table.dataset.filter = value;
+      filter.querySelectorAll('button').forEach((b) => b.setAttribute('aria-pressed', b.dataset.filter === value ? 'true' : 'false'));
+    }}, text));
+  }
+  page.append(filter, FS.scrolling(table));
+
+  // --- the episode viewer: one episode's video and per-step signals on one step cursor
+  page.append(el('h2', {}, 'Episode viewer'));
+  const viewable = recorded.filter((e) => e.video || e.viewer);
+  const headline = (e) => `episode ${e.label} — ${e.success ? 'success' : 'failure'}, return ${num(e.return, 2)}, ` +
+      `final distance ${num(e.final_distance, 3)} m` + (e.complete ? '' : ', interrupted');
+  const v = data.viewer || {};
+  viewer = FSViewer.create(page, {
+    id: 'viewer', fps: data.fps, threshold: data.threshold, linkable: true,
+    has_object: v.has_object, gripper_command: v.gripper_command, reach: v.reach,
+    episodes: viewable.map((e) => ({index: e.index, label: e.label, title: headline(e), className: e.success ? 'ok' : 'fail',
+      tracks: () => [{name: `episode ${e.label}`, video: e.video, format: e.video_format, frames: e.frames,
+                      signals: e.viewer ? FSViewer.episodeSignals(`fetchscope-episode-${e.index}`) : null}]})),
+    // the episodes ↑/↓ visit: the table's rows in their order, those the filter shows
+    visible: () => [...table.tBodies[0].rows]
+        .filter((row) => row.dataset.outcome !== 'missing' && (table.dataset.filter === 'all' || row.dataset.outcome === table.dataset.filter))
+        .map((row) => Number(row.dataset.episode)).filter((k) => viewable.some((e) => e.index === k)),
+    onOpen: (k) => table.querySelectorAll('tbody tr').forEach((row) => row.classList.toggle('current', Number(row.dataset.episode) === k)),
+  });
+  window.fetchscopeViewer = viewer;
+  const openFromHash = (scroll) => {
+    const link = FSViewer.parseHash(location.hash);
+    if (!link || !viewer.open(link.episode, link.t)) return false;
+    if (scroll) viewer.element.scrollIntoView({block: 'start'});
+    return true;
+  };
+  if (!openFromHash(true) && viewable.length) viewer.open(viewable[0].index, 0);
+  window.addEventListener('hashchange', () => openFromHash(true));
 
   // --- each episode
   page.append(el('h2', {}, 'Videos and contact sheets'));
   const grid = el('div', {class: 'episodes'});
-  const preload = recorded.length <= 50 ? 'auto' : 'metadata';
+  // a large run's players load nothing until played: the page opens fast, the viewer shows one episode
+  const preload = recorded.length <= 50 ? 'auto' : 'none';
   for (const e of episodes) {
     const card = el('section', {class: 'episode' + (e.status === 'missing' ? ' missing' : ''), id: `episode-${e.label}`});
     if (e.status === 'missing') {
@@ -153,4 +215,5 @@
   page.append(grid);
   page.append(FS.footer());
   document.body.dataset.ready = '1';
+  performance.mark('fetchscope-ready');
 })();
