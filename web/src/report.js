@@ -81,6 +81,7 @@
     }, [r.n, r.rate, r.low, r.high]],
   }]);
 
+  performance.mark('fetchscope-plots');
   // --- table
   page.append(el('h2', {}, 'Episodes'));
   const numeric = (v) => (typeof v === 'number' ? v : null);
@@ -148,6 +149,7 @@
   }
   page.append(filter, FS.scrolling(table));
 
+  performance.mark('fetchscope-table');
   // --- the episode viewer: one episode's video and per-step signals on one step cursor
   page.append(el('h2', {}, 'Episode viewer'));
   const viewable = recorded.filter((e) => e.video || e.viewer);
@@ -176,17 +178,34 @@
   if (!openFromHash(true) && viewable.length) viewer.open(viewable[0].index, 0);
   window.addEventListener('hashchange', () => openFromHash(true));
 
+  performance.mark('fetchscope-viewer');
   // --- each episode
   page.append(el('h2', {}, 'Videos and contact sheets'));
   const grid = el('div', {class: 'episodes'});
-  // a large run's players load nothing until played: the page opens fast, the viewer shows one episode
-  const preload = recorded.length <= 50 ? 'auto' : 'none';
-  for (const e of episodes) {
+  // A large run's cards get their player and sheet when they come near the screen: a thousand
+  // video elements would take seconds to create and lay out, and load nothing anyone looks at.
+  const lazy = recorded.length > 50;
+  const media = (e) => {
+    // the best format a browser plays (mp4, then webm) as a video; a gif-only run's gif as an image
+    if (e.video && e.video_format === 'gif') return el('img', {class: 'clip', src: e.video, alt: `episode ${e.label} (gif)`});
+    if (e.video) return el('video', {src: e.video, controls: true, muted: true, playsinline: true, preload: lazy ? 'metadata' : 'auto'});
+    return null;
+  };
+  const sheet = (e) => (e.sheet ? el('a', {href: e.sheet}, el('img', {src: e.sheet, alt: `contact sheet of episode ${e.label}`, loading: 'lazy'})) : null);
+  const cardObserver = lazy ? new IntersectionObserver((entries) => {
+    for (const entry of entries) {
+      if (!entry.isIntersecting) continue;
+      const e = episodes[Number(entry.target.dataset.position)];
+      entry.target.querySelector('.card-media').replaceChildren(...[media(e), sheet(e)].filter(Boolean));
+      cardObserver.unobserve(entry.target);
+    }
+  }, {rootMargin: '400px'}) : null;
+  episodes.forEach((e, position) => {
     const card = el('section', {class: 'episode' + (e.status === 'missing' ? ' missing' : ''), id: `episode-${e.label}`});
     if (e.status === 'missing') {
       card.append(el('h3', {}, `episode ${e.label} — missing`), el('p', {}, e.reason));
       grid.append(card);
-      continue;
+      return;
     }
     const heading = `episode ${e.label} — ${e.success ? 'success' : 'failure'}, return ${num(e.return, 2)}, ` +
         `final distance ${num(e.final_distance, 3)} m` + (e.complete ? '' : ', interrupted');
@@ -195,13 +214,13 @@
       card.append(el('p', {}, `hindsight (HER future, k = 4): ${e.hindsight.relabelled_successes} relabelled ` +
           `successes against ${e.hindsight.original_successes} original`));
     }
-    // the best format a browser plays (mp4, then webm) as a video; a gif-only run's gif as an image
-    if (e.video && e.video_format === 'gif') {
-      card.append(el('img', {class: 'clip', src: e.video, alt: `episode ${e.label} (gif)`}));
-    } else if (e.video) {
-      card.append(el('video', {src: e.video, controls: true, muted: true, playsinline: true, preload}));
+    if (lazy) {
+      card.dataset.position = position;
+      card.append(el('div', {class: 'card-media lazy'}));
+      cardObserver.observe(card);
+    } else {
+      card.append(...[media(e), sheet(e)].filter(Boolean));
     }
-    if (e.sheet) card.append(el('a', {href: e.sheet}, el('img', {src: e.sheet, alt: `contact sheet of episode ${e.label}`, loading: 'lazy'})));
     card.append(el('div', {class: 'links'}, [
       ...e.videos.map((v) => el('a', {href: v.file, class: 'video-link'}, v.file)),
       ...e.layers.flatMap((l) => [
@@ -211,9 +230,11 @@
       e.sheet ? el('a', {href: e.sheet}, 'contact sheet') : null,
       e.trajectory ? el('a', {href: e.trajectory}, 'trajectory JSON') : null]));
     grid.append(card);
-  }
+  });
   page.append(grid);
   page.append(FS.footer());
   document.body.dataset.ready = '1';
   performance.mark('fetchscope-ready');
+  // the first frame drawn after it (for tools/bench-viewer.sh)
+  requestAnimationFrame(() => setTimeout(() => performance.mark('fetchscope-painted')));
 })();

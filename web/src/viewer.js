@@ -202,12 +202,17 @@ const FSViewer = (() => {
         return;
       }
       const xs = Array.from({length: state.steps + 1}, (_, t) => t);
-      for (const spec of state.specs) {
+      // every box first, then one width for all (the grid's cells are alike): one layout, not one per plot
+      const targets = state.specs.map((spec) => {
         const box = el('div', {class: 'vplot', id: `vplot-${spec.id}`});
         const target = el('div', {class: 'chart'});
         box.append(el('h4', {}, spec.title), el('div', {class: 'viewer-readout'}), target);
         plotsBox.append(box);
-        const width = Math.max(300, Math.floor(target.clientWidth || 520));
+        return target;
+      });
+      const width = Math.max(300, Math.floor(targets[0].clientWidth || 520));
+      for (const [i, spec] of state.specs.entries()) {
+        const target = targets[i];
         const hasCmd = spec.series.some((s) => s.scale === 'cmd');
         const series = [{label: 'step'}];
         const values = [xs];
