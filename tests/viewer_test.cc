@@ -17,6 +17,7 @@
 #include "src/env_spec.h"
 #include "src/fetch_env.h"
 #include "src/hindsight.h"
+#include "src/trajectory.h"
 #include "tests/test_util.h"
 
 namespace fetchscope {
@@ -28,10 +29,14 @@ using testing::ReadFile;
 using testing::RunFetchscope;
 using testing::TempDir;
 
-ViewerStep Step(std::vector<double> obs, std::array<double, 3> achieved,
-                std::array<double, 3> desired, std::optional<std::array<double, 4>> action,
-                std::optional<double> reward) {
-  return {std::move(obs), achieved, desired, action, reward};
+TrajectoryStep Step(std::vector<double> obs, std::array<double, 3> achieved,
+                    std::array<double, 3> desired, std::optional<std::array<double, 4>> action,
+                    std::optional<double> reward) {
+  TrajectoryStep step;
+  step.obs = {std::move(obs), achieved, desired};
+  if (action) step.action = Action{*action, false};
+  step.reward = reward;
+  return step;
 }
 
 TEST(ViewerSignalsTest, ReachPlotsCommandAgainstAchievedAndItsFingers) {
@@ -43,7 +48,7 @@ TEST(ViewerSignalsTest, ReachPlotsCommandAgainstAchievedAndItsFingers) {
   o2[1] = -0.01;
   o1[3] = 0.02;  // fingers
   o1[4] = 0.025;
-  const std::vector<ViewerStep> steps = {
+  const std::vector<TrajectoryStep> steps = {
       Step(o0, {1, 0, 0}, {1, 0.3, 0.4}, std::nullopt, std::nullopt),
       Step(o1, {1.03, 0, 0}, {1, 0.3, 0.4}, std::array<double, 4>{2.0, -0.5, NAN, 1}, -1.0),
       Step(o2, {1.05, -0.01, 0}, {1, 0.3, 0.4}, std::array<double, 4>{0.4, -3, 0, -1}, -0.0)};
@@ -78,7 +83,7 @@ TEST(ViewerSignalsTest, PickAndPlacePlotsGripperCommandAndObject) {
   o1[5] = 0.45;
   o1[9] = 0.03;  // fingers
   o1[10] = 0.01;
-  const std::vector<ViewerStep> steps = {
+  const std::vector<TrajectoryStep> steps = {
       Step(o0, {0, 0, 0}, {1.3, 0.7, 0.55}, std::nullopt, std::nullopt),
       Step(o1, {1.3, 0.7, 0.45}, {1.3, 0.7, 0.55}, std::array<double, 4>{0, 0, 0, -4}, -1.0)};
   const json s = EpisodeSignals(spec, steps);
@@ -94,7 +99,7 @@ TEST(ViewerSignalsTest, PickAndPlacePlotsGripperCommandAndObject) {
 
 TEST(ViewerSignalsTest, HindsightRewardsAreRecordsRelabelling) {
   const EnvSpec& spec = FindEnvSpec("FetchPush-v4");
-  std::vector<ViewerStep> steps;
+  std::vector<TrajectoryStep> steps;
   std::vector<std::array<double, 3>> achieved;
   for (int t = 0; t <= 6; ++t) {
     const std::array<double, 3> a = {1.2 + 0.02 * t, 0.7, 0.42};
