@@ -217,4 +217,43 @@ std::vector<PageBlock> AddEpisodeViewers(const fs::path& dir, const Manifest& ma
   return blocks;
 }
 
+std::vector<PageBlock> AddCompareViewers(const cli::RecordedRun& a, const cli::RecordedRun& b,
+                                         json* page_data) {
+  std::vector<PageBlock> blocks;
+  json& page = *page_data;
+  const EnvSpec* spec = nullptr;
+  try {
+    spec = &FindEnvSpec(a.manifest.env_id);
+  } catch (const std::exception&) {
+    // an env this build does not know: the videos alone
+  }
+  page["viewer"] = {{"signals", spec != nullptr},
+                    {"threshold", spec ? spec->distance_threshold : 0.05},
+                    {"has_object", spec && spec->has_object},
+                    {"gripper_command", spec && !spec->block_gripper},
+                    {"reach", spec && spec->task == Task::kReach}};
+  for (json& row : page["episodes"]) {
+    const int k = row.value("index", -1);
+    for (const auto& [run, side] : {std::pair{&a, "a"}, std::pair{&b, "b"}}) {
+      const std::string key = std::string("viewer_") + side;
+      row[key] = false;
+      const auto entry = run->recorded.find(k);
+      if (!spec || entry == run->recorded.end() || entry->second.trajectory.empty()) continue;
+      try {
+        const Trajectory trajectory =
+            ReadTrajectory((run->dir / entry->second.trajectory).string());
+        if (trajectory.episodes.empty()) continue;
+        json signals = EpisodeSignals(*spec, trajectory.episodes.front().steps);
+        signals["index"] = k;
+        blocks.emplace_back(std::string("fetchscope-") + side + "-episode-" + std::to_string(k),
+                            signals.dump());
+        row[key] = true;
+      } catch (const RunError&) {
+        // compare has read both trajectories already: it would have stopped
+      }
+    }
+  }
+  return blocks;
+}
+
 }  // namespace fetchscope

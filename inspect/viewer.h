@@ -13,6 +13,7 @@
 #include <utility>
 #include <vector>
 
+#include "inspect/report.h"
 #include "run/manifest.h"
 #include "src/env_spec.h"
 #include "src/trajectory.h"
@@ -70,5 +71,13 @@ using PageBlock = std::pair<std::string, std::string>;
 /// trajectory cannot be read has none (ReportData notes why).
 std::vector<PageBlock> AddEpisodeViewers(const std::filesystem::path& dir, const Manifest& manifest,
                                          nlohmann::json* report_data);
+
+/// The viewer's part of `compare`'s page (A and B on one step cursor, over the comparison video):
+/// adds to `page_data` a "viewer" object (the threshold, which plots the task has) and, per
+/// compared episode (its "episodes" rows, by "index"), "viewer_a" and "viewer_b" (whether the run's
+/// signals are on the page); returns their blocks, ids "fetchscope-a-episode-K" and
+/// "fetchscope-b-episode-K".
+std::vector<PageBlock> AddCompareViewers(const cli::RecordedRun& a, const cli::RecordedRun& b,
+                                         nlohmann::json* page_data);
 
 }  // namespace fetchscope

@@ -393,6 +393,27 @@ void ExpectShowsFrame(const fs::path& grab, const fs::path& video, int t) {
   }
 }
 
+// Runs web/test/check_viewer.mjs on `page` (deep links "E:T,...", a click at step `click_step`,
+// the frames it grabs written to `grabs`) and returns what it found; no console or page errors.
+json CheckViewer(const fs::path& page, const std::string& links, int click_step,
+                 const fs::path& grabs) {
+  fs::create_directories(grabs);
+  const auto c =
+      RunCommand("node " + (SourceDir() / "web" / "test" / "check_viewer.mjs").string() +
+                 " --page " + page.string() + " --links " + links + " --click-step " +
+                 std::to_string(click_step) + " --grab-dir " + grabs.string() + " --screenshot " +
+                 ScreenshotPath().string() + " --chromium " + Chromium());
+  const size_t line = c.output.rfind("\n{");
+  json result = json::parse(c.output.substr(line == std::string::npos ? 0 : line + 1), nullptr,
+                            /*allow_exceptions=*/false);
+  EXPECT_EQ(c.exit_code, 0) << c.output;
+  EXPECT_TRUE(result.is_object()) << c.output;
+  if (!result.is_object()) return json::object({{"links", json::array()}});
+  EXPECT_TRUE(result["console_errors"].empty()) << result["console_errors"].dump();
+  EXPECT_TRUE(result["page_errors"].empty()) << result["page_errors"].dump();
+  return result;
+}
+
 // The report's episode viewer (web/src/viewer.js, web/test/check_viewer.mjs) on a scripted
 // FetchPickAndPlace run of 20 steps (episodes 0 and 1 fail, 2-4 succeed): a deep link opens its
 // episode at its step, showing that frame of the video (against FFmpeg's decoding, and episode 0's
@@ -413,18 +434,7 @@ TEST_F(BrowserTest, ViewerFollowsDeepLinksKeysAndClicks) {
   }
   ASSERT_EQ(failures, (std::vector<int>{0, 1})) << "the run should fail twice, then succeed";
   const fs::path grabs = tmp.path() / "grabs";
-  fs::create_directories(grabs);
-  const auto c = RunCommand(
-      "node " + (SourceDir() / "web" / "test" / "check_viewer.mjs").string() + " --page " +
-      (run / "index.html").string() + " --links 3:7,0:12 --click-step 15 --grab-dir " +
-      grabs.string() + " --screenshot " + ScreenshotPath().string() + " --chromium " + Chromium());
-  const json result = json::parse(
-      c.output.substr(c.output.rfind("\n{") == std::string::npos ? 0 : c.output.rfind("\n{") + 1),
-      nullptr, false);
-  ASSERT_EQ(c.exit_code, 0) << c.output;
-  ASSERT_TRUE(result.is_object()) << c.output;
-  EXPECT_TRUE(result["console_errors"].empty()) << result["console_errors"].dump();
-  EXPECT_TRUE(result["page_errors"].empty()) << result["page_errors"].dump();
+  const json result = CheckViewer(run / "index.html", "3:7,0:12", 15, grabs);
   ASSERT_EQ(result["links"].size(), 2u) << result.dump();
   const double fps = 25;
 
@@ -507,6 +517,39 @@ TEST_F(BrowserTest, ViewerFollowsDeepLinksKeysAndClicks) {
   EXPECT_EQ(result["after_down"]["step"], 0);
 }
 
+// compare's page: its viewer shows run A (solid) and B (dashed) on one step cursor over the
+// comparison video A | B | difference; a deep link opens its episode and step, → moves one.
+TEST_F(BrowserTest, CompareViewerShowsAAndBOnOneCursor) {
+  TempDir tmp;
+  for (const char* policy : {"scripted", "zero"}) {
+    const auto r = RunFetchscope(Record(tmp.path() / policy, policy, "--no-report"));
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+  }
+  const fs::path cmp = tmp.path() / "cmp";
+  const auto c = RunFetchscope("compare -q " + (tmp.path() / "scripted").string() + " " +
+                               (tmp.path() / "zero").string() + " --out " + cmp.string());
+  ASSERT_EQ(c.exit_code, 1) << c.output;
+  const json result = CheckViewer(cmp / "index.html", "2:6", 12, tmp.path() / "grabs");
+  ASSERT_EQ(result["links"].size(), 1u) << result.dump();
+  const json& link = result["links"][0];
+  EXPECT_EQ(link["state"]["episode"], 2) << link.dump();
+  EXPECT_EQ(link["state"]["step"], 6) << link.dump();
+  EXPECT_NEAR(link["state"]["current_time"].get<double>(), 6.5 / 25, 1e-3);
+  ExpectShowsFrame(link["grab"].get<std::string>(), cmp / "compare_episode_002.mp4", 6);
+  EXPECT_EQ(link["right"]["step"], 7) << link.dump();
+  ExpectShowsFrame(link["right_grab"].get<std::string>(), cmp / "compare_episode_002.mp4", 7);
+  EXPECT_EQ(link["click"]["state"]["step"], 12) << link.dump();
+  EXPECT_EQ(result["after_down"]["episode"], 3) << result.dump();
+  // both runs' distances, every step: the scripted A closes in, the zero policy's B stays put
+  const json& distance = result["plots"]["distance"];
+  ASSERT_EQ(distance["A distance"].size(), 21u) << distance.dump();
+  ASSERT_EQ(distance["B distance"].size(), 21u) << distance.dump();
+  EXPECT_EQ(distance["A distance"][0], distance["B distance"][0]);  // the same reset
+  EXPECT_LT(distance["A distance"][20].get<double>(), distance["B distance"][20].get<double>());
+  EXPECT_EQ(distance["B distance"][20], distance["B distance"][0]);
+  EXPECT_EQ(result["cursor_lines"], result["plots"].size());
+}
+
 // A static web server (Python's http.server) on a free port, serving `dir`, for the test's life.
 class StaticServer {
  public:
@@ -560,7 +603,7 @@ TEST_F(BrowserTest, ComparePageLoadsPlaysPlotsAndSorts) {
   ASSERT_EQ(c.exit_code, 1) << c.output;
   const json result = CheckPage((tmp.path() / "cmp" / "index.html").string(),
                                 /*sort_column: max state difference*/ 3);
-  ExpectHealthyPage(result, 5, 21 / 25.0, 3 * 96, 2);
+  ExpectHealthyPage(result, 5 + kViewerVideo, 21 / 25.0, 3 * 96, 2);
   // one state curve and one pixel curve per episode, with every step and frame, and drawn (the
   // curves lie close together, one may hide another: their colours together)
   const json compare = ReadJsonFile(tmp.path() / "cmp" / "compare.json");

@@ -75,7 +75,8 @@ const FSViewer = (() => {
   }
 
   // One viewer in `parent`. options: {id, fps, threshold, has_object, gripper_command, reach,
-  // episodes: [{index, label, title, tracks: () => [{name, video, format, signals, frames}]}],
+  // episodes: [{index, label, title, tracks: () => [{name, caption, video, format, signals, frames,
+  // noMedia (signals only)}]}],
   // visible: () => indices allowed by the page's filter, onOpen(index)}.
   function create(parent, options) {
     const root = el('section', {class: 'viewer', id: options.id || 'viewer', tabindex: '-1'});
@@ -261,6 +262,7 @@ const FSViewer = (() => {
         media.replaceChildren();
         state.videos = [];
         for (const track of state.tracks) {
+          if (track.noMedia) continue;  // compare: B's signals, its frames are in A's video
           const figure = el('figure', {class: 'viewer-track'});
           if (track.video && track.format === 'gif') {
             figure.append(el('img', {src: track.video, alt: `${track.name} (gif: not seekable)`}));
@@ -273,7 +275,7 @@ const FSViewer = (() => {
           } else {
             figure.append(el('p', {class: 'caption'}, 'no video'));
           }
-          if (state.tracks.length > 1) figure.append(el('figcaption', {}, track.name));
+          if (state.tracks.length > 1) figure.append(el('figcaption', {}, track.caption || track.name));
           media.append(figure);
         }
         buildPlots();

@@ -8,8 +8,8 @@
 // viewer's state (data-episode, data-step, data-steps, the video's currentTime) and the video
 // frame on screen, a screenshot of the video at its natural size, written to OUT/grab_E_T.png. At the first link it
 // then presses → (state and frame again: OUT/right_E_T.png), clicks the distance plot at step
-// K, reads the data every viewer plot holds, filters the table (success, failure, all), and
-// presses ↓ under the success filter.
+// K, reads the data every viewer plot holds, filters the table (success, failure, all; on a
+// report), and presses ↓ (under the success filter on a report).
 import {mkdtempSync, rmSync, writeFileSync} from 'node:fs';
 import {tmpdir} from 'node:os';
 import {join, resolve} from 'node:path';
@@ -100,20 +100,22 @@ try {
     result.plots = await page.evaluate(() => Object.fromEntries(Object.entries(window.fetchscopeViewer.charts).map(([id, chart]) =>
       [id, Object.fromEntries(chart.series.slice(1).map((s, j) => [s.label, chart.data[j + 1]]))])));
     result.cursor_lines = await page.$$eval('#viewer .viewer-cursor', (lines) => lines.length);
-    // the table's filter
-    const rows = () => page.$$eval('#episode-table tbody tr', (trs) => trs.filter((tr) => tr.offsetParent !== null)
-        .map((tr) => ({episode: Number(tr.dataset.episode), outcome: tr.dataset.outcome})));
-    result.filter = {all: await rows()};
-    for (const f of ['success', 'failure']) {
-      await page.click(`#episode-filter button[data-filter="${f}"]`);
-      result.filter[f] = await rows();
+    // the table's filter (the report's; compare's page has none)
+    if (await page.$('#episode-filter')) {
+      const rows = () => page.$$eval('#episode-table tbody tr', (trs) => trs.filter((tr) => tr.offsetParent !== null)
+          .map((tr) => ({episode: Number(tr.dataset.episode), outcome: tr.dataset.outcome})));
+      result.filter = {all: await rows()};
+      for (const f of ['success', 'failure']) {
+        await page.click(`#episode-filter button[data-filter="${f}"]`);
+        result.filter[f] = await rows();
+      }
+      // ↓ under the success filter: the next successful episode
+      await page.click('#episode-filter button[data-filter="success"]');
     }
-    // ↓ under the success filter: the next successful episode
-    await page.click('#episode-filter button[data-filter="success"]');
     await page.locator('#viewer').scrollIntoViewIfNeeded();
     await page.keyboard.press('ArrowDown');
     result.after_down = await settle(page);
-    await page.click('#episode-filter button[data-filter="all"]');
+    if (await page.$('#episode-filter')) await page.click('#episode-filter button[data-filter="all"]');
     result.thumbs = await page.$$eval('#episode-table .thumb', (ts) => ts.length);
   }
 } catch (e) {
