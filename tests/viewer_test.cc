@@ -231,5 +231,32 @@ TEST(ViewerPageTest, ARunsPageCarriesEachEpisodesSignals) {
   }
 }
 
+// With the hindsight overlay, each episode's relabelled rewards are the ones record sampled: their
+// successes add up to the manifest's count.
+TEST(ViewerPageTest, HindsightRewardsMatchTheManifestsCounts) {
+  TempDir tmp;
+  const fs::path run = tmp.path() / "run";
+  const auto r = RunFetchscope(
+      "record --env-id FetchPush-v4 --policy scripted --steps 20 --width 48 --height 48 "
+      "--episodes 2 --overlay hindsight --quiet --out " +
+      run.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const std::string html = ReadFile(run / "index.html");
+  const json data = PageBlock(html, "fetchscope-data");
+  ASSERT_TRUE(data.is_object());
+  EXPECT_EQ(data["viewer"]["hindsight"], true);
+  const json manifest = json::parse(ReadFile(run / "manifest.json"));
+  for (const json& e : manifest["episodes"]) {
+    const int k = e["index"].get<int>();
+    const json block = PageBlock(html, "fetchscope-episode-" + std::to_string(k));
+    ASSERT_TRUE(block.contains("her")) << k;
+    int successes = 0;
+    for (const json& n : block["her"]["successes"]) successes += n.is_null() ? 0 : n.get<int>();
+    EXPECT_EQ(successes, e["hindsight"]["relabelled_successes"].get<int>()) << k;
+    EXPECT_EQ(block["her"]["rewards"].size(), 4u);
+    EXPECT_EQ(block["her"]["rewards"][0].size(), 21u);
+  }
+}
+
 }  // namespace
 }  // namespace fetchscope
