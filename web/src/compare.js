@@ -117,7 +117,8 @@
   const openFromHash = (scroll) => {
     const link = FSViewer.parseHash(location.hash);
     if (!link || !viewer.open(link.episode, link.t)) return false;
-    if (scroll) viewer.element.scrollIntoView({block: 'start'});
+    // after the page's first layout, which it would otherwise force while the page is built
+    if (scroll) requestAnimationFrame(() => viewer.element.scrollIntoView({block: 'start'}));
     return true;
   };
   if (!openFromHash(true) && rows.length) viewer.open(rows[0].index, 0);

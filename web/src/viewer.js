@@ -193,6 +193,16 @@ const FSViewer = (() => {
       render(false);
     }
 
+    // The width of one plot, from the window's and the grid's sizes (page.css: main at most 1180 px
+    // with 24 px padding, the viewer's 10 px padding and border, cells at least 520 px, 10 px
+    // apart, each with 6 px padding and a border), so that opening a view forces no layout of a
+    // page that may hold a thousand table rows; fit() corrects it once the page is drawn.
+    function plotWidth() {
+      const grid = Math.min(1180, window.innerWidth) - 2 * 24 - 2 * 11;
+      const columns = Math.max(1, Math.floor((grid + 10) / (520 + 10)));
+      return Math.max(300, Math.floor((grid - 10 * (columns - 1)) / columns) - 2 * 7);
+    }
+
     function buildPlots() {
       for (const chart of Object.values(state.charts)) chart.destroy();
       state.charts = {};
@@ -211,7 +221,7 @@ const FSViewer = (() => {
         plotsBox.append(box);
         return target;
       });
-      const width = Math.max(300, Math.floor(targets[0].clientWidth || 520));
+      const width = plotWidth();
       for (const [i, spec] of state.specs.entries()) {
         const target = targets[i];
         const hasCmd = spec.series.some((s) => s.scale === 'cmd');
@@ -279,6 +289,7 @@ const FSViewer = (() => {
           media.append(figure);
         }
         buildPlots();
+        requestAnimationFrame(() => setTimeout(fit));
         if (options.onOpen) options.onOpen(episode.index);
       }
       seek(t);
@@ -305,13 +316,15 @@ const FSViewer = (() => {
       event.preventDefault();
       action();
     });
-    window.addEventListener('resize', () => {
+    // every plot at its cell's width (after a resize, and once a view's first frame is drawn)
+    function fit() {
       for (const chart of Object.values(state.charts)) {
         const width = Math.max(300, Math.floor(chart.root.parentNode.clientWidth || 520));
-        chart.setSize({width, height: 150});
+        if (width !== chart.width) chart.setSize({width, height: 150});
       }
       drawCursor();
-    });
+    }
+    window.addEventListener('resize', fit);
 
     const api = {element: root, open, seek, togglePlay, nextEpisode,
                  get episode() { return state.episode; }, get step() { return state.step; },
