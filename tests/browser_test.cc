@@ -515,6 +515,14 @@ TEST_F(BrowserTest, ViewerFollowsDeepLinksKeysAndClicks) {
   // ↓ from episode 3 with the successes shown: episode 4
   EXPECT_EQ(result["after_down"]["episode"], 4) << result["after_down"].dump();
   EXPECT_EQ(result["after_down"]["step"], 0);
+  // space plays: the cursor follows the video; space again pauses on the frame on screen
+  EXPECT_EQ(result["while_playing"]["playing"], "1") << result["while_playing"].dump();
+  const json& paused = result["after_pause"];
+  EXPECT_EQ(paused["episode"], 4) << paused.dump();
+  EXPECT_GE(paused["step"].get<int>(), 3) << paused.dump();
+  EXPECT_EQ(paused["step"].get<int>(),
+            std::min(20, static_cast<int>(std::floor(paused["current_time"].get<double>() * fps))))
+      << paused.dump();
 }
 
 // compare's page: its viewer shows run A (solid) and B (dashed) on one step cursor over the

@@ -9,7 +9,8 @@
 // frame on screen, a screenshot of the video at its natural size, written to OUT/grab_E_T.png. At the first link it
 // then presses → (state and frame again: OUT/right_E_T.png), clicks the distance plot at step
 // K, reads the data every viewer plot holds, filters the table (success, failure, all; on a
-// report), and presses ↓ (under the success filter on a report).
+// report), presses ↓ (under the success filter on a report), then plays the episode for a
+// moment with space and pauses it with space again.
 import {mkdtempSync, rmSync, writeFileSync} from 'node:fs';
 import {tmpdir} from 'node:os';
 import {join, resolve} from 'node:path';
@@ -115,6 +116,15 @@ try {
     await page.locator('#viewer').scrollIntoViewIfNeeded();
     await page.keyboard.press('ArrowDown');
     result.after_down = await settle(page);
+    // space: play for a moment, the cursor following the video; space again: paused on a step
+    await page.locator('#viewer').scrollIntoViewIfNeeded();
+    await page.keyboard.press(' ');
+    await page.waitForFunction(() => Number(document.getElementById('viewer').dataset.step) >= 3, null, {timeout});
+    result.while_playing = await page.evaluate(() => ({playing: document.getElementById('viewer').dataset.playing,
+        step: Number(document.getElementById('viewer').dataset.step)}));
+    await page.keyboard.press(' ');
+    await page.waitForFunction(() => document.querySelector('#viewer video').paused, null, {timeout});
+    result.after_pause = await settle(page);
     if (await page.$('#episode-filter')) await page.click('#episode-filter button[data-filter="all"]');
     result.thumbs = await page.$$eval('#episode-table .thumb', (ts) => ts.length);
   }
