@@ -217,7 +217,7 @@ std::vector<PageBlock> AddEpisodeViewers(const fs::path& dir, const Manifest& ma
   return blocks;
 }
 
-std::vector<PageBlock> AddCompareViewers(const cli::RecordedRun& a, const cli::RecordedRun& b,
+std::vector<PageBlock> AddCompareViewers(const RecordedRun& a, const RecordedRun& b,
                                          json* page_data) {
   std::vector<PageBlock> blocks;
   json& page = *page_data;

@@ -77,7 +77,7 @@ std::vector<PageBlock> AddEpisodeViewers(const std::filesystem::path& dir, const
 /// compared episode (its "episodes" rows, by "index"), "viewer_a" and "viewer_b" (whether the run's
 /// signals are on the page); returns their blocks, ids "fetchscope-a-episode-K" and
 /// "fetchscope-b-episode-K".
-std::vector<PageBlock> AddCompareViewers(const cli::RecordedRun& a, const cli::RecordedRun& b,
+std::vector<PageBlock> AddCompareViewers(const RecordedRun& a, const RecordedRun& b,
                                          nlohmann::json* page_data);
 
 }  // namespace fetchscope
