@@ -14,6 +14,7 @@
 #include "encode/video_writer.h"
 #include "inspect/html_page.h"
 #include "inspect/report.h"
+#include "inspect/viewer.h"
 #include "render/text.h"
 #include "run/manifest.h"
 #include "run/run_files.h"
@@ -391,9 +392,12 @@ CompareResult CompareRuns(const CompareOptions& o) {
                      {"fps", fps},
                      {"summary", summary},
                      {"episodes", rows}};
+  // the episode viewer: A's and B's per-step signals on one cursor over the comparison video
+  json page_data = page;
+  const std::vector<PageBlock> blocks = AddCompareViewers(a, b, &page_data);
   const fs::path html = fs::path(o.out) / "index.html";
-  WriteFileAtomically(html.string(),
-                      HtmlPage(PageKind::kCompare, "fetchscope compare: " + title, page));
+  WriteFileAtomically(html.string(), HtmlPage(PageKind::kCompare, "fetchscope compare: " + title,
+                                              page_data, blocks));
 
   return {std::move(rows), same, differing, html};
 }

@@ -8,6 +8,7 @@
 #include "web_report_js.h"
 #include "web_uplot_css.h"
 #include "web_uplot_js.h"
+#include "web_viewer_js.h"
 
 namespace fetchscope {
 namespace {
@@ -65,8 +66,10 @@ std::pair<double, double> WilsonInterval(int successes, int n, double z) {
   return {std::max(0.0, centre - half), std::min(1.0, centre + half)};
 }
 
-std::string HtmlPage(PageKind kind, const std::string& title, const nlohmann::json& data) {
+std::string HtmlPage(PageKind kind, const std::string& title, const nlohmann::json& data,
+                     const std::vector<std::pair<std::string, std::string>>& blocks) {
   const std::string page_js = Text(kWebPageJs, kWebPageJs_size);
+  const std::string viewer_js = Text(kWebViewerJs, kWebViewerJs_size);
   const std::string kind_js = kind == PageKind::kReport ? Text(kWebReportJs, kWebReportJs_size)
                                                         : Text(kWebCompareJs, kWebCompareJs_size);
   std::string html;
@@ -89,8 +92,14 @@ std::string HtmlPage(PageKind kind, const std::string& title, const nlohmann::js
       "files it shows sit beside it.</noscript>\n<main id=\"page\"></main>\n";
   html += "<script id=\"fetchscope-data\" type=\"application/json\">" + ScriptSafe(data.dump()) +
           "</script>\n";
+  // raw text to the HTML parser: no script is compiled until the page parses one
+  for (const auto& [id, json_text] : blocks) {
+    html += "<script id=\"" + HtmlEscape(id) + "\" type=\"application/json\">" +
+            ScriptSafe(json_text) + "</script>\n";
+  }
   html += "<script>\n" + ScriptSafe(Text(kWebUplotJs, kWebUplotJs_size)) + "\n</script>\n";
-  html += "<script>\n" + ScriptSafe(page_js) + "\n" + ScriptSafe(kind_js) + "\n</script>\n";
+  html += "<script>\n" + ScriptSafe(page_js) + "\n" + ScriptSafe(viewer_js) + "\n" +
+          ScriptSafe(kind_js) + "\n</script>\n";
   html += "</body>\n</html>\n";
   return html;
 }

@@ -6,14 +6,19 @@
 
 #include <nlohmann/json.hpp>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace fetchscope {
 
 /// Which script draws the page from its data.
 enum class PageKind { kReport, kCompare };
 
-/// The whole HTML text of a page titled `title` whose script renders `data`.
-std::string HtmlPage(PageKind kind, const std::string& title, const nlohmann::json& data);
+/// The whole HTML text of a page titled `title` whose script renders `data`; each of `blocks`
+/// ({element id, JSON text}) is written as a JSON element that the page parses only when it
+/// needs it (the episode viewer's per-step data).
+std::string HtmlPage(PageKind kind, const std::string& title, const nlohmann::json& data,
+                     const std::vector<std::pair<std::string, std::string>>& blocks = {});
 
 /// The uPlot version embedded (from web/package.json at build time), for the page footer.
 const char* EmbeddedUplotVersion();

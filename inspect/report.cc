@@ -16,6 +16,7 @@
 #include "base/errors.h"
 #include "base/json_util.h"
 #include "inspect/html_page.h"
+#include "inspect/viewer.h"
 #include "run/run_files.h"
 #include "src/env_spec.h"
 
@@ -462,11 +463,14 @@ json ReportData(const RecordedRun& run) {
 }
 
 fs::path WriteRunReport(const RecordedRun& run) {
-  const json data = ReportData(run);
+  json data = ReportData(run);
+  // the episode viewer: per-step signals, parsed by the page when an episode's view opens
+  const std::vector<PageBlock> blocks = AddEpisodeViewers(run.dir, run.manifest, &data);
   const fs::path out = run.dir / kReportFileName;
   WriteFileAtomically(
       out.string(),
-      HtmlPage(PageKind::kReport, "fetchscope report: " + data["title"].get<std::string>(), data));
+      HtmlPage(PageKind::kReport, "fetchscope report: " + data["title"].get<std::string>(), data,
+               blocks));
   return out;
 }
 

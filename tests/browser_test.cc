@@ -24,6 +24,8 @@
 #include <tuple>
 #include <vector>
 
+#include "encode/png_io.h"
+#include "encode/video_reader.h"
 #include "tests/test_util.h"
 
 namespace fetchscope {
@@ -44,6 +46,9 @@ constexpr char kFailure[] = "#d73027";
 constexpr char kInterrupted[] = "#8a8f94";
 constexpr char kThreshold[] = "#555";
 constexpr char kAccent[] = "#2c6db2";
+
+// A report page's episode viewer plays one of the run's videos (web/src/viewer.js).
+constexpr size_t kViewerVideo = 1;
 
 std::string Chromium() {
   const char* env = std::getenv("FETCHSCOPE_CHROMIUM");
@@ -271,7 +276,7 @@ TEST_F(BrowserTest, ReportLoadsPlaysPlotsAndSorts) {
   ASSERT_EQ(outcomes.size(), 2u) << "the run should hold successes and failures";
   const json result =
       CheckPage((tmp.path() / "run" / "index.html").string(), /*sort_column: return*/ 2);
-  ExpectHealthyPage(result, 5, 21 / 25.0, 96, 3);
+  ExpectHealthyPage(result, 5 + kViewerVideo, 21 / 25.0, 96, 3);
   ExpectReportPlots(result, tmp.path() / "run");
   EXPECT_EQ(result["table"]["header"], "return");
   ExpectSorts(result["table"]);
@@ -303,7 +308,7 @@ TEST_F(BrowserTest, InterruptedEpisodeIsLeftOutOfTheAggregates) {
   std::ofstream(run / "manifest.json") << manifest.dump();
   ASSERT_EQ(RunFetchscope("report -q " + run.string()).exit_code, 0);
   const json result = CheckPage((run / "index.html").string(), /*sort_column: return*/ 2);
-  ExpectHealthyPage(result, 5, 21 / 25.0, 96, 3);
+  ExpectHealthyPage(result, 5 + kViewerVideo, 21 / 25.0, 96, 3);
   ExpectReportPlots(result, run);
 }
 
@@ -314,7 +319,7 @@ TEST_F(BrowserTest, ReportPlaysWebmAndLinksEveryFormat) {
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const json result =
       CheckPage((tmp.path() / "run" / "index.html").string(), /*sort_column: final distance*/ 3);
-  ExpectHealthyPage(result, 5, 21 / 25.0, 96, 3);
+  ExpectHealthyPage(result, 5 + kViewerVideo, 21 / 25.0, 96, 3);
   for (const json& v : result["videos"]) {
     EXPECT_EQ(fs::path(v["src"].get<std::string>()).extension(), ".webm") << v.dump();
   }
@@ -352,6 +357,207 @@ TEST_F(BrowserTest, ReportOfAGifRunShowsImages) {
   }
 }
 
+// The mean absolute difference per RGB sample of two images of one size (a PNG's alpha ignored),
+// or a large number when their sizes differ.
+double MeanDifference(const Image& a, const std::vector<uint8_t>& rgb, int width, int height) {
+  if (a.width != width || a.height != height || a.bit_depth != 8 || a.channels < 3) return 1e9;
+  double sum = 0;
+  for (size_t p = 0; p < static_cast<size_t>(width) * height; ++p) {
+    for (int c = 0; c < 3; ++c) sum += std::abs(a.pixels[p * a.channels + c] - rgb[p * 3 + c]);
+  }
+  return sum / (3.0 * width * height);
+}
+
+// The frame on screen is frame `t` of the video: closer to FFmpeg's decoding of frame t than to
+// its neighbours', and within codec tolerance of it.
+void ExpectShowsFrame(const fs::path& grab, const fs::path& video, int t) {
+  const Image shown = ReadPng(grab.string());
+  int width = 0, height = 0;
+  const std::vector<std::vector<uint8_t>> frames = ReadAllFrames(video.string(), &width, &height);
+  ASSERT_LT(t, static_cast<int>(frames.size()));
+  const double own = MeanDifference(shown, frames[t], width, height);
+  std::cout << grab.filename() << ": mean difference " << own << " to frame " << t;
+  for (int other : {t - 1, t + 1}) {
+    if (other >= 0 && other < static_cast<int>(frames.size())) {
+      std::cout << ", " << MeanDifference(shown, frames[other], width, height) << " to frame "
+                << other;
+    }
+  }
+  std::cout << std::endl;
+  EXPECT_LT(own, 4.0) << grab << " against frame " << t << " of " << video;
+  for (int other : {t - 1, t + 1}) {
+    if (other < 0 || other >= static_cast<int>(frames.size()) || frames[other] == frames[t])
+      continue;
+    EXPECT_LT(own, MeanDifference(shown, frames[other], width, height))
+        << grab << " is closer to frame " << other << " than to frame " << t;
+  }
+}
+
+// Runs web/test/check_viewer.mjs on `page` (deep links "E:T,...", a click at step `click_step`,
+// the frames it grabs written to `grabs`) and returns what it found; no console or page errors.
+json CheckViewer(const fs::path& page, const std::string& links, int click_step,
+                 const fs::path& grabs) {
+  fs::create_directories(grabs);
+  const auto c =
+      RunCommand("node " + (SourceDir() / "web" / "test" / "check_viewer.mjs").string() +
+                 " --page " + page.string() + " --links " + links + " --click-step " +
+                 std::to_string(click_step) + " --grab-dir " + grabs.string() + " --screenshot " +
+                 ScreenshotPath().string() + " --chromium " + Chromium());
+  const size_t line = c.output.rfind("\n{");
+  json result = json::parse(c.output.substr(line == std::string::npos ? 0 : line + 1), nullptr,
+                            /*allow_exceptions=*/false);
+  EXPECT_EQ(c.exit_code, 0) << c.output;
+  EXPECT_TRUE(result.is_object()) << c.output;
+  if (!result.is_object()) return json::object({{"links", json::array()}});
+  EXPECT_TRUE(result["console_errors"].empty()) << result["console_errors"].dump();
+  EXPECT_TRUE(result["page_errors"].empty()) << result["page_errors"].dump();
+  return result;
+}
+
+// The report's episode viewer (web/src/viewer.js, web/test/check_viewer.mjs) on a scripted
+// FetchPickAndPlace run of 20 steps (episodes 0 and 1 fail, 2-4 succeed): a deep link opens its
+// episode at its step, showing that frame of the video (against FFmpeg's decoding, and episode 0's
+// against `render` of that step); → moves one step, cursor and video; a click on a plot seeks to
+// its step; the commanded-versus-achieved plots hold the arm's lag; the filter hides the failures
+// and ↓ visits the next success.
+TEST_F(BrowserTest, ViewerFollowsDeepLinksKeysAndClicks) {
+  TempDir tmp;
+  const fs::path run = tmp.path() / "run";
+  const std::string env = "--env-id FetchPickAndPlace-v4 --policy scripted --width 96 --height 96";
+  const auto r =
+      RunFetchscope("record " + env + " --steps 20 --episodes 5 --quiet --out " + run.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const json manifest = ReadJsonFile(run / "manifest.json");
+  std::vector<int> successes, failures;
+  for (const json& e : manifest["episodes"]) {
+    (e["is_success"].get<bool>() ? successes : failures).push_back(e["index"].get<int>());
+  }
+  ASSERT_EQ(failures, (std::vector<int>{0, 1})) << "the run should fail twice, then succeed";
+  const fs::path grabs = tmp.path() / "grabs";
+  const json result = CheckViewer(run / "index.html", "3:7,0:12", 15, grabs);
+  ASSERT_EQ(result["links"].size(), 2u) << result.dump();
+  const double fps = 25;
+
+  // the deep link: episode 3 at step 7, frame 7 on screen
+  const json& link = result["links"][0];
+  EXPECT_EQ(link["state"]["episode"], 3) << link.dump();
+  EXPECT_EQ(link["state"]["step"], 7) << link.dump();
+  EXPECT_EQ(link["state"]["steps"], 20) << link.dump();
+  EXPECT_EQ(link["state"]["label"], "t = 7 / 20");
+  EXPECT_NEAR(link["state"]["current_time"].get<double>(), 7.5 / fps, 1e-3);
+  ExpectShowsFrame(link["grab"].get<std::string>(), run / "episode_003.mp4", 7);
+  // → : exactly one step on, the cursor and the video; the address follows
+  EXPECT_EQ(link["right"]["step"], 8) << link.dump();
+  EXPECT_EQ(link["right"]["label"], "t = 8 / 20");
+  EXPECT_EQ(link["right"]["hash"], "#episode=3&t=8");
+  EXPECT_NEAR(link["right"]["current_time"].get<double>(), 8.5 / fps, 1e-3);
+  ExpectShowsFrame(link["right_grab"].get<std::string>(), run / "episode_003.mp4", 8);
+  // a click on the distance plot at step 15
+  EXPECT_EQ(link["click"]["state"]["step"], 15) << link.dump();
+  EXPECT_NEAR(link["click"]["state"]["current_time"].get<double>(), 15.5 / fps, 1e-3);
+
+  // episode 0 at step 12: what `render` draws after 12 steps of the same policy and seed
+  const json& first = result["links"][1];
+  EXPECT_EQ(first["state"]["episode"], 0);
+  EXPECT_EQ(first["state"]["step"], 12);
+  const fs::path rendered = tmp.path() / "render_12.png";
+  const auto rr = RunFetchscope("render " + env + " --seed 0 --steps 12 -o " + rendered.string());
+  ASSERT_EQ(rr.exit_code, 0) << rr.output;
+  const Image frame = ReadPng(rendered.string());
+  const Image shown = ReadPng(first["grab"].get<std::string>());
+  std::vector<uint8_t> rgb;
+  for (size_t p = 0; p < static_cast<size_t>(frame.width) * frame.height; ++p) {
+    for (int ch = 0; ch < 3; ++ch) rgb.push_back(frame.pixels[p * frame.channels + ch]);
+  }
+  const double to_render = MeanDifference(shown, rgb, frame.width, frame.height);
+  std::cout << "episode 0 step 12 against render --steps 12: mean difference " << to_render
+            << std::endl;
+  EXPECT_LT(to_render, 6.0) << "the viewer's frame 12 of episode 0 against render --steps 12";
+
+  // every plot has its cursor line; every recorded episode its two thumbnails
+  ASSERT_TRUE(result["plots"].is_object()) << result.dump();
+  EXPECT_EQ(result["cursor_lines"], result["plots"].size());
+  EXPECT_EQ(result["thumbs"], 2 * manifest["episodes"].size());
+  // the lag, in the data episode 3's plots hold: at |a| = 1 (commanded 0.05 m) the grip moves
+  // about 0.03 m a step once moving, less than commanded
+  int saturated = 0;
+  double sum = 0;
+  for (const char* axis : {"x", "y", "z"}) {
+    const json& plot = result["plots"][std::string("displacement-") + axis];
+    const json& commanded = plot[std::string("commanded ") + axis];
+    const json& achieved = plot[std::string("achieved ") + axis];
+    ASSERT_EQ(commanded.size(), 21u) << plot.dump();
+    ASSERT_EQ(achieved.size(), 21u) << plot.dump();
+    EXPECT_TRUE(commanded[0].is_null() && achieved[0].is_null());  // the reset: no step
+    for (size_t t = 2; t < commanded.size(); ++t) {
+      const double now = commanded[t].get<double>(), before = commanded[t - 1].get<double>();
+      if (std::abs(now) < 0.05 - 1e-9 || now != before) continue;  // saturated two steps running
+      const double moved = achieved[t].get<double>() * (now > 0 ? 1 : -1);
+      EXPECT_GT(moved, 0.02) << axis << " t=" << t;
+      EXPECT_LT(moved, 0.04) << axis << " t=" << t;
+      ++saturated;
+      sum += moved;
+    }
+  }
+  ASSERT_GE(saturated, 3) << result["plots"].dump();
+  std::cout << "achieved per step at |a| = 1: " << sum / saturated << " m over " << saturated
+            << " steps" << std::endl;
+
+  // the filter: the successes alone, the failures alone, then all again
+  auto episodes_of = [](const json& rows) {
+    std::vector<int> out;
+    for (const json& row : rows) out.push_back(row["episode"].get<int>());
+    return out;
+  };
+  EXPECT_EQ(episodes_of(result["filter"]["all"]), (std::vector<int>{0, 1, 2, 3, 4}));
+  EXPECT_EQ(episodes_of(result["filter"]["success"]), successes);
+  EXPECT_EQ(episodes_of(result["filter"]["failure"]), failures);
+  // ↓ from episode 3 with the successes shown: episode 4
+  EXPECT_EQ(result["after_down"]["episode"], 4) << result["after_down"].dump();
+  EXPECT_EQ(result["after_down"]["step"], 0);
+  // space plays: the cursor follows the video; space again pauses on the frame on screen
+  EXPECT_EQ(result["while_playing"]["playing"], "1") << result["while_playing"].dump();
+  const json& paused = result["after_pause"];
+  EXPECT_EQ(paused["episode"], 4) << paused.dump();
+  EXPECT_GE(paused["step"].get<int>(), 3) << paused.dump();
+  EXPECT_EQ(paused["step"].get<int>(),
+            std::min(20, static_cast<int>(std::floor(paused["current_time"].get<double>() * fps))))
+      << paused.dump();
+}
+
+// compare's page: its viewer shows run A (solid) and B (dashed) on one step cursor over the
+// comparison video A | B | difference; a deep link opens its episode and step, → moves one.
+TEST_F(BrowserTest, CompareViewerShowsAAndBOnOneCursor) {
+  TempDir tmp;
+  for (const char* policy : {"scripted", "zero"}) {
+    const auto r = RunFetchscope(Record(tmp.path() / policy, policy, "--no-report"));
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+  }
+  const fs::path cmp = tmp.path() / "cmp";
+  const auto c = RunFetchscope("compare -q " + (tmp.path() / "scripted").string() + " " +
+                               (tmp.path() / "zero").string() + " --out " + cmp.string());
+  ASSERT_EQ(c.exit_code, 1) << c.output;
+  const json result = CheckViewer(cmp / "index.html", "2:6", 12, tmp.path() / "grabs");
+  ASSERT_EQ(result["links"].size(), 1u) << result.dump();
+  const json& link = result["links"][0];
+  EXPECT_EQ(link["state"]["episode"], 2) << link.dump();
+  EXPECT_EQ(link["state"]["step"], 6) << link.dump();
+  EXPECT_NEAR(link["state"]["current_time"].get<double>(), 6.5 / 25, 1e-3);
+  ExpectShowsFrame(link["grab"].get<std::string>(), cmp / "compare_episode_002.mp4", 6);
+  EXPECT_EQ(link["right"]["step"], 7) << link.dump();
+  ExpectShowsFrame(link["right_grab"].get<std::string>(), cmp / "compare_episode_002.mp4", 7);
+  EXPECT_EQ(link["click"]["state"]["step"], 12) << link.dump();
+  EXPECT_EQ(result["after_down"]["episode"], 3) << result.dump();
+  // both runs' distances, every step: the scripted A closes in, the zero policy's B stays put
+  const json& distance = result["plots"]["distance"];
+  ASSERT_EQ(distance["A distance"].size(), 21u) << distance.dump();
+  ASSERT_EQ(distance["B distance"].size(), 21u) << distance.dump();
+  EXPECT_EQ(distance["A distance"][0], distance["B distance"][0]);  // the same reset
+  EXPECT_LT(distance["A distance"][20].get<double>(), distance["B distance"][20].get<double>());
+  EXPECT_EQ(distance["B distance"][20], distance["B distance"][0]);
+  EXPECT_EQ(result["cursor_lines"], result["plots"].size());
+}
+
 // A static web server (Python's http.server) on a free port, serving `dir`, for the test's life.
 class StaticServer {
  public:
@@ -387,7 +593,7 @@ TEST_F(BrowserTest, ReportWorksFromAStaticServer) {
   const json result = CheckPage("http://127.0.0.1:" + std::to_string(server.port()) + "/index.html",
                                 /*final distance*/ 3);
   // a request the server answers 404 (e.g. /favicon.ico) shows up as a console error
-  ExpectHealthyPage(result, 5, 21 / 25.0, 96, 3);
+  ExpectHealthyPage(result, 5 + kViewerVideo, 21 / 25.0, 96, 3);
   ExpectReportPlots(result, tmp.path() / "run");
   EXPECT_EQ(result["table"]["header"], "final distance (m)");
   ExpectSorts(result["table"]);
@@ -405,7 +611,7 @@ TEST_F(BrowserTest, ComparePageLoadsPlaysPlotsAndSorts) {
   ASSERT_EQ(c.exit_code, 1) << c.output;
   const json result = CheckPage((tmp.path() / "cmp" / "index.html").string(),
                                 /*sort_column: max state difference*/ 3);
-  ExpectHealthyPage(result, 5, 21 / 25.0, 3 * 96, 2);
+  ExpectHealthyPage(result, 5 + kViewerVideo, 21 / 25.0, 3 * 96, 2);
   // one state curve and one pixel curve per episode, with every step and frame, and drawn (the
   // curves lie close together, one may hide another: their colours together)
   const json compare = ReadJsonFile(tmp.path() / "cmp" / "compare.json");

@@ -1,6 +1,9 @@
 #!/usr/bin/env bash
 # Remakes README's pictures with the tool itself: docs/pick_and_place.png and
-# docs/push_three_views.png (render), docs/report.png and docs/compare.png: two record runs of
+# docs/push_three_views.png (render), docs/viewer.png: the report's episode viewer opened by the
+# deep link index.html#episode=2&t=16 on a scripted FetchPickAndPlace-v4 run (5 episodes of 30
+# steps at 240x240; web/test/check_viewer.mjs photographs the viewer element),
+# docs/report.png and docs/compare.png: two record runs of
 # FetchPush-v4, 5 episodes of 20 steps each (the scripted policy reaches the goal in time in
 # some episodes and not in others, so the report shows successes and failures; the zero policy
 # never moves), the scripted run's report and the comparison of the two. Headless Chromium
@@ -31,9 +34,21 @@ shoot() {  # PAGE PNG: the whole page; a failed check (console error, no page) f
 }
 shoot "$work/scripted/index.html" "$out/report.png"
 shoot "$work/compare/index.html" "$out/compare.png"
+# the episode viewer at a deep-linked step: the gripper closing on the block
+"$bin" record --env-id FetchPickAndPlace-v4 --policy scripted --episodes 5 --steps 30 \
+  --width 240 --height 240 --quiet --out "$work/pick"
+mkdir -p "$work/grabs"
+node web/test/check_viewer.mjs --page "$work/pick/index.html" --links 2:16 --grab-dir "$work/grabs" \
+  --screenshot "$out/viewer.png" --chromium "$chromium" >"$work/viewer.json" ||
+  { cat "$work/viewer.json" >&2; exit 1; }
+if ! grep -q '"console_errors":\[\],"page_errors":\[\]' "$work/viewer.json"; then
+  cat "$work/viewer.json" >&2
+  echo "docs-screenshots: the viewer page has errors" >&2
+  exit 1
+fi
 # the README's first two pictures: frames as `render` draws them
 "$bin" render --env-id FetchPickAndPlace-v4 --policy scripted --seed 0 --steps 30 \
   --overlay goal,achieved,hud,action,trail --width 480 --height 480 -o "$out/pick_and_place.png" >/dev/null
 "$bin" render --env-id FetchPush-v4 --policy scripted --seed 0 --steps 8 \
   --camera default,external_camera_0,track --width 320 --height 320 -o "$out/push_three_views.png" >/dev/null
-echo "docs-screenshots: $out/report.png $out/compare.png $out/pick_and_place.png $out/push_three_views.png"
+echo "docs-screenshots: $out/report.png $out/compare.png $out/viewer.png $out/pick_and_place.png $out/push_three_views.png"

@@ -93,9 +93,36 @@
     {label: 'final distance A / B (m)', value: (r) => number(r.a.final_distance), render: (r) => pair(r, (x) => x.final_distance, 4), numeric: true},
     {label: 'steps A / B', value: (r) => r.steps_a, render: (r) => `${r.steps_a} / ${r.steps_b}`, numeric: true},
   ];
-  const table = FS.sortableTable(columns, rows);
+  const table = FS.sortableTable(columns, rows, null, (r) => ({'data-episode': r.index}));
   table.id = 'episode-table';
   page.append(FS.scrolling(table));
+
+  // --- the episode viewer: A (solid) and B (dashed) on one step cursor over the comparison video
+  page.append(el('h2', {}, 'Episode viewer: A and B step by step'));
+  const v = data.viewer || {};
+  const viewer = FSViewer.create(page, {
+    id: 'viewer', fps: data.fps || 25, threshold: v.threshold || 0.05, linkable: true,
+    has_object: v.has_object, gripper_command: v.gripper_command, reach: v.reach,
+    episodes: rows.map((r) => ({index: r.index, label: r.label, className: r.same ? 'ok' : 'fail',
+      title: `episode ${r.label} — ` + (r.first_divergence_step === null ? 'states equal within the tolerance'
+          : `states diverge at step ${r.first_divergence_step}`) + ' · A solid, B dashed',
+      tracks: () => [
+        {name: 'A', caption: 'A | B | difference', video: r.video, format: 'mp4', frames: r.steps_a + 1,
+         signals: r.viewer_a ? FSViewer.episodeSignals(`fetchscope-a-episode-${r.index}`) : null},
+        {name: 'B', noMedia: true, frames: r.steps_b + 1,
+         signals: r.viewer_b ? FSViewer.episodeSignals(`fetchscope-b-episode-${r.index}`) : null}]})),
+    visible: () => [...table.tBodies[0].rows].map((row) => Number(row.dataset.episode)),
+  });
+  window.fetchscopeViewer = viewer;
+  const openFromHash = (scroll) => {
+    const link = FSViewer.parseHash(location.hash);
+    if (!link || !viewer.open(link.episode, link.t)) return false;
+    // after the page's first layout, which it would otherwise force while the page is built
+    if (scroll) requestAnimationFrame(() => viewer.element.scrollIntoView({block: 'start'}));
+    return true;
+  };
+  if (!openFromHash(true) && rows.length) viewer.open(rows[0].index, 0);
+  window.addEventListener('hashchange', () => openFromHash(true));
 
   // --- side-by-side videos
   if (!s.states_only) {

@@ -57,13 +57,14 @@ const FS = (() => {
   }
 
   // columns: [{label, value: row => sortable value (null sorts last), render: row => node|text,
-  // numeric}]. Clicking a header sorts by it; clicking again reverses.
-  function sortableTable(columns, rows, rowClass) {
+  // numeric}]. Clicking a header sorts by it; clicking again reverses. rowAttrs(row): more
+  // attributes of the row's <tr> (such as data-episode).
+  function sortableTable(columns, rows, rowClass, rowAttrs) {
     const table = el('table', {class: 'sortable'});
     const headRow = el('tr');
     const body = el('tbody');
     const fill = (ordered) => {
-      body.replaceChildren(...ordered.map((row) => el('tr', {class: rowClass ? rowClass(row) : null},
+      body.replaceChildren(...ordered.map((row) => el('tr', {class: rowClass ? rowClass(row) : null, ...(rowAttrs ? rowAttrs(row) : {})},
           columns.map((c) => el('td', {class: c.numeric ? 'num' : null}, c.render(row))))));
     };
     columns.forEach((column, i) => {

@@ -1,5 +1,5 @@
 // The report page of one record run (fetchscope report DIR): drawn from FS.data, see
-// cli/report.cc ReportData for its fields.
+// inspect/report.cc ReportData and inspect/viewer.h AddEpisodeViewers for its fields.
 (() => {
   const {data, colors, el, num, percent} = FS;
   const page = document.getElementById('page');
@@ -81,13 +81,33 @@
     }, [r.n, r.rate, r.low, r.high]],
   }]);
 
+  performance.mark('fetchscope-plots');
   // --- table
   page.append(el('h2', {}, 'Episodes'));
   const numeric = (v) => (typeof v === 'number' ? v : null);
   const status = (e) => (e.status === 'missing' ? el('span', {}, 'missing') :
       el('span', {class: e.success ? 'ok' : 'fail'}, e.success ? 'success' : 'failure'));
+  const outcome = (e) => (e.status === 'missing' ? 'missing' : e.success ? 'success' : 'failure');
+  // the first and last frame: their tiles of the contact sheet, loaded once the row is on screen
+  const thumbObserver = new IntersectionObserver((entries) => {
+    for (const entry of entries) {
+      if (!entry.isIntersecting) continue;
+      entry.target.style.backgroundImage = `url("${entry.target.dataset.sheet}")`;
+      thumbObserver.unobserve(entry.target);
+    }
+  }, {rootMargin: '200px'});
+  const thumb = (e, which) => {
+    const th = e.thumbs, scale = 64 / th.tile[0];
+    const t = which === 'first' ? 0 : e.frames - 1;
+    const box = el('a', {class: 'thumb', href: `#episode=${e.index}&t=${t}`, 'data-sheet': e.sheet, title: `frame ${t}`,
+        style: `width:64px;height:${Math.round(th.tile[1] * scale)}px;background-size:${th.sheet[0] * scale}px ${th.sheet[1] * scale}px;` +
+               `background-position:${-th[which][0] * scale}px ${-th[which][1] * scale}px`});
+    thumbObserver.observe(box);
+    return box;
+  };
   const columns = [
-    {label: 'episode', value: (e) => e.index, render: (e) => el('a', {href: `#episode-${e.label}`}, e.label), numeric: true},
+    {label: 'episode', value: (e) => e.index, numeric: true,
+     render: (e) => (e.status === 'missing' ? e.label : el('a', {href: `#episode=${e.index}`, title: 'open in the viewer'}, e.label))},
     {label: 'success', value: (e) => (e.status === 'missing' ? null : e.success ? 1 : 0), render: status},
     {label: 'return', value: (e) => numeric(e.return), render: (e) => num(e.return, 3), numeric: true},
     {label: 'final distance (m)', value: (e) => numeric(e.final_distance), render: (e) => num(e.final_distance, 4), numeric: true},
@@ -101,6 +121,8 @@
     columns.push({label: 'original successes', value: (e) => (e.hindsight ? e.hindsight.original_successes : null),
                   render: (e) => (e.hindsight ? String(e.hindsight.original_successes) : '—'), numeric: true});
   }
+  columns.push({label: 'first / last frame', value: () => null,
+                render: (e) => (e.thumbs && e.sheet ? el('span', {class: 'thumbs'}, thumb(e, 'first'), thumb(e, 'last')) : '')});
   // a per-layer video "episode_000_segmentation.mp4" is linked as "segmentation.mp4"
   const shortName = (e, file) => file.replace(/^.*\//, '').replace(`episode_${e.label}_`, '');
   columns.push({label: 'files', value: () => null, render: (e) => (e.status === 'missing' ? '' : [
@@ -111,20 +133,80 @@
     ...e.other_videos.flatMap((file) => [el('a', {href: file, class: 'video-link'}, shortName(e, file)), ' ']),
     e.sheet ? el('a', {href: e.sheet}, 'sheet') : null, ' ',
     e.trajectory ? el('a', {href: e.trajectory}, 'json') : null])});
-  const table = FS.sortableTable(columns, episodes, (e) => (e.status === 'missing' ? 'missing' : null));
+  let viewer = null;
+  const table = FS.sortableTable(columns, episodes,
+      (e) => [e.status === 'missing' ? 'missing' : null, viewer && viewer.episode === e.index ? 'current' : null].filter(Boolean).join(' ') || null,
+      (e) => ({'data-episode': e.index, 'data-outcome': outcome(e)}));
   table.id = 'episode-table';
-  page.append(FS.scrolling(table));
+  table.dataset.filter = 'all';
+  // filter: every episode, the successes or the failures (the others' rows are hidden)
+  const filter = el('div', {class: 'episode-filter', id: 'episode-filter', role: 'group', 'aria-label': 'show episodes'}, 'Show: ');
+  for (const [value, text] of [['all', 'all'], ['success', 'successes'], ['failure', 'failures']]) {
+    filter.append(el('button', {type: 'button', 'data-filter': value, 'aria-pressed': value === 'all' ? 'true' : 'false', onclick: () => {
+      table.dataset.filter = value;
+      filter.querySelectorAll('button').forEach((b) => b.setAttribute('aria-pressed', b.dataset.filter === value ? 'true' : 'false'));
+    }}, text));
+  }
+  page.append(filter, FS.scrolling(table));
 
+  performance.mark('fetchscope-table');
+  // --- the episode viewer: one episode's video and per-step signals on one step cursor
+  page.append(el('h2', {}, 'Episode viewer'));
+  const viewable = recorded.filter((e) => e.video || e.viewer);
+  const headline = (e) => `episode ${e.label} — ${e.success ? 'success' : 'failure'}, return ${num(e.return, 2)}, ` +
+      `final distance ${num(e.final_distance, 3)} m` + (e.complete ? '' : ', interrupted');
+  const v = data.viewer || {};
+  viewer = FSViewer.create(page, {
+    id: 'viewer', fps: data.fps, threshold: data.threshold, linkable: true,
+    has_object: v.has_object, gripper_command: v.gripper_command, reach: v.reach,
+    episodes: viewable.map((e) => ({index: e.index, label: e.label, title: headline(e), className: e.success ? 'ok' : 'fail',
+      tracks: () => [{name: `episode ${e.label}`, video: e.video, format: e.video_format, frames: e.frames,
+                      signals: e.viewer ? FSViewer.episodeSignals(`fetchscope-episode-${e.index}`) : null}]})),
+    // the episodes ↑/↓ visit: the table's rows in their order, those the filter shows
+    visible: () => [...table.tBodies[0].rows]
+        .filter((row) => row.dataset.outcome !== 'missing' && (table.dataset.filter === 'all' || row.dataset.outcome === table.dataset.filter))
+        .map((row) => Number(row.dataset.episode)).filter((k) => viewable.some((e) => e.index === k)),
+    onOpen: (k) => table.querySelectorAll('tbody tr').forEach((row) => row.classList.toggle('current', Number(row.dataset.episode) === k)),
+  });
+  window.fetchscopeViewer = viewer;
+  const openFromHash = (scroll) => {
+    const link = FSViewer.parseHash(location.hash);
+    if (!link || !viewer.open(link.episode, link.t)) return false;
+    // after the page's first layout, which it would otherwise force while the page is built
+    if (scroll) requestAnimationFrame(() => viewer.element.scrollIntoView({block: 'start'}));
+    return true;
+  };
+  if (!openFromHash(true) && viewable.length) viewer.open(viewable[0].index, 0);
+  window.addEventListener('hashchange', () => openFromHash(true));
+
+  performance.mark('fetchscope-viewer');
   // --- each episode
   page.append(el('h2', {}, 'Videos and contact sheets'));
   const grid = el('div', {class: 'episodes'});
-  const preload = recorded.length <= 50 ? 'auto' : 'metadata';
-  for (const e of episodes) {
+  // A large run's cards get their player and sheet when they come near the screen: a thousand
+  // video elements would take seconds to create and lay out, and load nothing anyone looks at.
+  const lazy = recorded.length > 50;
+  const media = (e) => {
+    // the best format a browser plays (mp4, then webm) as a video; a gif-only run's gif as an image
+    if (e.video && e.video_format === 'gif') return el('img', {class: 'clip', src: e.video, alt: `episode ${e.label} (gif)`});
+    if (e.video) return el('video', {src: e.video, controls: true, muted: true, playsinline: true, preload: lazy ? 'metadata' : 'auto'});
+    return null;
+  };
+  const sheet = (e) => (e.sheet ? el('a', {href: e.sheet}, el('img', {src: e.sheet, alt: `contact sheet of episode ${e.label}`, loading: 'lazy'})) : null);
+  const cardObserver = lazy ? new IntersectionObserver((entries) => {
+    for (const entry of entries) {
+      if (!entry.isIntersecting) continue;
+      const e = episodes[Number(entry.target.dataset.position)];
+      entry.target.querySelector('.card-media').replaceChildren(...[media(e), sheet(e)].filter(Boolean));
+      cardObserver.unobserve(entry.target);
+    }
+  }, {rootMargin: '400px'}) : null;
+  episodes.forEach((e, position) => {
     const card = el('section', {class: 'episode' + (e.status === 'missing' ? ' missing' : ''), id: `episode-${e.label}`});
     if (e.status === 'missing') {
       card.append(el('h3', {}, `episode ${e.label} — missing`), el('p', {}, e.reason));
       grid.append(card);
-      continue;
+      return;
     }
     const heading = `episode ${e.label} — ${e.success ? 'success' : 'failure'}, return ${num(e.return, 2)}, ` +
         `final distance ${num(e.final_distance, 3)} m` + (e.complete ? '' : ', interrupted');
@@ -133,13 +215,13 @@
       card.append(el('p', {}, `hindsight (HER future, k = 4): ${e.hindsight.relabelled_successes} relabelled ` +
           `successes against ${e.hindsight.original_successes} original`));
     }
-    // the best format a browser plays (mp4, then webm) as a video; a gif-only run's gif as an image
-    if (e.video && e.video_format === 'gif') {
-      card.append(el('img', {class: 'clip', src: e.video, alt: `episode ${e.label} (gif)`}));
-    } else if (e.video) {
-      card.append(el('video', {src: e.video, controls: true, muted: true, playsinline: true, preload}));
+    if (lazy) {
+      card.dataset.position = position;
+      card.append(el('div', {class: 'card-media lazy'}));
+      cardObserver.observe(card);
+    } else {
+      card.append(...[media(e), sheet(e)].filter(Boolean));
     }
-    if (e.sheet) card.append(el('a', {href: e.sheet}, el('img', {src: e.sheet, alt: `contact sheet of episode ${e.label}`, loading: 'lazy'})));
     card.append(el('div', {class: 'links'}, [
       ...e.videos.map((v) => el('a', {href: v.file, class: 'video-link'}, v.file)),
       ...e.layers.flatMap((l) => [
@@ -149,8 +231,11 @@
       e.sheet ? el('a', {href: e.sheet}, 'contact sheet') : null,
       e.trajectory ? el('a', {href: e.trajectory}, 'trajectory JSON') : null]));
     grid.append(card);
-  }
+  });
   page.append(grid);
   page.append(FS.footer());
   document.body.dataset.ready = '1';
+  performance.mark('fetchscope-ready');
+  // the first frame drawn after it (for tools/bench-viewer.sh)
+  requestAnimationFrame(() => setTimeout(() => performance.mark('fetchscope-painted')));
 })();
