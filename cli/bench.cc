@@ -57,6 +57,30 @@ double EnvStepsPerSecond(FetchEnv& env, double budget_s) {
 
 }  // namespace
 
+nlohmann::json NodeRecommendation(const nlohmann::json& record_rows) {
+  const nlohmann::json* best = nullptr;
+  for (const nlohmann::json& row : record_rows) {
+    if (!row.contains("frames_per_s")) continue;  // a skipped run
+    if (!best || row["frames_per_s"].get<double>() > (*best)["frames_per_s"].get<double>()) {
+      best = &row;
+    }
+  }
+  if (!best) return {{"none", "no record run finished, so there is nothing to recommend"}};
+  const nlohmann::json& b = *best;
+  std::string flags = "--jobs " + std::to_string(b["jobs"].get<int>()) + " --worker-mode " +
+                      b["worker_mode"].get<std::string>();
+  // msaa auto is the default; a row that asked for 0 was faster without multisampling
+  if (b.value("msaa_requested", "auto") != "auto") {
+    flags += " --msaa " + b["msaa_requested"].get<std::string>();
+  }
+  return {{"jobs", b["jobs"]},
+          {"worker_mode", b["worker_mode"]},
+          {"msaa_requested", b.value("msaa_requested", "auto")},
+          {"frames_per_s", b["frames_per_s"]},
+          {"flags", flags},
+          {"why", "the record run with the most frames/s of those measured above"}};
+}
+
 double PeakRssMiB() {
   rusage usage{};
   getrusage(RUSAGE_SELF, &usage);
@@ -113,8 +137,18 @@ int RunBench(const BenchOptions& o) {
   if (all || o.what == "render") j["render"] = BenchRender(source, o.backends, o.seconds, o.peers);
   if (all || o.what == "encode") j["encode"] = BenchEncode(o.seconds);
   if (all || o.what == "record") j["record"] = BenchRecord(source, o.backends, o.seconds, o.peers);
-  if (o.what == "node")
+  if (o.what == "node") {
     j["node"] = BenchNode(source, o.backends, o.seconds, o.node_width, o.node_height);
+    const nlohmann::json rec = NodeRecommendation(j["node"]["record"]);
+    j["node"]["recommendation"] = rec;
+    if (rec.contains("flags")) {
+      std::printf("recommended: %s (the fastest record run: %.0f frames/s at %dx%d)\n",
+                  rec["flags"].get<std::string>().c_str(), rec["frames_per_s"].get<double>(),
+                  o.node_width, o.node_height);
+    } else {
+      std::printf("recommended: nothing (%s)\n", rec["none"].get<std::string>().c_str());
+    }
+  }
   if (o.what == "soak") j["soak"] = BenchSoak(source, o.backends, o.soak_frames, 1.0);
   j["peak_rss_mib"] = PeakRssMiB();
   std::printf("peak RSS %.1f MiB\n", PeakRssMiB());
@@ -136,7 +170,8 @@ Command AddBench(CLI::App& app) {
          "--what", o->what,
          "sim, render, encode, record, all (those four); node: what sizes a job on this "
          "machine (render frames/s of one context, sync and async readback; record "
-         "frames/s at --jobs 1, cores/2 and cores as processes and as threads; the encoder); "
+         "frames/s at --jobs 1, cores/2 and cores as processes and as threads; the encoder; "
+         "and the --jobs and --worker-mode of the fastest record run, recommended); "
          "or soak: one long record run (--soak-frames, minutes) with its memory sampled "
          "every second. node and soak are not part of all")
       ->capture_default_str()
