@@ -23,6 +23,7 @@ struct RolloutOptions {
   int steps = 50;
   std::string policy = "random";
   std::string json_out;
+  bool overwrite = false;  // replace a --json-out file of another env or seed
   double exec_timeout = 10.0;
   std::string replay_dtype;
   int jobs = 1;
@@ -63,6 +64,8 @@ int RunRollout(const RolloutOptions& o) {
   const AssetSource& assets = run.env.assets;
   const std::vector<int>& indices = run.episodes;
   const PolicyContext& context = run.policy_context;
+  const std::string path = JsonOutPath(o.json_out, "rollout");
+  CheckJsonOutReplaces(path, {{"env_id", spec.id}, {"seed", seed}}, o.overwrite);
   { FetchEnv check(spec, assets); }  // bad assets fail here, before any worker starts
   ScheduleOptions schedule;
   schedule.episodes = indices;
@@ -92,7 +95,6 @@ int RunRollout(const RolloutOptions& o) {
     std::printf("%s\n", DumpJson(j).c_str());
     return 0;
   }
-  const std::string path = JsonOutPath(o.json_out, "rollout");
   WriteJson(path, j);
   std::printf(
       "%s: %d episode(s) of %d steps, policy %s, seed %s: success %d/%d (%.0f%%)\nwrote %s\n",
@@ -121,7 +123,9 @@ Command AddRollout(CLI::App& app) {
       ->check(CLI::Range(0.001, 86400.0));
   sub->add_option("--replay-dtype", o->replay_dtype, kReplayDtypeHelp);
   sub->add_option("--json-out", o->json_out,
-                  "Write F (.json) or F_rollout.json; without it JSON goes to stdout");
+                  "Write F (.json), F/rollout.json if F ends in /, or F_rollout.json; without it "
+                  "JSON goes to stdout");
+  sub->add_flag("--overwrite", o->overwrite, kJsonOverwriteHelp);
   AddJobsOptions(sub, &o->jobs, &o->worker_mode);
   return {sub, [o, sub] {
             o->episodes_given = sub->count("--episodes") > 0;
