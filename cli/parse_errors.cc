@@ -91,7 +91,15 @@ std::string ExtrasMessage(const CLI::App* command, int first, int argc, const ch
     const std::string name = arg.substr(0, eq);
     const CLI::Option* opt = FindOption(command, name);
     if (!opt) {
-      return "unknown option '" + name + "'" + DidYouMean(name, OptionNames(command));
+      // name the value it came with too ("--seed abc" to a command without --seed)
+      std::string value;
+      if (eq != std::string::npos) {
+        value = arg.substr(eq + 1);
+      } else if (i + 1 < argc && argv[i + 1][0] != '-') {
+        value = argv[i + 1];
+      }
+      return "unknown option '" + name + "'" + (value.empty() ? "" : " (given '" + value + "')") +
+             DidYouMean(name, OptionNames(command));
     }
     if (eq != std::string::npos && eq + 1 == arg.size() && opt->get_expected_max() != 0) {
       return name + " needs a value after '=' (" + name + "=VALUE or " + name + " VALUE)";
