@@ -29,6 +29,10 @@ nlohmann::json BenchRecord(const AssetSource& assets, const std::string& backend
 /// against threads.
 nlohmann::json BenchNode(const AssetSource& assets, const std::string& backends, double budget_s,
                          int width = 480, int height = 480);
+/// The --jobs, --worker-mode (and --msaa when 0 won) of BenchNode's fastest "record" row:
+/// {jobs, worker_mode, msaa_requested, frames_per_s, flags: "--jobs 8 --worker-mode process",
+/// why}; {none: why} when no record run finished.
+nlohmann::json NodeRecommendation(const nlohmann::json& record_rows);
 /// One record run of about `target_frames` frames at 640x480 on the first of `backends`, its
 /// resident set sampled every `interval_s`: whether memory stays flat over a long run.
 nlohmann::json BenchSoak(const AssetSource& assets, const std::string& backends, int target_frames,

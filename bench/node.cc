@@ -221,4 +221,28 @@ nlohmann::json BenchNode(const AssetSource& assets, const std::string& backends,
   return result;
 }
 
+nlohmann::json NodeRecommendation(const nlohmann::json& record_rows) {
+  const nlohmann::json* best = nullptr;
+  for (const nlohmann::json& row : record_rows) {
+    if (!row.contains("frames_per_s")) continue;  // a skipped run
+    if (!best || row["frames_per_s"].get<double>() > (*best)["frames_per_s"].get<double>()) {
+      best = &row;
+    }
+  }
+  if (!best) return {{"none", "no record run finished, so there is nothing to recommend"}};
+  const nlohmann::json& b = *best;
+  std::string flags = "--jobs " + std::to_string(b["jobs"].get<int>()) + " --worker-mode " +
+                      b["worker_mode"].get<std::string>();
+  // msaa auto is the default; a row that asked for 0 was faster without multisampling
+  if (b.value("msaa_requested", "auto") != "auto") {
+    flags += " --msaa " + b["msaa_requested"].get<std::string>();
+  }
+  return {{"jobs", b["jobs"]},
+          {"worker_mode", b["worker_mode"]},
+          {"msaa_requested", b.value("msaa_requested", "auto")},
+          {"frames_per_s", b["frames_per_s"]},
+          {"flags", flags},
+          {"why", "the record run with the most frames/s of those measured above"}};
+}
+
 }  // namespace fetchscope::bench

@@ -42,8 +42,18 @@ int RunBench(const BenchOptions& o) {
   if (all || o.what == "encode") j["encode"] = bench::BenchEncode(o.seconds);
   if (all || o.what == "record")
     j["record"] = bench::BenchRecord(source, o.backends, o.seconds, o.peers);
-  if (o.what == "node")
+  if (o.what == "node") {
     j["node"] = bench::BenchNode(source, o.backends, o.seconds, o.node_width, o.node_height);
+    const nlohmann::json rec = bench::NodeRecommendation(j["node"]["record"]);
+    j["node"]["recommendation"] = rec;
+    if (rec.contains("flags")) {
+      std::printf("recommended: %s (the fastest record run: %.0f frames/s at %dx%d)\n",
+                  rec["flags"].get<std::string>().c_str(), rec["frames_per_s"].get<double>(),
+                  o.node_width, o.node_height);
+    } else {
+      std::printf("recommended: nothing (%s)\n", rec["none"].get<std::string>().c_str());
+    }
+  }
   if (o.what == "soak") j["soak"] = bench::BenchSoak(source, o.backends, o.soak_frames, 1.0);
   j["peak_rss_mib"] = bench::PeakRssMiB();
   std::printf("peak RSS %.1f MiB\n", bench::PeakRssMiB());
@@ -65,7 +75,8 @@ Command AddBench(CLI::App& app) {
          "--what", o->what,
          "sim, render, encode, record, all (those four); node: what sizes a job on this "
          "machine (render frames/s of one context, sync and async readback; record "
-         "frames/s at --jobs 1, cores/2 and cores as processes and as threads; the encoder); "
+         "frames/s at --jobs 1, cores/2 and cores as processes and as threads; the encoder; "
+         "and the --jobs and --worker-mode of the fastest record run, recommended); "
          "or soak: one long record run (--soak-frames, minutes) with its memory sampled "
          "every second. node and soak are not part of all")
       ->capture_default_str()

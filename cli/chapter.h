@@ -29,20 +29,34 @@ std::string ObservationSlice(bool has_object, const std::string& slice);
 /// element) plus our labels, formulas, timing, assets and the D4 answers.
 nlohmann::json DescribeJson(const FetchEnv& env);
 
+/// What the course chapter says where this environment does otherwise (README: "What the
+/// environment really does"): the gripper's sign, for every task.
+inline constexpr const char* kChapterGripper = "a[3] > 0 closes the gripper";
+/// The chapter's expected D3 mean return of the random policy on FetchReachDense-v4.
+inline constexpr double kChapterDenseReturnLow = -25, kChapterDenseReturnHigh = -15;
+
+/// Where `env`'s gripper differs from the chapter, one line each, measured by stepping a fresh
+/// copy of the env from reset (seed 0) with a[3] = +1 and -1: "a[3] > 0 opens the fingers (the
+/// chapter says it closes them): finger width +0.1000 m after 5 steps of a[3]=+1".
+std::vector<std::string> GripperVersusChapter(const FetchEnv& env);
+
 /// What describe runs.
 struct DescribeOptions {
   EnvOptions env;
-  std::string json_out;  ///< empty: the JSON goes to stdout
+  std::string json_out;    ///< empty: the JSON goes to stdout
+  bool overwrite = false;  ///< replace a --json-out file of another env (CheckJsonOutReplaces)
 };
 
-/// D1, `describe`: to stdout, or to JsonOutPath(json_out, "describe"). Returns the exit status.
+/// D1, `describe`: to stdout, or to JsonOutPath(json_out, "describe"), then (with --json-out)
+/// the lines of "chapter_differences" on stdout. Returns the exit status.
 int RunDescribe(const DescribeOptions& options);
 
 /// What reward-check runs.
 struct RewardCheckOptions {
   EnvOptions env;
-  int n_steps = 500;     ///< random-policy steps per variant
-  std::string json_out;  ///< empty: no JSON file
+  int n_steps = 500;       ///< random-policy steps per variant
+  std::string json_out;    ///< empty: no JSON file
+  bool overwrite = false;  ///< replace a --json-out file of another task or seed
 };
 
 /// D2, `reward-check`: prints a table and writes JSON when asked. Returns true on pass.
@@ -55,11 +69,13 @@ struct RandomEpisodesOptions {
   std::string json_out;  ///< empty: the JSON goes to stdout
   int jobs = 1;
   std::string worker_mode = "process";
+  bool overwrite = false;  ///< replace a --json-out file of another env or seed
 };
 
 /// D3, `random-episodes`: the random-policy baseline, to stdout or JsonOutPath(json_out,
-/// "random_metrics") (then a one-line summary goes to stdout). Returns the exit status
-/// (128 + signal when interrupted).
+/// "random_metrics") (then a one-line summary, and a line where the mean return lies outside
+/// the chapter's range, go to stdout; the JSON has that line under "chapter_differences").
+/// Returns the exit status (128 + signal when interrupted).
 int RunRandomEpisodes(const RandomEpisodesOptions& options);
 
 }  // namespace fetchscope::cli

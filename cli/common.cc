@@ -12,6 +12,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <utility>
 
 #include "base/atomic_file.h"
 #include "base/errors.h"
@@ -56,7 +57,42 @@ uint64_t ParseSeed(const std::string& text) {
 std::string JsonOutPath(const std::string& prefix, const std::string& suffix) {
   if (prefix.empty()) return "";
   if (prefix.size() >= 5 && prefix.compare(prefix.size() - 5, 5, ".json") == 0) return prefix;
+  if (prefix.back() == '/') return prefix + suffix + ".json";
   return prefix + "_" + suffix + ".json";
+}
+
+namespace {
+
+// "FetchReach-v4 seed 0", "task Push seed 3": an identity as a message tells it.
+std::string DescribeIdentity(const ResultIdentity& identity, const nlohmann::json& source) {
+  std::string text;
+  for (const auto& [key, ignored] : identity) {
+    if (!source.contains(key)) continue;
+    const nlohmann::json& v = source.at(key);
+    const std::string value = v.is_string() ? v.get<std::string>() : v.dump();
+    text += (text.empty() ? "" : " ") + (key == "env_id" ? value : key + " " + value);
+  }
+  return text.empty() ? "unnamed" : text;
+}
+
+}  // namespace
+
+void CheckJsonOutReplaces(const std::string& path, const ResultIdentity& identity, bool overwrite) {
+  if (overwrite || path.empty()) return;
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return;
+  const nlohmann::json old = nlohmann::json::parse(in, nullptr, /*allow_exceptions=*/false);
+  if (!old.is_object() || !old.contains("assets")) return;  // not a result fetchscope wrote
+  nlohmann::json now = nlohmann::json::object();
+  bool same = true;
+  for (const auto& [key, value] : identity) {
+    now[key] = value;
+    if (old.contains(key) && old.at(key) != value) same = false;
+  }
+  if (same) return;
+  throw UsageError(path + " holds " + DescribeIdentity(identity, old) + " results; this run is " +
+                   DescribeIdentity(identity, now) +
+                   ": pass --overwrite to replace them, or another --json-out");
 }
 
 std::string& CommandLine() {

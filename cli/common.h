@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "base/cores.h"
@@ -32,8 +33,24 @@ void AddEnvOptions(CLI::App* sub, EnvOptions* options, bool with_seed = true);
 /// Parses a Gymnasium seed: a non-negative integer below 2^64. Throws UsageError.
 uint64_t ParseSeed(const std::string& text);
 
-/// `--json-out P` naming: P itself if it ends in .json, else P + "_" + suffix + ".json".
+/// `--json-out P` naming: P itself if it ends in .json; P + suffix + ".json" if it ends in '/'
+/// (P names a folder: results/ gives results/describe.json); else P + "_" + suffix + ".json".
 std::string JsonOutPath(const std::string& prefix, const std::string& suffix);
+
+/// What a result file is about, in the order it is told: ("env_id", id), ("seed", n), ("task",
+/// name); the keys are those of the JSON the file holds.
+using ResultIdentity = std::vector<std::pair<std::string, nlohmann::json>>;
+
+/// Before --json-out writes `path`: throws UsageError, naming the file, its identity and this
+/// run's, when the file holds fetchscope's results (a JSON object with "assets") for another
+/// env, seed or task, unless `overwrite`. A missing file, one of the same identity or one that
+/// is not fetchscope's passes (it is replaced, as before).
+void CheckJsonOutReplaces(const std::string& path, const ResultIdentity& identity, bool overwrite);
+
+/// The help text of --overwrite for the --json-out writers.
+inline constexpr const char* kJsonOverwriteHelp =
+    "Let --json-out replace a result file of another env, seed or task (one of the same is "
+    "replaced without it)";
 
 /// The command line as typed (set by main), recorded in manifests.
 std::string& CommandLine();

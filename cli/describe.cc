@@ -1,5 +1,7 @@
 // fetchscope describe: Gymnasium-style spaces plus what every index means.
+#include <cmath>
 #include <cstdio>
+#include <cstdlib>
 
 #include "base/json_util.h"
 #include "cli/chapter.h"
@@ -23,7 +25,49 @@ nlohmann::json Box(int n, const std::string& dtype, double low, double high) {
   return {{"type", "Box"}, {"shape", {n}}, {"dtype", dtype}, {"low", lows}, {"high", highs}};
 }
 
+// "+0.1000": a signed width in metres, without "-0.0000".
+std::string SignedMetres(double v) {
+  char text[32];
+  std::snprintf(text, sizeof(text), "%+.4f", std::fabs(v) < 5e-5 ? 0.0 : v);
+  return text;
+}
+
+constexpr int kGripSteps = 5;  // steps of a[3] = +-1 from reset that the gripper lines measure
+
+// The change in finger width (the two finger joints of gripper_state) after kGripSteps steps of
+// a[3] = `a3` (a[0..2] = 0) from reset with seed 0, on a fresh copy of `env`.
+double FingerWidthChange(const FetchEnv& like, double a3) {
+  FetchEnv env(like.spec(), like.assets());
+  const bool has_object = like.spec().has_object;
+  const std::string right = ObservationSlice(has_object, "gripper_state");  // "obs[i:j]"
+  const int first = std::atoi(right.c_str() + 4);
+  auto width = [&](const Observation& o) {
+    return o.observation[first] + o.observation[first + 1];
+  };
+  const double before = width(env.Reset(0));
+  Observation after;
+  Action action;
+  action.value = {0, 0, 0, a3};
+  for (int i = 0; i < kGripSteps; ++i) after = env.Step(action).obs;
+  return width(after) - before;
+}
+
 }  // namespace
+
+std::vector<std::string> GripperVersusChapter(const FetchEnv& env) {
+  const std::string steps = std::to_string(kGripSteps);
+  const double open = FingerWidthChange(env, +1);
+  if (env.spec().block_gripper) {
+    const double close = FingerWidthChange(env, -1);
+    return {"a[3] is ignored in " + env.spec().id + " (the chapter says " + kChapterGripper +
+            "): finger width " + SignedMetres(open) + " m after " + steps + " steps of a[3]=+1, " +
+            SignedMetres(close) + " m after " + steps + " of a[3]=-1: a difference of " +
+            SignedMetres(open - close) + " m"};
+  }
+  return {std::string(open > 0 ? "a[3] > 0 opens the fingers (the chapter says it closes them)"
+                               : "a[3] > 0 does not open the fingers here") +
+          ": finger width " + SignedMetres(open) + " m after " + steps + " steps of a[3]=+1"};
+}
 
 std::vector<ObservationLabel> ObservationLabels(bool has_object) {
   using Label = ObservationLabel;
@@ -178,19 +222,25 @@ nlohmann::json DescribeJson(const FetchEnv& env) {
                                          : "the two finger position servos: > 0 opens, < 0 closes"},
       {"success_threshold_m", s.distance_threshold},
       {"why_relabelling_works", "the reward is a pure function of (achieved_goal, desired_goal)"}};
+  // where the chapter says otherwise, each line with the measurement that decides it
+  j["chapter_differences"] = GripperVersusChapter(env);
   return j;
 }
 
 int RunDescribe(const DescribeOptions& o) {
   const ResolvedEnv env = ResolveEnv(o.env, /*with_seed=*/false);
+  const std::string path = JsonOutPath(o.json_out, "describe");
+  CheckJsonOutReplaces(path, {{"env_id", env.spec->id}}, o.overwrite);
   FetchEnv fetch(*env.spec, env.assets);
   const nlohmann::json j = DescribeJson(fetch);
   if (o.json_out.empty()) {
-    std::printf("%s\n", DumpJson(j).c_str());
+    std::printf("%s\n", DumpJson(j).c_str());  // the JSON alone: its "chapter_differences" say it
   } else {
-    const std::string path = JsonOutPath(o.json_out, "describe");
     WriteJson(path, j);
     std::printf("wrote %s\n", path.c_str());
+    for (const auto& line : j["chapter_differences"]) {
+      std::printf("differs from the chapter: %s\n", line.get<std::string>().c_str());
+    }
   }
   return 0;
 }
@@ -201,8 +251,10 @@ Command AddDescribe(CLI::App& app) {
       "describe", "Observation/action schema with a label per index, reward formulas, timing");
   AddEnvOptions(sub, &o->env, false);
   sub->add_option("--json-out", o->json_out,
-                  "Write P (if it ends in .json) else P_describe.json; "
-                  "without it the JSON goes to stdout");
+                  "Write P (if it ends in .json), P/describe.json if P ends in /, else "
+                  "P_describe.json; without it the JSON goes to stdout. Where the env differs "
+                  "from the course chapter, a line says so with the measurement that decides it");
+  sub->add_flag("--overwrite", o->overwrite, kJsonOverwriteHelp);
   return {sub, [o] { return RunDescribe(*o); }};
 }
 

@@ -6,9 +6,10 @@
 #include <vector>
 
 #include "base/errors.h"
-#include "base/suggest.h"
 #include "cli/command.h"
 #include "cli/common.h"
+#include "cli/parse_errors.h"
+#include "render/gl_context.h"
 #include "src/fetch_env.h"
 
 int main(int argc, char** argv) {
@@ -26,6 +27,7 @@ int main(int argc, char** argv) {
   for (cli::AddCommandFn add : cli::kCommands) commands.push_back(add(app));
   try {
     app.parse(argc, argv);
+    ResolveWindowedMujocoGl();  // after parsing: --help and usage errors stay quiet
     for (const cli::Command& command : commands) {
       if (command.app->parsed()) return command.run();
     }
@@ -37,29 +39,8 @@ int main(int argc, char** argv) {
   } catch (const CLI::CallForVersion& e) {
     return app.exit(e);
   } catch (const CLI::ParseError& e) {
-    // CLI11 reports a misspelt command as "A subcommand is required": name it instead
-    const CLI::App* parent = &app;
-    int i = 1;
-    for (; i < argc && argv[i][0] != '-'; ++i) {
-      const CLI::App* next = nullptr;
-      for (const CLI::App* sub : parent->get_subcommands({})) {
-        if (sub->get_name() == argv[i]) next = sub;
-      }
-      if (!next) break;
-      parent = next;
-    }
-    if (i < argc && argv[i][0] != '-' && !parent->get_subcommands({}).empty()) {
-      std::string names;
-      std::vector<std::string> list;
-      for (const CLI::App* sub : parent->get_subcommands({})) {
-        names += (names.empty() ? "" : ", ") + sub->get_name();
-        list.push_back(sub->get_name());
-      }
-      std::fprintf(stderr, "fetchscope: error: unknown command '%s'%s: accepted: %s\n", argv[i],
-                   DidYouMean(argv[i], list).c_str(), names.c_str());
-      return 2;
-    }
-    std::fprintf(stderr, "fetchscope: error: %s (see fetchscope --help)\n", e.what());
+    std::fprintf(stderr, "fetchscope: error: %s\n",
+                 cli::ParseErrorMessage(app, e, argc, argv).c_str());
     return 2;
   } catch (const UsageError& e) {
     std::fprintf(stderr, "fetchscope: error: %s\n", e.what());

@@ -41,6 +41,20 @@ class RandomEpisodeRunner : public EpisodeRunner {
   EpisodeSequence sequence_;
 };
 
+// The chapter's D3 expects a dense mean return of -15 to -25 on FetchReachDense-v4; a line
+// saying what this run measured when it lies outside that ("" inside it, or for another env).
+std::string MeanReturnVersusChapter(const EnvSpec& spec, double mean, int episodes, uint64_t seed) {
+  if (spec.id != "FetchReachDense-v4") return "";
+  if (mean >= kChapterDenseReturnLow && mean <= kChapterDenseReturnHigh) return "";
+  char line[256];
+  std::snprintf(line, sizeof(line),
+                "mean return %.1f (the chapter expects %.0f to %.0f): measured over these %d "
+                "random episodes, seed %llu",
+                mean, kChapterDenseReturnHigh, kChapterDenseReturnLow, episodes,
+                static_cast<unsigned long long>(seed));
+  return line;
+}
+
 }  // namespace
 
 int RunRandomEpisodes(const RandomEpisodesOptions& o) {
@@ -49,6 +63,8 @@ int RunRandomEpisodes(const RandomEpisodesOptions& o) {
   const uint64_t seed = env.seed;
   const AssetSource& assets = env.assets;
   const WorkerMode mode = ParseWorkerMode(o.worker_mode);
+  const std::string path = JsonOutPath(o.json_out, "random_metrics");
+  CheckJsonOutReplaces(path, {{"env_id", spec.id}, {"seed", seed}}, o.overwrite);
   FetchEnv fetch(spec, assets);  // bad assets fail here, before any worker starts
   PolicyContext context;
   context.seed = seed;
@@ -97,17 +113,19 @@ int RunRandomEpisodes(const RandomEpisodesOptions& o) {
                       {"episodes", rows},
                       {"assets", AssetsJson(fetch.assets())},
                       {"versions", VersionsJson()}};
+  const std::string chapter = MeanReturnVersusChapter(spec, mean, o.n_episodes, seed);
+  if (!chapter.empty()) j["chapter_differences"] = {chapter};
   if (o.json_out.empty()) {
     std::printf("%s\n", DumpJson(j).c_str());
     return 0;
   }
-  const std::string path = JsonOutPath(o.json_out, "random_metrics");
   WriteJson(path, j);
   std::printf(
       "%s, %d random episodes (seed %s): success rate %.3f, mean return %.3f (std %.3f), "
       "mean length %.1f, mean final distance %.4f m\nwrote %s\n",
       spec.id.c_str(), o.n_episodes, o.env.seed.c_str(), successes / n, mean, std::sqrt(var),
       total_length / n, mean_final, path.c_str());
+  if (!chapter.empty()) std::printf("differs from the chapter: %s\n", chapter.c_str());
   return 0;
 }
 
@@ -122,7 +140,10 @@ Command AddRandomEpisodes(CLI::App& app) {
       ->capture_default_str()
       ->check(CLI::Range(1, 1000000));
   sub->add_option("--json-out", o->json_out,
-                  "Write P (.json) or P_random_metrics.json; without it JSON goes to stdout");
+                  "Write P (.json), P/random_metrics.json if P ends in /, or "
+                  "P_random_metrics.json; without it JSON goes to stdout. A mean return outside "
+                  "the course chapter's expected range gets a line saying so");
+  sub->add_flag("--overwrite", o->overwrite, kJsonOverwriteHelp);
   AddJobsOptions(sub, &o->jobs, &o->worker_mode);
   return {sub, [o] { return RunRandomEpisodes(*o); }};
 }

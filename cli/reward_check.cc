@@ -40,6 +40,8 @@ bool RunRewardCheck(const RewardCheckOptions& options) {
   const EnvSpec& chosen = *env.spec;
   const uint64_t seed = env.seed;
   const AssetSource& assets = env.assets;
+  const std::string path = JsonOutPath(options.json_out, "reward_check");
+  CheckJsonOutReplaces(path, {{"task", TaskName(chosen.task)}, {"seed", seed}}, options.overwrite);
   std::vector<Mismatch> mismatches;
   nlohmann::json variants = nlohmann::json::array();
   for (const EnvSpec& spec : AllEnvSpecs()) {
@@ -133,7 +135,6 @@ bool RunRewardCheck(const RewardCheckOptions& options) {
                         {"assets", AssetsJson(assets)},        {"variants", variants},
                         {"mismatch_count", mismatches.size()}, {"first_mismatches", first},
                         {"versions", VersionsJson()}};
-    const std::string path = JsonOutPath(options.json_out, "reward_check");
     WriteJson(path, j);
     std::printf("wrote %s\n", path.c_str());
   }
@@ -150,8 +151,9 @@ Command AddRewardCheck(CLI::App& app) {
       ->capture_default_str()
       ->check(CLI::Range(1, 10000000));
   sub->add_option("--json-out", o->json_out,
-                  "Write P (.json) or P_reward_check.json; without it only the table is "
-                  "printed");
+                  "Write P (.json), P/reward_check.json if P ends in /, or P_reward_check.json; "
+                  "without it only the table is printed");
+  sub->add_flag("--overwrite", o->overwrite, kJsonOverwriteHelp);
   return {sub, [o] { return RunRewardCheck(*o) ? 0 : 1; }};
 }
 

@@ -33,7 +33,8 @@ struct RolloutOptions {
   std::string worker_mode = "process";
   std::string minari;       // --minari: a Minari dataset id to write
   std::string minari_root;  // --minari-root
-  bool overwrite = false;   // --overwrite: replace an existing dataset of that id
+  bool overwrite =
+      false;  // replace an existing Minari dataset, or a --json-out file of another env or seed
 };
 
 // The played episodes (their trajectory JSON entries, by index) as a Minari dataset; returns
@@ -89,6 +90,8 @@ int RunRollout(const RolloutOptions& o) {
   const AssetSource& assets = run.env.assets;
   const std::vector<int>& indices = run.episodes;
   const PolicyContext& context = run.policy_context;
+  const std::string path = JsonOutPath(o.json_out, "rollout");
+  CheckJsonOutReplaces(path, {{"env_id", spec.id}, {"seed", seed}}, o.overwrite);
   { FetchEnv check(spec, assets); }  // bad assets fail here, before any worker starts
   MinariWriteOptions minari;
   if (!o.minari.empty()) {
@@ -135,7 +138,6 @@ int RunRollout(const RolloutOptions& o) {
   }
   std::string wrote;
   if (!o.json_out.empty()) {
-    const std::string path = JsonOutPath(o.json_out, "rollout");
     WriteJson(path, TrajectoryJson(spec, assets, seed, o.policy, std::move(episodes)));
     wrote += "wrote " + path + "\n";
   }
@@ -166,14 +168,17 @@ Command AddRollout(CLI::App& app) {
       ->check(CLI::Range(0.001, 86400.0));
   sub->add_option("--replay-dtype", o->replay_dtype, kReplayDtypeHelp);
   sub->add_option("--json-out", o->json_out,
-                  "Write F (.json) or F_rollout.json; without it JSON goes to stdout");
+                  "Write F (.json), F/rollout.json if F ends in /, or F_rollout.json; without it "
+                  "JSON goes to stdout");
   sub->add_option("--minari", o->minari,
                   "Also write the episodes as a Minari dataset of this id, e.g. "
                   "fetchscope/FetchPush/scripted-v0 (README: Datasets); without --json-out no "
                   "JSON is printed");
   sub->add_option("--minari-root", o->minari_root,
                   "Datasets root (default $MINARI_DATASETS_PATH, else ~/.minari/datasets)");
-  sub->add_flag("--overwrite", o->overwrite, "Replace an existing Minari dataset of that id");
+  sub->add_flag("--overwrite", o->overwrite,
+                "Replace an existing Minari dataset of that id, and let --json-out replace a "
+                "result file of another env, seed or task");
   AddJobsOptions(sub, &o->jobs, &o->worker_mode);
   return {sub, [o, sub] {
             o->episodes_given = sub->count("--episodes") > 0;

@@ -2,11 +2,14 @@
 
 #include <GL/gl.h>
 
+#include <cctype>
+#include <cstdio>
 #include <cstdlib>
 #include <mutex>
 #include <string>
 
 #include "base/errors.h"
+#include "base/suggest.h"
 
 namespace fetchscope {
 
@@ -66,6 +69,31 @@ void GlContext::PrepareForMujoco() const {
   }
 }
 
+namespace {
+
+// MUJOCO_GL values that ask MuJoCo's Python bindings for a windowed GL (GLFW, GLX, ...). Many
+// laptops set one globally; fetchscope never opens a window, so they mean auto here.
+bool IsWindowedGl(std::string name) {
+  for (char& c : name) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return name == "glfw" || name == "glx" || name == "glut" || name == "wgl" || name == "cgl";
+}
+
+void WarnWindowedGl(const std::string& name) {
+  std::fprintf(stderr,
+               "fetchscope: warning: MUJOCO_GL=%s opens a window; fetchscope renders off-screen "
+               "and uses auto (EGL, then OSMesa)\n",
+               name.c_str());
+}
+
+}  // namespace
+
+void ResolveWindowedMujocoGl() {
+  const char* env = std::getenv("MUJOCO_GL");
+  if (!env || !IsWindowedGl(env)) return;
+  WarnWindowedGl(env);
+  setenv("MUJOCO_GL", "auto", 1);
+}
+
 std::unique_ptr<GlContext> CreateGlContext(const std::string& backend, int gpu) {
   std::string name = backend;
   std::string origin = "backend";
@@ -73,11 +101,17 @@ std::unique_ptr<GlContext> CreateGlContext(const std::string& backend, int gpu) 
     const char* env = std::getenv("MUJOCO_GL");
     name = env && *env ? env : "auto";
     if (env && *env) origin = "MUJOCO_GL";
+    if (IsWindowedGl(name)) {
+      static std::once_flag warned;  // once per process, however many workers make contexts
+      std::call_once(warned, [&] { WarnWindowedGl(name); });
+      name = "auto";
+    }
   }
   if (name == "egl") return CreateEglContext(gpu);
   if (name == "osmesa") return CreateOsMesaContext();
   if (name != "auto") {
-    throw UsageError(origin + " '" + name + "' is not known; accepted: auto|egl|osmesa");
+    throw UsageError(origin + " '" + name + "' is not known" +
+                     DidYouMean(name, {"auto", "egl", "osmesa"}) + "; accepted: auto|egl|osmesa");
   }
 
   // auto: EGL first (hardware when present), OSMesa as the software fallback. A bad device

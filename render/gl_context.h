@@ -67,6 +67,11 @@ class GlContext {
 /// when no context can be made (saying why each backend failed and what to install).
 std::unique_ptr<GlContext> CreateGlContext(const std::string& backend, int gpu = -1);
 
+/// When $MUJOCO_GL asks for a windowed GL (glfw, glx, glut, wgl, cgl), which fetchscope never
+/// opens: warns once on stderr and sets MUJOCO_GL=auto, so that worker processes and child
+/// runs do not warn again. Call it while the process has one thread (main does).
+void ResolveWindowedMujocoGl();
+
 /// The EGL backend alone (see CreateGlContext for `gpu`). Throws RunError/UsageError.
 std::unique_ptr<GlContext> CreateEglContext(int gpu);
 

@@ -408,6 +408,27 @@ uint8_t* Renderer::Collect() {
 
 void Renderer::DiscardPending() { pending_.clear(); }
 
+namespace {
+
+// Removes the geoms of mocap bodies from `scene` (the crosshair is a mocap target, not an object;
+// Gymnasium draws its bars at alpha 0.1) and renumbers the segmentation ids, which MuJoCo draws
+// as colours, to the remaining geoms' places.
+void DropMocapGeoms(const mjModel* model, mjvScene* scene) {
+  int kept = 0;
+  for (int i = 0; i < scene->ngeom; ++i) {
+    const mjvGeom& g = scene->geoms[i];
+    const bool mocap = g.objtype == mjOBJ_GEOM && g.objid >= 0 && g.objid < model->ngeom &&
+                       model->body_mocapid[model->geom_bodyid[g.objid]] >= 0;
+    if (mocap) continue;
+    scene->geoms[kept] = g;
+    if (scene->geoms[kept].segid >= 0) scene->geoms[kept].segid = kept;
+    ++kept;
+  }
+  scene->ngeom = kept;
+}
+
+}  // namespace
+
 void Renderer::Draw(const mjData* data, const FrameInfo& info, bool overlays) {
   gl_.MakeCurrent();
   mjvScene* scene = scene_->get();
@@ -433,6 +454,7 @@ void Renderer::Draw(const mjData* data, const FrameInfo& info, bool overlays) {
     if (i == 0) {
       mjv_updateScene(model_, readonly, &option_, &perturb_, &cameras_[0], mjCAT_ALL, scene);
       bool placed = PlaceSiteGeom(scene, target_site_, info.goal);
+      if (drop_mocap_) DropMocapGeoms(model_, scene);
       if (overlays) {
         std::array<double, 3> grip = info.achieved;
         if (grip_site_ >= 0) {

@@ -78,6 +78,9 @@ struct RenderOptions {
   /// Optional: adds more decor geoms after the overlays (the anatomy card's markers), in Render
   /// only; must stay within scene->maxgeom (kMaxOverlayGeoms are free when overlays are off).
   std::function<void(mjvScene*)> extra_geoms;
+  /// Whether the segmentation layer shows the mocap body (robot0:mocap's crosshair: 2 m bars
+  /// that Gymnasium draws at alpha 0.1). Off: the mask shows what lies behind it instead.
+  bool segment_mocap = false;
 };
 
 /// Width and height of a whole frame.
@@ -192,6 +195,7 @@ class Renderer {
   std::vector<mjvCamera> cameras_;
   std::vector<mjrRect> tiles_;
   bool tiles_leave_gaps_ = false;  // a grid with empty cells: clear the frame first
+  bool drop_mocap_ = false;        // Draw leaves out the mocap bodies' geoms (segmentation)
   mjvOption option_;
   mjvPerturb perturb_;
   int target_site_ = -1;  // target0, the goal marker

@@ -94,7 +94,9 @@ void Renderer::RenderLayer(const mjData* data, const FrameInfo& info, Layer laye
     mjvScene* scene = scene_->get();
     scene->flags[mjRND_SEGMENT] = 1;
     scene->flags[mjRND_IDCOLOR] = 1;
+    drop_mocap_ = !options_.segment_mocap;
     Draw(data, info, /*overlays=*/false);
+    drop_mocap_ = false;
     scene->flags[mjRND_SEGMENT] = 0;
     scene->flags[mjRND_IDCOLOR] = 0;
     out->resize(pixels * 3);

@@ -3,6 +3,7 @@
 #include <map>
 
 #include "base/errors.h"
+#include "base/suggest.h"
 #include "src/exec_policy.h"
 #include "src/replay_file.h"
 #include "src/rng.h"
@@ -203,7 +204,12 @@ std::unique_ptr<Policy> MakePolicy(const std::string& spec, const EnvSpec& env,
     return MakeExecPolicy(command, context.exec_timeout_s, context.stop_requested);
   }
 
-  throw UsageError("unknown policy '" + spec + "': use " + kPolicyHelp);
+  // the name before a ':' is what gets mistyped ("scriptd", "replya:a.csv")
+  const size_t colon = spec.find(':');
+  const std::string name = colon == std::string::npos ? spec : spec.substr(0, colon + 1);
+  throw UsageError("unknown policy '" + spec + "'" +
+                   DidYouMean(name, {"random", "zero", "scripted", "replay:", "exec:"}) + ": use " +
+                   kPolicyHelp);
 }
 
 }  // namespace fetchscope

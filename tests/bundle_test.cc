@@ -129,6 +129,14 @@ TEST_F(BundleTest, HoldsWhatANodeLacksAndNothingOfGlibcOrTheDriver) {
 // The launcher takes the node's C++ runtime when it has every version the bundle needs (this
 // Debian machine's does: it built the binary), and the bundled one when the node's is older
 // (a file without those version strings stands in for it). ld.so's log says which was loaded.
+// A release file: readable by the group and others (mktemp made it 0600 before issue 19),
+// whatever the umask, and writable only by its owner.
+TEST_F(BundleTest, ArchiveIsReadableByEveryone) {
+  const fs::perms p = fs::status(archive_).permissions();
+  EXPECT_EQ(p & fs::perms::all, fs::perms(0644))
+      << archive_ << " mode " << std::oct << static_cast<int>(p & fs::perms::all);
+}
+
 TEST_F(BundleTest, LauncherPrefersTheNodesCxxRuntimeUnlessItIsTooOld) {
   const std::string launcher = (root_ / "fetchscope").string();
   auto loaded_from = [&](const std::string& env) {

@@ -180,5 +180,6 @@ mkdir -p "$dist"
 out=$dist/$name.tar.xz
 tmp_out=$(mktemp "$dist/.$name.XXXXXX")
 tar -C "$stage" -cf - "$name" | xz -T0 -"${XZ_LEVEL:-6}" > "$tmp_out"
+chmod 0644 "$tmp_out"  # mktemp made it 0600; a release file is readable by everyone
 mv "$tmp_out" "$out"
 echo "bundle: $out ($(du -h "$out" | cut -f1), ${#wanted[@]} libraries, needs glibc >= $glibc_needed)"
