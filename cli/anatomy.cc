@@ -26,27 +26,38 @@ struct AnatomyOptions {
   std::string out = "results";
   ViewOptions view;  // the card's: width, height (each panel), backend, msaa
   bool no_card = false;
+  bool overwrite = false;  // replace D1-D3 files of another env or seed in --out
 };
 
 int RunAnatomy(AnatomyOptions o) {
   const EnvSpec& spec = FindEnvSpec(o.env.env_id);  // bad input fails before any file
-  ParseSeed(o.env.seed);
   const int msaa_samples = ParseMsaa(o.view.msaa);
   const std::string prefix = (std::filesystem::path(o.out) / "ch01").string();
+  // all three files are checked before any is written: a refused run leaves --out as it was
+  const uint64_t seed = ParseSeed(o.env.seed);
+  CheckJsonOutReplaces(JsonOutPath(prefix + "_env", "describe"), {{"env_id", spec.id}},
+                       o.overwrite);
+  CheckJsonOutReplaces(JsonOutPath(prefix, "reward_check"),
+                       {{"task", TaskName(spec.task)}, {"seed", seed}}, o.overwrite);
+  CheckJsonOutReplaces(JsonOutPath(prefix, "random_metrics"), {{"env_id", spec.id}, {"seed", seed}},
+                       o.overwrite);
   std::printf("D1 (describe, %s)\n", spec.id.c_str());
   DescribeOptions describe;
   describe.env = o.env;
   describe.json_out = prefix + "_env";
+  describe.overwrite = o.overwrite;
   RunDescribe(describe);
   std::printf("\nD2 (reward-check)\n");
   RewardCheckOptions check;
   check.env = o.env;
   check.json_out = prefix;
+  check.overwrite = o.overwrite;
   const bool pass = RunRewardCheck(check);
   std::printf("\nD3 (random-episodes)\n");
   RandomEpisodesOptions random;
   random.env = o.env;
   random.json_out = prefix;
+  random.overwrite = o.overwrite;
   if (const int status = RunRandomEpisodes(random); status != 0) return status;  // interrupted
 
   std::printf("\nD4 answers (%s)\n", spec.id.c_str());
@@ -107,6 +118,9 @@ Command AddAnatomy(CLI::App& app) {
   sub->add_option("--msaa", o->view.msaa, "Anti-aliasing samples of the card, as render's")
       ->capture_default_str();
   sub->add_flag("--no-card", o->no_card, "Skip the anatomy card (no rendering, no GL needed)");
+  sub->add_flag("--overwrite", o->overwrite,
+                "Replace D1-D3 files in --out that hold another env's or seed's results (without "
+                "it such files are kept and the run refused; the same env and seed are replaced)");
   return {sub, [o] { return RunAnatomy(*o); }};
 }
 

@@ -123,4 +123,11 @@ bool NvidiaDevicePresent() {
   return fs::exists("/dev/nvidiactl", error);
 }
 
+Vp9Speed Vp9SpeedFor(const std::string& preset) {
+  const int index = PresetIndex(preset);
+  const int speed = index < 0 ? PresetIndex(kDefaultVideoPreset) : index;
+  if (speed <= PresetIndex("veryfast")) return {"realtime", 8 - speed};
+  return {"good", std::clamp(7 - speed, 0, 4)};
+}
+
 }  // namespace fetchscope

@@ -260,15 +260,9 @@ bool VideoWriter::Impl::TryOpenEncoder(const std::string& name, std::string* fai
     // depends on the machine or the number of workers (record runs one encoder per episode).
     codec_options.Set("crf", std::to_string(std::min(63, options.crf + 8)));
     codec_options.Set("b", "0");
-    // Up to veryfast (the default): libvpx's realtime mode, ultrafast -> cpu-used 8, superfast
-    // 7, veryfast 6. "good" even at its fastest (cpu-used 5) took 2x MP4's record time; realtime
-    // 6 takes about as long as H.264 at 0.4 dB less PSNR and 7% more bytes (BENCHMARKS.md).
-    // Slower presets keep "good": faster -> cpu-used 4, medium -> 2, slower and slower -> 0.
-    const int speed = preset_index < 0 ? PresetIndex(kDefaultVideoPreset) : preset_index;
-    const bool realtime = speed <= PresetIndex("veryfast");
-    codec_options.Set("deadline", realtime ? "realtime" : "good");
-    codec_options.Set("cpu-used",
-                      std::to_string(realtime ? 8 - speed : std::clamp(7 - speed, 0, 4)));
+    const Vp9Speed vp9 = Vp9SpeedFor(options.preset);
+    codec_options.Set("deadline", vp9.deadline);
+    codec_options.Set("cpu-used", std::to_string(vp9.cpu_used));
     codec_options.Set("threads", "1");
     codec_options.Set("row-mt", "0");
     codec_options.Set("tile-columns", "0");

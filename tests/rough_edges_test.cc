@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "encode/png_io.h"
+#include "encode/video_options.h"
 #include "encode/video_writer.h"
 #include "render/gl_context.h"
 #include "render/renderer.h"
@@ -206,62 +207,18 @@ TEST(RoughEdges, SegmentationWithoutTheMocapKeepsEveryOtherPixel) {
 
 // ---- 3. WebM about as fast as MP4 ----------------------------------------------------------
 
-// A frame like a rendered scene: a smooth gradient (sky, table), two discs moving a few pixels
-// per frame (arm, object) and a faint fixed texture, so that motion search has work to do.
-std::vector<uint8_t> SceneFrame(int k, int width, int height) {
-  std::vector<uint8_t> rgb(static_cast<size_t>(width) * height * 3);
-  uint32_t noise = 12345;
-  for (int y = 0; y < height; ++y) {
-    for (int x = 0; x < width; ++x) {
-      noise = noise * 1664525u + 1013904223u;
-      const int grain = static_cast<int>(noise >> 29);  // 0..7, the same every frame
-      uint8_t* p = &rgb[(static_cast<size_t>(y) * width + x) * 3];
-      p[0] = static_cast<uint8_t>(40 + y * 150 / height + grain);
-      p[1] = static_cast<uint8_t>(90 + x * 100 / width + grain);
-      p[2] = static_cast<uint8_t>(60 + grain);
-      const int dx1 = x - (width / 4 + 3 * k), dy1 = y - height / 2;
-      const int dx2 = x - width * 3 / 4, dy2 = y - (height / 4 + 2 * k);
-      if (dx1 * dx1 + dy1 * dy1 < height * height / 36) p[0] = 220, p[1] = p[2] = 40 + grain;
-      if (dx2 * dx2 + dy2 * dy2 < height * height / 64) p[0] = p[1] = p[2] = 200 + grain;
-    }
-  }
-  return rgb;
-}
-
-double ProcessCpuSeconds() {
-  timespec t{};
-  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
-  return t.tv_sec + 1e-9 * t.tv_nsec;
-}
-
-// CPU seconds to encode one 51-frame episode at 240x240 in `format` (single-threaded encoders,
-// as record runs them).
-double EncodeCpuSeconds(const std::string& format, const fs::path& dir,
-                        const std::vector<std::vector<uint8_t>>& frames) {
-  VideoOptions options;
-  options.width = options.height = 240;
-  options.codec = "libx264";
-  options.format = format;
-  const double start = ProcessCpuSeconds();
-  VideoWriter writer((dir / ("e." + format)).string(), options);
-  for (const auto& frame : frames) writer.AddFrame(frame.data());
-  writer.Finish();
-  return ProcessCpuSeconds() - start;
-}
-
 // VP9 ran with deadline good (2x MP4's record time, 4-6x its encode time); realtime at the
-// default preset costs about what H.264 does. CPU time, best of three: load on the machine
-// does not change it much.
-TEST(RoughEdges, WebmEncodesInAboutMp4sTime) {
-  TempDir tmp;
-  std::vector<std::vector<uint8_t>> frames;
-  for (int k = 0; k < 51; ++k) frames.push_back(SceneFrame(k, 240, 240));
-  double mp4 = 1e9, webm = 1e9;
-  for (int rep = 0; rep < 3; ++rep) {
-    mp4 = std::min(mp4, EncodeCpuSeconds("mp4", tmp.path(), frames));
-    webm = std::min(webm, EncodeCpuSeconds("webm", tmp.path(), frames));
-  }
-  EXPECT_LT(webm, 2.0 * mp4) << "webm " << webm << " s, mp4 " << mp4 << " s of CPU";
+// default preset costs about what H.264 does (measured in BENCHMARKS.md, not here: no timed
+// tests). What is tested is the setting: the default and the fast presets use realtime, the
+// slow ones keep good, and every WebM comes out the same whatever --jobs (formats_test).
+TEST(RoughEdges, WebmUsesLibvpxRealtimeUpToTheDefaultPreset) {
+  EXPECT_STREQ(Vp9SpeedFor("").deadline, "realtime");
+  EXPECT_EQ(Vp9SpeedFor("").cpu_used, 6);
+  EXPECT_STREQ(Vp9SpeedFor("veryfast").deadline, "realtime");
+  EXPECT_EQ(Vp9SpeedFor("ultrafast").cpu_used, 8);
+  EXPECT_STREQ(Vp9SpeedFor("faster").deadline, "good");
+  EXPECT_EQ(Vp9SpeedFor("medium").cpu_used, 2);
+  EXPECT_EQ(Vp9SpeedFor("veryslow").cpu_used, 0);
 }
 
 // ---- 4. bench --what node recommends --jobs and a worker mode -------------------------------
@@ -456,6 +413,30 @@ TEST(RoughEdges, JsonOutEndingInASlashIsAFolder) {
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_TRUE(fs::exists(tmp.path() / "results" / "describe.json")) << r.output;
   EXPECT_FALSE(fs::exists(tmp.path() / "results" / "_describe.json"));
+}
+
+// anatomy writes D1-D3 under the chapter's names whatever the env: a second run for another env
+// in the same --out is refused before it writes anything (the first run's three files stay as
+// they were), and --overwrite replaces them.
+TEST(AnatomyOverwrite, AnotherEnvInTheSameOutIsRefusedWholeUnlessOverwrite) {
+  testing::TempDir tmp;
+  const std::string out = (tmp.path() / "results").string();
+  auto first = RunFetchscope("anatomy --no-card --out '" + out + "'");
+  ASSERT_EQ(first.exit_code, 0) << first.output;
+  const std::string names[] = {"ch01_env_describe.json", "ch01_reward_check.json",
+                               "ch01_random_metrics.json"};
+  std::map<std::string, std::string> before;
+  for (const std::string& n : names) before[n] = ReadFile(tmp.path() / "results" / n);
+  auto refused = RunFetchscope("anatomy --no-card --env-id FetchPush-v4 --out '" + out + "'");
+  EXPECT_EQ(refused.exit_code, 2) << refused.output;
+  EXPECT_NE(refused.output.find("--overwrite"), std::string::npos) << refused.output;
+  for (const std::string& n : names)
+    EXPECT_EQ(ReadFile(tmp.path() / "results" / n), before[n]) << n;
+  auto replaced =
+      RunFetchscope("anatomy --no-card --env-id FetchPush-v4 --overwrite --out '" + out + "'");
+  ASSERT_EQ(replaced.exit_code, 0) << replaced.output;
+  EXPECT_NE(ReadFile(tmp.path() / "results" / "ch01_env_describe.json").find("FetchPush-v4"),
+            std::string::npos);
 }
 
 }  // namespace
