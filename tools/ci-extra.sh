@@ -17,12 +17,18 @@ stages=("$@")
 supp="$root/tools/sanitizers"
 
 stamp() { echo "ci-extra: $* ($(date -u +%H:%M:%S))"; }
+# ccache when installed (tools/install-deps.sh installs it): a second CI run on the same machine
+# recompiles only what changed
+launcher=()
+if command -v ccache >/dev/null; then
+  launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCMAKE_C_COMPILER_LAUNCHER=ccache)
+fi
 
 run_asan() {
   stamp "ASan+UBSan build"
   local t0=$SECONDS
   cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG="-O1 -g" \
-    -DFETCHSCOPE_SANITIZE=ON -DBUILD_TESTING=ON >/dev/null
+    -DFETCHSCOPE_SANITIZE=ON -DBUILD_TESTING=ON "${launcher[@]}" >/dev/null
   cmake --build build-asan -j"$jobs"
   stamp "ASan+UBSan ctest"
   # the test binaries and the fetchscope they run inherit these; a report fails the test.
@@ -40,7 +46,7 @@ run_fuzz() {
   stamp "fuzz build (clang)"
   local t0=$SECONDS
   CC=clang CXX=clang++ cmake -S . -B build-fuzz -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-    -DFETCHSCOPE_FUZZ=ON -DBUILD_TESTING=OFF >/dev/null
+    -DFETCHSCOPE_FUZZ=ON -DBUILD_TESTING=OFF "${launcher[@]}" >/dev/null
   cmake --build build-fuzz -j"$jobs" --target fuzzers
   local failed=0
   for seeds in fuzz/corpus/*/; do
