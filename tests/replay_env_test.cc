@@ -26,9 +26,10 @@ class ReplayEnvTest : public ::testing::Test {
  protected:
   void SetUp() override {
     // recorded on a non-default env and seed: FetchReach-v4 (sparse), seed 3
-    const auto r = RunFetchscope("record --env-id FetchReach-v4 --seed 3 --episodes 2 --width 64 "
-                                 "--height 48 --overlay goal --quiet --no-report --out '" +
-                                 recorded().string() + "'");
+    const auto r = RunFetchscope(
+        "record --env-id FetchReach-v4 --seed 3 --episodes 2 --width 64 "
+        "--height 48 --overlay goal --quiet --no-report --out '" +
+        recorded().string() + "'");
     ASSERT_EQ(r.exit_code, 0) << r.output;
   }
   fs::path recorded() const { return tmp_.path() / "a"; }
