@@ -21,12 +21,31 @@ void Canvas::Blend(int x, int y, Rgb c, double alpha) {
 void Canvas::FillRect(int x, int y, int w, int h, Rgb c, double alpha) {
   const int x0 = std::max(0, x), x1 = std::min(width_, x + w);
   const int y0 = std::max(0, y), y1 = std::min(height_, y + h);
+  uint8_t lut[3][256];
+  bool lut_ready = false;
   for (int row = y0; row < y1; ++row) {
     if (alpha >= 1) {  // opaque: what the blend gives, written straight
       uint8_t* p = rgb_ + (static_cast<size_t>(row) * width_ + x0) * 3;
       for (int col = x0; col < x1; ++col, p += 3) p[0] = c.r, p[1] = c.g, p[2] = c.b;
     } else {
-      for (int col = x0; col < x1; ++col) Blend(col, row, c, alpha);
+      // one colour at one alpha: BlendChannel of every possible value looked up, not recomputed
+      // per pixel (a HUD box is tens of thousands of pixels a frame); the same bytes
+      if (alpha <= 0) return;
+      if (!lut_ready) {
+        for (int v = 0; v < 256; ++v) {
+          const auto u = static_cast<uint8_t>(v);
+          lut[0][v] = BlendChannel(u, c.r, alpha);
+          lut[1][v] = BlendChannel(u, c.g, alpha);
+          lut[2][v] = BlendChannel(u, c.b, alpha);
+        }
+        lut_ready = true;
+      }
+      uint8_t* p = rgb_ + (static_cast<size_t>(row) * width_ + x0) * 3;
+      for (int col = x0; col < x1; ++col, p += 3) {
+        p[0] = lut[0][p[0]];
+        p[1] = lut[1][p[1]];
+        p[2] = lut[2][p[2]];
+      }
     }
   }
 }
