@@ -11,7 +11,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 root=$(pwd)
 jobs=${JOBS:-$(nproc)}
-fuzz_seconds=${FUZZ_SECONDS:-60}
+fuzz_seconds=${FUZZ_SECONDS:-30}
 stages=("$@")
 [[ ${#stages[@]} -eq 0 ]] && stages=(asan fuzz valgrind)
 supp="$root/tools/sanitizers"
@@ -21,13 +21,15 @@ stamp() { echo "ci-extra: $* ($(date -u +%H:%M:%S))"; }
 # recompiles only what changed
 launcher=()
 if command -v ccache >/dev/null; then
-  launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCMAKE_C_COMPILER_LAUNCHER=ccache)
+  # pch_defines,time_macros: what ccache needs to cache files compiled with a precompiled header
+  cc="env;CCACHE_SLOPPINESS=pch_defines,time_macros;ccache"
+  launcher=("-DCMAKE_CXX_COMPILER_LAUNCHER=$cc" "-DCMAKE_C_COMPILER_LAUNCHER=$cc")
 fi
 
 run_asan() {
   stamp "ASan+UBSan build"
   local t0=$SECONDS
-  cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG="-O1 -g" \
+  cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG="-O1 -g1" \
     -DFETCHSCOPE_SANITIZE=ON -DBUILD_TESTING=ON "${launcher[@]}" >/dev/null
   cmake --build build-asan -j"$jobs"
   stamp "ASan+UBSan ctest"

@@ -6,7 +6,9 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 launcher=()
 if command -v ccache >/dev/null; then
-  launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCMAKE_C_COMPILER_LAUNCHER=ccache)
+  # pch_defines,time_macros: what ccache needs to cache files compiled with a precompiled header
+  cc="env;CCACHE_SLOPPINESS=pch_defines,time_macros;ccache"
+  launcher=("-DCMAKE_CXX_COMPILER_LAUNCHER=$cc" "-DCMAKE_C_COMPILER_LAUNCHER=$cc")
 fi
 cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DBUILD_TESTING=ON -DFETCHSCOPE_WERROR=ON \
   "${launcher[@]}" "$@" >/dev/null
