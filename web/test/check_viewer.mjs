@@ -8,7 +8,7 @@
 // viewer's state (data-episode, data-step, data-steps, the video's currentTime) and the video
 // frame on screen, a screenshot of the video at its natural size, written to OUT/grab_E_T.png. At the first link it
 // then presses → (state and frame again: OUT/right_E_T.png), clicks the distance plot at step
-// K, reads the data every viewer plot holds, filters the table (success, failure, all; on a
+// K, presses End and Home, drags along the distance plot from step 2 to K - 1, reads the data every viewer plot holds, filters the table (success, failure, all; on a
 // report), presses ↓ (under the success filter on a report), then plays the episode for a
 // moment with space and pauses it with space again.
 import {mkdtempSync, rmSync, writeFileSync} from 'node:fs';
@@ -97,6 +97,27 @@ try {
     }, k);
     await page.mouse.click(point.x, point.y);
     entry.click = {step: k, state: await settle(page)};
+    // End, then Home: the last step, then the reset frame
+    await page.keyboard.press('End');
+    entry.end = await settle(page);
+    await page.keyboard.press('Home');
+    entry.home = await settle(page);
+    // a drag along the distance plot from step 2 to step K - 1: the cursor follows the pointer
+    const at = (step) => page.evaluate((s) => {
+      const chart = window.fetchscopeViewer.charts.distance;
+      const box = chart.over.getBoundingClientRect();
+      return {x: box.left + chart.valToPos(s, 'x'), y: box.top + box.height / 2};
+    }, step);
+    const from = await at(2), to = await at(k - 1);
+    await page.mouse.move(from.x, from.y);
+    await page.mouse.down();
+    entry.drag = {from: 2, to: k - 1, steps_seen: []};
+    for (let j = 1; j <= 8; ++j) {
+      await page.mouse.move(from.x + (to.x - from.x) * j / 8, from.y);
+      entry.drag.steps_seen.push(await page.evaluate(() => Number(document.getElementById('viewer').dataset.step)));
+    }
+    await page.mouse.up();
+    entry.drag.state = await settle(page);
     // the data of every viewer plot: its series by label
     result.plots = await page.evaluate(() => Object.fromEntries(Object.entries(window.fetchscopeViewer.charts).map(([id, chart]) =>
       [id, Object.fromEntries(chart.series.slice(1).map((s, j) => [s.label, chart.data[j + 1]]))])));
