@@ -37,24 +37,49 @@ struct RolloutOptions {
       false;  // replace an existing Minari dataset, or a --json-out file of another env or seed
 };
 
-// The played episodes (their trajectory JSON entries, by index) as a Minari dataset; returns
-// its folder. Each goes through the trajectory reader on its own, so memory stays one episode.
-std::string WriteMinari(const RolloutOptions& o, const MinariWriteOptions& options,
-                        const AssetSource& assets, uint64_t seed,
-                        const std::map<int, nlohmann::json>& episodes) {
-  MinariWriter writer(options);
-  const int width = options.spec->has_object ? 25 : 10;
-  for (const auto& [k, episode] : episodes) {
-    const Trajectory one =
-        ParseTrajectory(DumpJson(TrajectoryJson(*options.spec, assets, seed, o.policy,
-                                                nlohmann::json::array({episode}))),
-                        "rollout");
-    // episode 0 was reset with the run's seed; the others continued its generator
-    writer.Add(ToMinariEpisode(one.episodes.front(),
-                               k == 0 ? std::optional<uint64_t>(seed) : std::nullopt, width));
+// The played episodes as a Minari dataset, added as they arrive (in index order: the scheduler
+// reports them as workers finish), so that writing overlaps the simulation instead of following
+// it. Each goes through the trajectory reader on its own. Nothing is left behind unless Commit.
+class MinariSink {
+ public:
+  MinariSink(const RolloutOptions& o, const MinariWriteOptions& options, const AssetSource& assets,
+             uint64_t seed, std::vector<int> indices)
+      : o_(o), assets_(assets), seed_(seed), writer_(options), indices_(std::move(indices)) {
+    width_ = options.spec->has_object ? 25 : 10;
+    spec_ = options.spec;
   }
-  return writer.Commit().string();
-}
+
+  void Done(int k, const nlohmann::json& episode) {
+    pending_.emplace(k, episode);
+    while (next_ < indices_.size()) {
+      const auto it = pending_.find(indices_[next_]);
+      if (it == pending_.end()) break;
+      const Trajectory one = ParseTrajectory(
+          TrajectoryJson(*spec_, assets_, seed_, o_.policy, nlohmann::json::array({it->second})),
+          "rollout");
+      // episode 0 was reset with the run's seed; the others continued its generator
+      writer_.Add(ToMinariEpisode(one.episodes.front(),
+                                  it->first == 0 ? std::optional<uint64_t>(seed_) : std::nullopt,
+                                  width_));
+      pending_.erase(it);
+      ++next_;
+    }
+  }
+
+  /// Every episode added: renames the dataset into place and returns its folder.
+  std::string Commit() { return writer_.Commit().string(); }
+
+ private:
+  const RolloutOptions& o_;
+  const AssetSource& assets_;
+  uint64_t seed_;
+  MinariWriter writer_;
+  const EnvSpec* spec_ = nullptr;
+  int width_ = 10;
+  std::vector<int> indices_;
+  size_t next_ = 0;  // indices_[next_] is the next episode to add
+  std::map<int, nlohmann::json> pending_;
+};
 
 // Plays episodes and reports each as its trajectory JSON entry.
 class RolloutRunner : public EpisodeRunner {
@@ -106,8 +131,11 @@ int RunRollout(const RolloutOptions& o) {
     minari.description = spec.id + " episodes played by fetchscope's " + o.policy + " policy";
     CheckMinariDestination(minari);  // an existing id fails now, not after the run
   }
+  std::unique_ptr<MinariSink> sink;
+  if (!o.minari.empty()) sink = std::make_unique<MinariSink>(o, minari, assets, seed, indices);
   ScheduleOptions schedule;
   schedule.episodes = indices;
+  if (sink) schedule.on_done = [&](int k, const nlohmann::json& e) { sink->Done(k, e); };
   const int count = static_cast<int>(indices.size());
   schedule.jobs = ResolveJobs(o.jobs, count);
   schedule.mode = mode;
@@ -123,8 +151,7 @@ int RunRollout(const RolloutOptions& o) {
                  result.signal == SIGINT ? "SIGINT" : "SIGTERM");
     return 128 + result.signal;
   }
-  const std::string dataset =
-      o.minari.empty() ? "" : WriteMinari(o, minari, assets, seed, result.results);
+  const std::string dataset = sink ? sink->Commit() : "";
   nlohmann::json episodes = nlohmann::json::array();
   int successes = 0;
   for (const auto& [k, episode] : result.results) {

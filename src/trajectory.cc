@@ -277,6 +277,10 @@ Trajectory ParseTrajectory(const std::string& text, const std::string& file) {
   return TrajectoryReader(file).Read(root);
 }
 
+Trajectory ParseTrajectory(const nlohmann::json& root, const std::string& file) {
+  return TrajectoryReader(file).Read(root);
+}
+
 std::optional<Trajectory> ReadReplayTrajectory(const std::string& path) {
   if (path.size() < 5) return std::nullopt;
   std::string tail = path.substr(path.size() - 5);
