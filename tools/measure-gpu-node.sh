@@ -1,0 +1,71 @@
+#!/usr/bin/env bash
+# What BENCHMARKS.md's GPU-node figures come from: one short script run on a GPU node with the
+# bundle (tools/bundle.sh) unpacked, printing every figure and writing the JSON beside it.
+#   tools/measure-gpu-node.sh FETCHSCOPE OUT_DIR [GENUINE_ASSETS]
+# FETCHSCOPE: the bundle's launcher (or a build's binary); run from the repository root (the
+# goldens are read from golden/). About 5 minutes on 16 cores. Parts:
+#   node     `bench --what node --backends egl`: render and record throughput, the recommendation
+#   golden   `golden check --backend egl` (genuine-asset scenes only when GENUINE_ASSETS is given)
+#   jobs     the same 4 episodes with --jobs 1 and --jobs 4 on the GPU: identical bytes?
+#   webm     16 FetchPush episodes at 480x480, --jobs 8, mp4 against webm, alternating, twice
+#   minari   10,000 scripted FetchPush episodes with `rollout --jobs 16`, trajectory JSON against
+#            a Minari dataset, alternating, twice
+set -uo pipefail
+fs=$1
+out=$2
+genuine=${3:-}
+mkdir -p "$out"
+work=$(mktemp -d)
+log() { echo "== $* ($(date -u +%H:%M:%S))"; }
+TIMEFORMAT='%R s wall, %U s user, %S s sys'
+
+log "machine"
+nvidia-smi --query-gpu=name,driver_version,memory.total --format=csv,noheader 2>&1 | head -2
+echo "cores: $(nproc); $(grep -m1 'model name' /proc/cpuinfo)"
+"$fs" --version 2>&1 | head -3
+
+log "node"
+"$fs" bench --what node --backends egl --json-out "$out/node.json" 2>&1 | tail -40
+
+log "golden"
+golden_args=(--backend egl --out "$work/golden")
+[[ -n $genuine ]] && golden_args+=(--genuine-assets "$genuine")
+"$fs" golden check "${golden_args[@]}" 2>&1 | tail -20
+
+log "jobs"
+for j in 1 4; do
+  "$fs" record --env-id FetchPush-v4 --episodes 4 --jobs "$j" --format mp4,webm --quiet \
+    --out "$work/jobs$j" >/dev/null 2>&1 || echo "record --jobs $j failed"
+done
+(cd "$work/jobs1" && sha256sum episode_*.mp4 episode_*.webm episode_*.json) >"$work/j1.sum"
+(cd "$work/jobs4" && sha256sum episode_*.mp4 episode_*.webm episode_*.json) >"$work/j4.sum"
+if cmp -s "$work/j1.sum" "$work/j4.sum"; then
+  echo "jobs: --jobs 1 and --jobs 4 wrote identical bytes ($(wc -l <"$work/j1.sum") files)"
+else
+  echo "jobs: DIFFERENT bytes"; diff "$work/j1.sum" "$work/j4.sum" | head
+fi
+
+log "webm"
+for round in 1 2; do
+  for f in mp4 webm; do
+    echo -n "round $round $f: "
+    { time "$fs" record --env-id FetchPush-v4 --episodes 16 --jobs 8 --width 480 --height 480 \
+        --format "$f" --quiet --overwrite --out "$work/fmt_$f" >/dev/null; } 2>&1
+  done
+done
+du -sb "$work"/fmt_mp4/episode_*.mp4 | awk '{s+=$1} END {print "mp4 bytes", s}'
+du -sb "$work"/fmt_webm/episode_*.webm | awk '{s+=$1} END {print "webm bytes", s}'
+
+log "minari"
+export MINARI_DATASETS_PATH=$work/minari
+for round in 1 2; do
+  echo -n "round $round json: "
+  { time "$fs" rollout --env-id FetchPush-v4 --policy scripted --episodes 10000 --jobs 16 \
+      --json-out "$work/push10k.json" >/dev/null; } 2>&1
+  echo -n "round $round minari: "
+  { time "$fs" rollout --env-id FetchPush-v4 --policy scripted --episodes 10000 --jobs 16 \
+      --minari fetchscope/FetchPush/scripted-v0 --overwrite >/dev/null; } 2>&1
+done
+ls -l "$work/push10k.json" "$MINARI_DATASETS_PATH/fetchscope/FetchPush/scripted-v0/data/"
+log "done"
+rm -rf "$work"
