@@ -159,16 +159,6 @@ RunFolderRequest MakeRunFolderRequest(const RecordOptions& o, const Shard& shard
   return request;
 }
 
-// --resume: the manifest entries of this run and the complete ones kept from the run it
-// continues, in episode order.
-std::vector<ManifestEpisode> WithKeptEpisodes(std::vector<ManifestEpisode> entries,
-                                              const std::vector<ManifestEpisode>& kept) {
-  entries.insert(entries.end(), kept.begin(), kept.end());
-  std::sort(entries.begin(), entries.end(),
-            [](const ManifestEpisode& a, const ManifestEpisode& b) { return a.index < b.index; });
-  return entries;
-}
-
 // The episodes this run records: those of its shard among 0 .. --episodes-1 or, replaying a
 // trajectory JSON, the file's episodes, each under its own index (and so with its own reset);
 // --episodes then becomes one past the last index.
@@ -326,7 +316,7 @@ int RunRecord(const RecordOptions& options, const std::string& command_line,
     e.erase("encoded_height");
     entries.push_back(ManifestEpisodeFromJson(e));
   }
-  entries = WithKeptEpisodes(std::move(entries), folder.kept());
+  entries = folder.WithKept(std::move(entries));
   // The first worker that started speaks for the GL setup (all run the same backend).
   nlohmann::json first_worker;
   for (const nlohmann::json& w : result.workers) {
@@ -428,22 +418,7 @@ int RunRecord(const RecordOptions& options, const std::string& command_line,
   const fs::path manifest_path = fs::path(o.out) / ShardManifestName(shard);
   WriteManifest(manifest_path, manifest);
   folder.Commit();
-  RecordSummary summary;
-  summary.recorded = result.results.size();
-  summary.kept = folder.kept().size();
-  summary.frames = progress.frames();
-  summary.wall_s = wall;
-  summary.jobs = result.jobs;
-  if (shard.sharded()) summary.shard = ShardLabel(shard);
-  summary.episodes = manifest.episodes;
-  summary.missing = result.missing.size();
-  summary.renderer = first_worker.value("gl_renderer", "?");
-  summary.backend = first_worker.value("backend", "?");
-  summary.codec = codec_used;
-  summary.out = o.out;
-  summary.interrupted = sig != 0;
-  summary.command_line = command_line;
-  progress.Done(RecordSummaryText(summary));
+  progress.Done(RecordSummaryText(manifest, result.results.size(), folder.kept().size(), o.out));
   // a shard's episodes are only part of the run: merge-manifests writes the run's report
   if (!o.no_report && !shard.sharded()) WriteRunReportOrWarn(manifest_path, o.quiet);
   if (sig) return 128 + sig;

@@ -402,6 +402,13 @@ void RunFolder::SetAside(const fs::path& out, const std::vector<std::string>& na
   }
 }
 
+std::vector<ManifestEpisode> RunFolder::WithKept(std::vector<ManifestEpisode> entries) const {
+  entries.insert(entries.end(), kept_.begin(), kept_.end());
+  std::sort(entries.begin(), entries.end(),
+            [](const ManifestEpisode& a, const ManifestEpisode& b) { return a.index < b.index; });
+  return entries;
+}
+
 void RunFolder::Commit() {
   committed_ = true;
   std::error_code ec;

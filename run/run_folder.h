@@ -75,6 +75,8 @@ class RunFolder {
   const std::vector<int>& todo() const { return todo_; }
   /// --resume: the earlier manifest's entries of the complete episodes kept, by index.
   const std::vector<ManifestEpisode>& kept() const { return kept_; }
+  /// This run's manifest entries and (--resume) the kept ones, in episode order: the whole run.
+  std::vector<ManifestEpisode> WithKept(std::vector<ManifestEpisode> entries) const;
   /// The run ended as it should (done or interrupted, with its manifest): keep everything, and
   /// delete the earlier run that --overwrite set aside.
   void Commit();

@@ -41,20 +41,27 @@ std::string ResumeCommand(const std::string& command_line) {
   return resume ? out : out + " --resume";
 }
 
-std::string RecordSummaryText(const RecordSummary& s) {
+std::string RecordSummaryText(const Manifest& m, size_t recorded, size_t kept,
+                              const std::string& out) {
+  const double wall = m.timings_s.value("wall", 0.0);
+  const bool sharded = m.shard && m.shard->count > 1;
+  const std::string shard =
+      sharded ? ", shard " + std::to_string(m.shard->index) + "/" + std::to_string(m.shard->count)
+              : "";
   char head[320];
   std::snprintf(head, sizeof(head),
                 "record: %zu episode(s), %ld frames in %.1f s (%.1f frames/s, %.2f episodes/s, %d "
-                "job(s)%s%s)",
-                s.recorded, s.frames, s.wall_s, s.frames / s.wall_s, s.recorded / s.wall_s, s.jobs,
-                s.shard.empty() ? "" : ", shard ", s.shard.c_str());
+                "job(s)%s)",
+                recorded, m.frames, wall, m.frames / wall, recorded / wall, m.jobs, shard.c_str());
   std::string text = head;
-  if (s.kept) text += ", " + std::to_string(s.kept) + " kept by --resume";
-  text += ", " + SuccessText(CountEpisodes(s.episodes));
-  if (s.missing) text += ", " + std::to_string(s.missing) + " missing";
-  text += ", " + s.renderer + " via " + s.backend + ", " + s.codec + " -> " + s.out;
-  if (s.interrupted) {
-    text += " (interrupted)\nrecord: to record the rest, run: " + ResumeCommand(s.command_line);
+  if (kept) text += ", " + std::to_string(kept) + " kept by --resume";
+  text += ", " + SuccessText(CountEpisodes(m.episodes));
+  if (!m.missing.empty()) text += ", " + std::to_string(m.missing.size()) + " missing";
+  auto shown = [](const std::string& s) { return s.empty() ? std::string("?") : s; };
+  text += ", " + shown(m.backend.value("gl_renderer", "")) + " via " +
+          shown(m.backend.value("name", "")) + ", " + m.video.value("codec", "") + " -> " + out;
+  if (m.interrupted) {
+    text += " (interrupted)\nrecord: to record the rest, run: " + ResumeCommand(m.command_line);
   }
   return text;
 }

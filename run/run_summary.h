@@ -25,24 +25,12 @@ EpisodeCounts CountEpisodes(const std::vector<ManifestEpisode>& episodes);
 /// --resume (once).
 std::string ResumeCommand(const std::string& command_line);
 
-/// What record's summary line says about one process's run.
-struct RecordSummary {
-  size_t recorded = 0;  ///< episodes this process recorded
-  size_t kept = 0;      ///< --resume: complete episodes kept from the run it continues
-  long frames = 0;      ///< frames this process rendered
-  double wall_s = 0;
-  int jobs = 1;
-  std::string shard;                      ///< "2/4", or "" unsharded
-  std::vector<ManifestEpisode> episodes;  ///< the whole run's, kept ones included
-  size_t missing = 0;                     ///< episodes not recorded (interrupted, failed)
-  std::string renderer, backend, codec, out;
-  bool interrupted = false;
-  std::string command_line;  ///< the run's, for the --resume line
-};
-
-/// "record: 3 episode(s), ... success 2/3 complete, 1 incomplete (not in the rate), ... -> out",
-/// and when interrupted a second line naming the --resume command.
-std::string RecordSummaryText(const RecordSummary& s);
+/// record's summary of the run `m` it has just written to `out`, of which this process recorded
+/// `recorded` episodes and kept `kept` (--resume): "record: 3 episode(s), ... success 2/3 complete,
+/// 1 incomplete (not in the rate), ... -> out", and when interrupted a second line naming the
+/// --resume command.
+std::string RecordSummaryText(const Manifest& m, size_t recorded, size_t kept,
+                              const std::string& out);
 
 /// --resume of a run already whole: "record: --out 'X' already holds the whole run (N
 /// episode(s)): nothing to record; success S/C complete".

@@ -302,6 +302,28 @@ TEST_F(RunSafetyTest, ResumeWithMoreEpisodesExtendsTheRunByteForByte) {
   EXPECT_TRUE(AllFiles(out) == before);
 }
 
+// --resume of a finished run records nothing, says the run is whole and summarises it, and
+// leaves every file as it was.
+TEST_F(RunSafetyTest, ResumeOfAFinishedRunSaysItIsWhole) {
+  TempDir tmp;
+  const fs::path out = tmp.path() / "run";
+  const std::string run =
+      "record --env-id FetchPush-v4 --width 32 --height 32 --steps 5 --seed 2 --episodes 3 --out " +
+      out.string();
+  auto r = RunFetchscope(run);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto [successes, complete] = SummarySuccess(r.output);
+  ASSERT_EQ(complete, 3) << r.output;
+  const auto before = AllFiles(out);
+  r = RunFetchscope(run + " --resume");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(r.output, "record: --out '" + out.string() +
+                          "' already holds the whole run (3 episode(s)): nothing to record; "
+                          "success " +
+                          std::to_string(successes) + "/3 complete\n");
+  EXPECT_TRUE(AllFiles(out) == before);
+}
+
 TEST(ResumeCommand, DropsOverwriteAndAddsResumeOnce) {
   EXPECT_EQ(ResumeCommand("fetchscope record --episodes 3 --overwrite --out x"),
             "fetchscope record --episodes 3 --out x --resume");
