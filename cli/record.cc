@@ -37,6 +37,7 @@
 #include "run/progress.h"
 #include "run/record_run.h"
 #include "run/run_folder.h"
+#include "run/run_summary.h"
 #include "run/shard.h"
 #include "src/episode_source.h"
 #include "src/trajectory.h"
@@ -82,13 +83,6 @@ struct RecordOptions {
   std::string minari;           // --minari: also write the run as this Minari dataset
   std::string minari_root;      // --minari-root
 };
-
-// ", 1 incomplete (as recorded)" for the summary line when episodes are incomplete.
-std::string IncompleteNote(const std::vector<int>& incomplete, bool interrupted) {
-  if (incomplete.empty()) return "";
-  return ", " + std::to_string(incomplete.size()) + " incomplete" +
-         (interrupted ? "" : " (as recorded)");
-}
 
 // record --from: the recorded episodes' indices, ascending.
 std::vector<int> FromEpisodes(const TrajectorySource& from) {
@@ -158,17 +152,11 @@ RunFolderRequest MakeRunFolderRequest(const RecordOptions& o, const Shard& shard
   request.owns = [shard](int k) { return shard.Owns(k); };
   request.episodes = episodes;
   request.parameters = parameters;
+  request.sources = {{"--from", o.from}};
+  if (o.policy.rfind("replay:", 0) == 0)
+    request.sources.push_back({"--policy", o.policy.substr(7)});
+  request.report = !o.no_report && !shard.sharded();
   return request;
-}
-
-// --resume: the manifest entries of this run and the complete ones kept from the run it
-// continues, in episode order.
-std::vector<ManifestEpisode> WithKeptEpisodes(std::vector<ManifestEpisode> entries,
-                                              const std::vector<ManifestEpisode>& kept) {
-  entries.insert(entries.end(), kept.begin(), kept.end());
-  std::sort(entries.begin(), entries.end(),
-            [](const ManifestEpisode& a, const ManifestEpisode& b) { return a.index < b.index; });
-  return entries;
 }
 
 // The episodes this run records: those of its shard among 0 .. --episodes-1 or, replaying a
@@ -273,6 +261,10 @@ int RunRecord(const RecordOptions& options, const std::string& command_line,
   if (!folder.notice().empty() && !o.quiet) {
     std::fprintf(stderr, "fetchscope: note: %s\n", folder.notice().c_str());
   }
+  if (folder.already_complete()) {  // --resume of a whole run: say so, change nothing
+    if (!o.quiet) std::fprintf(stderr, "%s\n", AlreadyCompleteText(o.out, folder.kept()).c_str());
+    return 0;
+  }
   const int early_signal = StopSignal();  // before the scheduler: record nothing
 
   ProgressReporter progress("record", static_cast<int>(folder.todo().size()), o.steps + 1, o.quiet);
@@ -324,7 +316,7 @@ int RunRecord(const RecordOptions& options, const std::string& command_line,
     e.erase("encoded_height");
     entries.push_back(ManifestEpisodeFromJson(e));
   }
-  entries = WithKeptEpisodes(std::move(entries), folder.kept());
+  entries = folder.WithKept(std::move(entries));
   // The first worker that started speaks for the GL setup (all run the same backend).
   nlohmann::json first_worker;
   for (const nlohmann::json& w : result.workers) {
@@ -426,18 +418,7 @@ int RunRecord(const RecordOptions& options, const std::string& command_line,
   const fs::path manifest_path = fs::path(o.out) / ShardManifestName(shard);
   WriteManifest(manifest_path, manifest);
   folder.Commit();
-  const size_t recorded = result.results.size();
-  char summary[768];
-  std::snprintf(
-      summary, sizeof(summary),
-      "record: %zu episode(s), %ld frames in %.1f s (%.1f frames/s, %.2f episodes/s, %d "
-      "job(s)%s%s), success %d/%zu%s, %s via %s, %s -> %s%s",
-      recorded, progress.frames(), wall, progress.frames() / wall, recorded / wall, result.jobs,
-      shard.sharded() ? ", shard " : "", shard.sharded() ? ShardLabel(shard).c_str() : "",
-      successes, recorded, IncompleteNote(incomplete, sig != 0).c_str(),
-      first_worker.value("gl_renderer", "?").c_str(), first_worker.value("backend", "?").c_str(),
-      codec_used.c_str(), o.out.c_str(), sig ? " (interrupted)" : "");
-  progress.Done(summary);
+  progress.Done(RecordSummaryText(manifest, result.results.size(), folder.kept().size(), o.out));
   // a shard's episodes are only part of the run: merge-manifests writes the run's report
   if (!o.no_report && !shard.sharded()) WriteRunReportOrWarn(manifest_path, o.quiet);
   if (sig) return 128 + sig;
@@ -514,7 +495,10 @@ Command AddRecord(CLI::App& app) {
          "Contact sheet: every K-th frame (0: about 12 tiles); the last frame is always included")
       ->capture_default_str()
       ->check(CLI::Range(0, 1000));
-  sub->add_option("--out", o->out, "Output folder")->capture_default_str();
+  sub->add_option("--out", o->out,
+                  "Output folder: checked writable before anything is rendered; never --from's "
+                  "folder, one holding it or one inside it")
+      ->capture_default_str();
   sub->add_flag("-q,--quiet", o->quiet, "No progress or summary on stderr");
   sub->add_option("--minari", o->minari,
                   "Also write the recorded episodes as a Minari dataset of this id (README: "
@@ -522,15 +506,19 @@ Command AddRecord(CLI::App& app) {
   sub->add_option("--minari-root", o->minari_root,
                   "Datasets root (default $MINARI_DATASETS_PATH, else ~/.minari/datasets)");
   sub->add_flag("--overwrite", o->overwrite,
-                "Replace the record run already in --out (its manifest, report and episode "
-                "files; other files stay). The earlier run is kept aside until the new one has "
-                "its manifest, and put back if it fails or is interrupted before an episode is "
-                "complete. Without --overwrite or --resume such a folder is refused");
+                "Replace the record run already in --out: only the files fetchscope wrote (its "
+                "manifest, the files the manifest lists, its report); other files stay, and one "
+                "under a run's name that fetchscope did not write is refused, naming it. The "
+                "earlier run is kept aside until the new one has its manifest, and put back if it "
+                "fails or is interrupted before an episode is complete. Without --overwrite or "
+                "--resume such a folder is refused");
   sub->add_flag("--resume", o->resume,
                 "Continue the interrupted record run in --out: keep its complete episodes and "
                 "record the others, byte-identical to an uninterrupted run; the options must "
-                "be those of that run. With nothing to resume (no such folder, or no manifest "
-                "in it) the whole run is recorded, with a note saying so");
+                "be those of that run, except a larger --episodes, which extends it (a smaller "
+                "one is refused). A run already whole is summarised and left as it is. With "
+                "nothing to resume (no such folder, or no manifest in it) the whole run is "
+                "recorded, with a note saying so");
   AddJobsOptions(sub, &o->jobs, &o->worker_mode);
   sub->add_option("--shard", o->shard,
                   "Record only shard I of N (0 <= I < N): episodes k with k mod N = I. Without it: "

@@ -18,6 +18,8 @@
 #include "inspect/html_page.h"
 #include "inspect/viewer.h"
 #include "run/run_files.h"
+#include "run/run_folder.h"
+#include "run/run_summary.h"
 #include "src/env_spec.h"
 
 namespace fetchscope {
@@ -417,11 +419,17 @@ json ReportData(const RecordedRun& run) {
   }
   const auto [low, high] = WilsonInterval(successes, n);
   const int missing = static_cast<int>(all.size()) - static_cast<int>(run.recorded.size());
+  // how to finish the run: its own command with --resume (a merged run: each shard's)
+  const std::string resume = m.command_line.empty() || m.merged
+                                 ? "; record them with --resume (the run's record command)"
+                                 : "; to record them, run: " + ResumeCommand(m.command_line);
   if (m.interrupted) {
     notes.insert(notes.begin(), "the run was interrupted by " + m.signal.value_or("") + ": " +
-                                    std::to_string(missing) + " episode(s) missing");
+                                    std::to_string(missing) + " episode(s) missing, " +
+                                    std::to_string(incomplete) + " incomplete" + resume);
   } else if (missing > 0) {
-    notes.insert(notes.begin(), std::to_string(missing) + " episode(s) missing (see the table)");
+    notes.insert(notes.begin(),
+                 std::to_string(missing) + " episode(s) missing (see the table)" + resume);
   }
   json provenance = RunProvenance(run);
   // the re-rendered run's own page, where the path record --from was given still finds one
@@ -467,6 +475,12 @@ fs::path WriteRunReport(const RecordedRun& run) {
   // the episode viewer: per-step signals, parsed by the page when an episode's view opens
   const std::vector<PageBlock> blocks = AddEpisodeViewers(run.dir, run.manifest, &data);
   const fs::path out = run.dir / kReportFileName;
+  std::error_code ec;
+  if (fs::exists(out, ec) && !IsFetchscopeReport(out)) {  // the user's own page: never replaced
+    throw UsageError("'" + out.string() +
+                     "' is not a report fetchscope wrote (no generator tag): move it elsewhere "
+                     "for the run's report to be written there");
+  }
   WriteFileAtomically(
       out.string(),
       HtmlPage(PageKind::kReport, "fetchscope report: " + data["title"].get<std::string>(), data,

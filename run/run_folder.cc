@@ -1,9 +1,15 @@
 #include "run/run_folder.h"
 
+#include <fcntl.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <iterator>
+#include <nlohmann/json.hpp>
 
 #include "base/errors.h"
 #include "run/run_files.h"
@@ -43,7 +49,72 @@ std::string Listed(const std::vector<std::string>& names) {
   return s;
 }
 
+// `p` as the file system resolves it: absolute, symlinks followed as far as it exists, no
+// trailing separator.
+fs::path Resolved(const fs::path& p) {
+  std::error_code ec;
+  fs::path r = fs::weakly_canonical(fs::absolute(p, ec), ec);
+  if (ec) r = fs::absolute(p).lexically_normal();
+  if (!r.has_filename() && r.has_relative_path()) r = r.parent_path();
+  return r;
+}
+
+// True when `inner` is `outer` or lies inside it (both resolved).
+bool Within(const fs::path& inner, const fs::path& outer) {
+  const size_t n = std::distance(outer.begin(), outer.end());
+  return static_cast<size_t>(std::distance(inner.begin(), inner.end())) >= n &&
+         std::equal(outer.begin(), outer.end(), inner.begin());
+}
+
+// Refuses an --out that is, holds or lies inside what the run reads: recording there would
+// replace (or bury) the run it replays.
+void CheckNotASource(const fs::path& out, const std::string& quoted,
+                     const std::vector<std::pair<std::string, std::string>>& sources) {
+  const fs::path o = Resolved(out);
+  for (const auto& [option, source] : sources) {
+    if (source.empty()) continue;
+    const fs::path s = Resolved(source);
+    const char* how = s == o         ? " is "
+                      : Within(s, o) ? " holds "
+                      : Within(o, s) ? " lies inside "
+                                     : "";
+    if (!*how) continue;
+    throw UsageError(quoted + how + option + " '" + source + "' (" +
+                     (s == o ? "both " + o.string() : o.string() + " and " + s.string()) +
+                     "): a run never writes where it reads; choose another --out");
+  }
+}
+
+// Refuses a folder nothing can be written in, before anything is rendered (root ignores the
+// permission bits, so the check writes a file rather than asking access()).
+void CheckWritable(const fs::path& out, const std::string& quoted) {
+  const fs::path probe = out / (".fetchscope-write-check-" + std::to_string(::getpid()));
+  const int fd = ::open(probe.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0600);
+  if (fd < 0) {
+    const int err = errno;
+    throw UsageError(quoted + " is not writable (" + std::strerror(err) +
+                     "): choose a folder you can write to");
+  }
+  ::close(fd);
+  ::unlink(probe.c_str());
+}
+
+// True for a fetchscope trajectory file (an object with env_id, seed and episodes).
+bool IsFetchscopeTrajectory(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  const nlohmann::json j = nlohmann::json::parse(in, nullptr, false);
+  return j.is_object() && j.contains("env_id") && j.contains("seed") && j.contains("episodes");
+}
+
 }  // namespace
+
+bool IsFetchscopeReport(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::string head(4096, '\0');
+  in.read(&head[0], static_cast<std::streamsize>(head.size()));
+  head.resize(static_cast<size_t>(in.gcount()));
+  return head.find("<meta name=\"generator\" content=\"fetchscope ") != std::string::npos;
+}
 
 ReuseMode ParseReuseMode(bool overwrite, bool resume) {
   if (overwrite && resume) {
@@ -69,6 +140,7 @@ bool RunFolder::Ours(const std::string& name) const {
 RunFolder::RunFolder(const RunFolderRequest& request) : request_(request) {
   const fs::path out = request.out.empty() ? fs::path(".") : fs::path(request.out);
   const std::string quoted = "--out '" + request.out + "'";
+  CheckNotASource(out, quoted, request.sources);
   std::error_code ec;
   for (fs::path p = out; !p.empty() && !fs::exists(p, ec); p = p.parent_path()) {
     created_dirs_.push_back(p);
@@ -94,6 +166,8 @@ RunFolder::RunFolder(const RunFolderRequest& request) : request_(request) {
     if (ec) throw RunError("cannot list " + quoted + ": " + ec.message());
     std::sort(run_files.begin(), run_files.end());
     std::sort(manifests.begin(), manifests.end());
+    CheckWritable(out, quoted);
+    RefuseForeignFiles(out, quoted, &run_files, manifests);
   }
   // --overwrite sets the earlier run aside in a hidden folder; one still there is from an
   // --overwrite that was killed outright (SIGKILL): never lost silently
@@ -181,7 +255,15 @@ RunFolder::RunFolder(const RunFolderRequest& request) : request_(request) {
                          " does not record the run's parameters (written by an older fetchscope, "
                          "or not a record manifest): pass --overwrite instead");
       }
-      const std::string why = Difference(m->parameters, request.parameters, SameRunScope::kRun);
+      RunParameters theirs = m->parameters;
+      if (theirs.episodes > request.parameters.episodes) {
+        throw UsageError("cannot --resume " + quoted + " with --episodes " +
+                         std::to_string(request.parameters.episodes) + ": the run there has " +
+                         std::to_string(theirs.episodes) + "; pass --episodes " +
+                         std::to_string(theirs.episodes) + ", or more to extend it");
+      }
+      theirs.episodes = request.parameters.episodes;  // --resume may extend the run
+      const std::string why = Difference(theirs, request.parameters, SameRunScope::kRun);
       if (!why.empty()) {
         throw UsageError(
             "cannot --resume " + quoted + " with other parameters: " + why +
@@ -205,6 +287,13 @@ RunFolder::RunFolder(const RunFolderRequest& request) : request_(request) {
       todo_.clear();
       for (int k : request.episodes) {
         if (!done.count(k)) todo_.push_back(k);
+      }
+      already_complete_ = todo_.empty() && !m->interrupted && m->missing.empty() &&
+                          m->failures.empty() &&
+                          m->episodes_requested == request.parameters.episodes;
+      if (already_complete_) {  // nothing to record, nothing to change (or clean up)
+        committed_ = true;
+        return;
       }
       // the files of the episodes to redo go first (an incomplete one's); the manifest stays
       // until the new one replaces it, so that a failed --resume leaves the run resumable
@@ -233,9 +322,63 @@ RunFolder::RunFolder(const RunFolderRequest& request) : request_(request) {
     throw RunError("cannot create output folder '" + request.out +
                    "': " + (ec ? ec.message() : std::string("a file is in the way")));
   }
+  if (!created_dirs_.empty()) {
+    try {
+      CheckWritable(out, quoted);
+    } catch (...) {
+      for (const fs::path& dir : created_dirs_) fs::remove(dir, ec);
+      throw;
+    }
+  }
   for (const auto& entry : fs::directory_iterator(out, ec)) {
     before_.insert(entry.path().filename().string());
   }
+}
+
+void RunFolder::RefuseForeignFiles(const fs::path& out, const std::string& quoted,
+                                   std::vector<std::string>* run_files,
+                                   const std::vector<std::string>& manifests) const {
+  // what the record manifests in the folder list is fetchscope's, and so are they
+  std::set<std::string> listed;
+  std::vector<std::string> names = manifests;
+  names.insert(names.end(), run_files->begin(), run_files->end());
+  for (const std::string& name : names) {
+    if (!IsManifestFileName(name)) continue;
+    const std::optional<Manifest> m = ReadManifestOrNull(out / name);
+    if (!m) continue;
+    listed.insert(name);
+    for (const ManifestEpisode& e : m->episodes) {
+      for (const std::string& file : e.FileNames()) listed.insert(file);
+    }
+  }
+  std::vector<std::string> foreign;
+  std::set<std::string> left_alone;
+  for (const std::string& name : names) {
+    const RunFileName parsed = *ParseRunFileName(name);
+    bool ours = listed.count(name) > 0;
+    if (!ours && parsed.report) {
+      ours = IsFetchscopeReport(out / name);
+      if (!ours && !request_.report) {  // never written, never removed: the user's page stays
+        left_alone.insert(name);
+        continue;
+      }
+    }
+    // an episode of a run killed before its manifest: beside its fetchscope trajectory
+    if (!ours && parsed.episode >= 0) {
+      ours = IsFetchscopeTrajectory(out / EpisodeTrajectoryFileName(parsed.episode));
+    }
+    if (!ours) foreign.push_back(name);
+  }
+  if (!foreign.empty()) {
+    std::sort(foreign.begin(), foreign.end());
+    throw UsageError(quoted + " holds " + Listed(foreign) +
+                     ", not written by fetchscope, under names a run writes (--overwrite removes "
+                     "only fetchscope's files): move them out of " +
+                     quoted + ", or choose another --out");
+  }
+  run_files->erase(std::remove_if(run_files->begin(), run_files->end(),
+                                  [&](const std::string& n) { return left_alone.count(n) > 0; }),
+                   run_files->end());
 }
 
 void RunFolder::SetAside(const fs::path& out, const std::vector<std::string>& names) {
@@ -257,6 +400,13 @@ void RunFolder::SetAside(const fs::path& out, const std::vector<std::string>& na
     }
     set_aside_.push_back(name);
   }
+}
+
+std::vector<ManifestEpisode> RunFolder::WithKept(std::vector<ManifestEpisode> entries) const {
+  entries.insert(entries.end(), kept_.begin(), kept_.end());
+  std::sort(entries.begin(), entries.end(),
+            [](const ManifestEpisode& a, const ManifestEpisode& b) { return a.index < b.index; });
+  return entries;
 }
 
 void RunFolder::Commit() {

@@ -3,7 +3,15 @@
 // fails.
 //
 // A run's files are the ones record and its report write (run/run_files.h names them all) and their
-// hidden temporaries. Anything else in the folder is the user's and is never touched.
+// hidden temporaries. Anything else in the folder is the user's and is never touched. A file under
+// one of those names counts as fetchscope's only when it carries fetchscope's mark: a record
+// manifest, a file a manifest there lists, a report with fetchscope's generator tag, or an episode
+// file beside a fetchscope trajectory of that episode (a run killed before its manifest). Any other
+// is the user's, and the folder is refused naming it, whatever the mode.
+//
+// The folder is also refused when it is, holds or lies inside a source the run reads (record
+// --from, a replay file), paths and symlinks resolved, and when nothing can be written in it; both
+// before anything is rendered.
 //
 // --overwrite moves the earlier run's files aside into a hidden folder inside --out
 // (.manifest.replaced-PID, or .manifest_shard_IIII_of_NNNN.replaced-PID for a shard) and deletes
@@ -18,6 +26,7 @@
 #include <functional>
 #include <set>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "run/manifest.h"
@@ -42,6 +51,11 @@ struct RunFolderRequest {
   /// What makes two manifests the same run (SameRun), stored in the manifest; --resume refuses a
   /// folder whose run differs in any of them.
   RunParameters parameters;
+  /// What the run reads (record --from's folder or file, a replay: file): --out may neither be,
+  /// hold nor lie inside one of them.
+  std::vector<std::pair<std::string, std::string>> sources;  ///< {option, path}: {"--from", "run"}
+  /// The run writes its report (index.html): a user's index.html is in the way.
+  bool report = true;
 };
 
 /// The folder, prepared: conflicts checked, earlier files removed as asked, the folder made.
@@ -61,6 +75,8 @@ class RunFolder {
   const std::vector<int>& todo() const { return todo_; }
   /// --resume: the earlier manifest's entries of the complete episodes kept, by index.
   const std::vector<ManifestEpisode>& kept() const { return kept_; }
+  /// This run's manifest entries and (--resume) the kept ones, in episode order: the whole run.
+  std::vector<ManifestEpisode> WithKept(std::vector<ManifestEpisode> entries) const;
   /// The run ended as it should (done or interrupted, with its manifest): keep everything, and
   /// delete the earlier run that --overwrite set aside.
   void Commit();
@@ -68,9 +84,17 @@ class RunFolder {
   bool replacing() const { return !set_aside_.empty(); }
   /// A line for the user about the folder, or "": --resume found nothing to resume.
   const std::string& notice() const { return notice_; }
+  /// --resume of a run that is already whole (nothing to record, not interrupted): the caller
+  /// summarises kept() and leaves the folder as it is.
+  bool already_complete() const { return already_complete_; }
 
  private:
   bool Ours(const std::string& name) const;
+  // Refuses files under a run's names that fetchscope did not write; drops from `run_files` a
+  // user's index.html that a run without a report leaves alone.
+  void RefuseForeignFiles(const std::filesystem::path& out, const std::string& quoted,
+                          std::vector<std::string>* run_files,
+                          const std::vector<std::string>& manifests) const;
   void Cleanup() noexcept;
   void Restore() noexcept;  // puts the files set aside back
   // --overwrite: moves `names` from `out` into aside_
@@ -85,8 +109,13 @@ class RunFolder {
   std::vector<std::filesystem::path> stale_aside_;  // left by a killed --overwrite
   std::vector<std::string> set_aside_;              // their names (in --out and in aside_)
   std::string notice_;
+  bool already_complete_ = false;
   bool committed_ = false;
 };
+
+/// True when `path` is a report page fetchscope wrote (it carries the generator tag
+/// `<meta name="generator" content="fetchscope ...">`).
+bool IsFetchscopeReport(const std::filesystem::path& path);
 
 /// Parses --overwrite/--resume into a mode; both at once is a UsageError.
 ReuseMode ParseReuseMode(bool overwrite, bool resume);

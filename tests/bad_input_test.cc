@@ -552,7 +552,8 @@ std::vector<Case> Matrix() {
        2,
        "already holds a record run",
        {"out/episode_000.mp4"},
-       file("out/manifest.json", "{}")},
+       // a record manifest (a bare "{}" is not fetchscope's, and is refused as the user's)
+       file("out/manifest.json", R"({"env_id": "FetchReach-v4", "seed": 0, "episodes": []})")},
       {"ReplayDtypeUnknown",
        rollout + "--policy replay:{src}/tests/data/replay/replay.csv "
                  "--replay-dtype float16",
