@@ -1,6 +1,7 @@
 #include "cli/record_from.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 
 #include "base/errors.h"
@@ -128,15 +129,17 @@ void AddDivergence(const TrajectorySource& source, std::vector<ManifestEpisode>*
     if (it == source.divergence.end()) continue;
     const EpisodeDivergence& d = it->second;
     e.extra["reset"] = d.reset;
+    // a NaN in the dataset makes an infinite difference: null, as JSON has no infinity
+    const auto number = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nullptr; };
     nlohmann::json j = {{"first_step", nullptr},
                         {"where", nullptr},
                         {"difference", nullptr},
-                        {"max_difference", d.max_difference},
+                        {"max_difference", number(d.max_difference)},
                         {"tolerance", d.tolerance}};
     if (d.first_step >= 0) {
       j["first_step"] = d.first_step;
       j["where"] = d.where;
-      j["difference"] = d.difference;
+      j["difference"] = number(d.difference);
     }
     e.extra["divergence"] = j;
   }

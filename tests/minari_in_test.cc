@@ -6,8 +6,10 @@
 // renders; a bad dataset is one line naming the file, with nothing written.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
@@ -309,12 +311,16 @@ TEST(RecordFromDataset, PerturbedObservationsReportTheirFirstDivergence) {
   EXPECT_TRUE(fs::is_regular_file(run / "episode_001.mp4"));
   // --tolerance above the edit: no divergence at step 7, the 1.0 one stays
   r = RunFetchscope("record --from edited/push-v0 --minari-root " + root.string() +
-                    " --tolerance 0.01 --overwrite" + kSmall + "--out " + run.string());
+                    " --tolerance 0.01 --overwrite --width 40 --height 40 --quiet --out " +
+                    run.string());
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_EQ(Manifest(run)["episodes"][1]["divergence"]["first_step"], 9);
-  // the report has a column for it
-  const std::string html = ReadFile(run.string() + "/../run/index.html");
-  (void)html;
+  // the report's data: a "reset" and "divergence" column per episode
+  const std::string html = ReadFile(run / "index.html");
+  EXPECT_NE(html.find("\"has_replay\":true"), std::string::npos);
+  EXPECT_NE(html.find("\"first_step\":9,"), std::string::npos);
+  EXPECT_NE(html.find("\"where\":\"observation[5]\""), std::string::npos);
+  EXPECT_NE(html.find("\"reset\":\"first observation\""), std::string::npos);
 }
 
 // Every bad dataset: one line naming the file and what is wrong, a non-zero exit, no --out.
