@@ -25,11 +25,12 @@ constexpr float kSuccessGreen[4] = {0.1f, 0.85f, 0.2f, 1.0f};
 constexpr float kMissOrange[4] = {1.0f, 0.55f, 0.0f, 1.0f};
 constexpr float kArrowYellow[4] = {1.0f, 0.85f, 0.0f, 1.0f};
 constexpr float kTrailCyan[4] = {0.0f, 0.75f, 1.0f, 1.0f};
-constexpr float kGhostViolet[4] = {0.75f, 0.45f, 1.0f, 0.45f};  // translucent: a dataset's own
+constexpr float kGhostViolet[4] = {0.8f, 0.3f, 1.0f, 0.6f};  // translucent: a dataset's own
 
 constexpr double kTargetRadius = 0.02;     // target0's size in the Fetch XMLs
 constexpr double kAchievedRadius = 0.012;  // opaque core
 constexpr double kAchievedHalo = 0.032;    // translucent halo: shows even around the 5 cm block
+constexpr double kGhostRadius = 0.022;     // a dataset's achieved goal: between core and halo
 constexpr double kArrowWidth = 0.008;      // m
 constexpr double kLineWidth = 2.0;         // pixels for mjGEOM_LINE
 
@@ -119,7 +120,7 @@ OverlaySet ParseOverlays(const std::string& spec) {
     if (token == "goal") {
       set.goal = true;
     } else if (token == "achieved") {
-      set.achieved = true;
+      set.achieved = set.ghost = true;  // a dataset's ghost goes with the achieved marker
     } else if (token == "hud") {
       set.hud = true;
     } else if (token == "action") {
@@ -227,7 +228,7 @@ void AddOverlayGeoms(const OverlaySet& overlays, const FrameInfo& info,
     }
   }
   if (overlays.ghost && info.ghost) {  // translucent, the replayed marker's size: both show
-    AddSphere(scene, *info.ghost, kAchievedRadius * 1.6, kGhostViolet);
+    AddSphere(scene, *info.ghost, kGhostRadius, kGhostViolet);
     AddConnector(scene, mjGEOM_LINE, kLineWidth, *info.ghost, info.achieved, kGhostViolet);
   }
   if (overlays.achieved) {

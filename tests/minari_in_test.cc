@@ -133,6 +133,7 @@ TEST(GhostOverlay, DrawsTheDatasetsAchievedGoal) {
   EXPECT_TRUE(ParseOverlays("default").ghost);
   EXPECT_FALSE(ParseOverlays("none").ghost);
   EXPECT_FALSE(ParseOverlays("goal,hud").ghost);
+  EXPECT_TRUE(ParseOverlays("goal,achieved,hud,labels").ghost);  // record's --overlay default
   EXPECT_TRUE(ParseOverlays("goal,ghost").ghost);
   EXPECT_TRUE(ParseOverlays("all").ghost);
   const EnvSpec& spec = FindEnvSpec("FetchPush-v4");
@@ -155,8 +156,8 @@ TEST(GhostOverlay, DrawsTheDatasetsAchievedGoal) {
   EXPECT_NE(hud.labels.find("ghost"), std::string::npos);
   EXPECT_NE(hud.values.find("0.03000 m off"), std::string::npos) << hud.values;
   scene.ngeom = 0;
-  AddOverlayGeoms(ParseOverlays("goal,achieved,hud"), info, info.achieved, trail, false, &scene);
-  EXPECT_EQ(scene.ngeom, without);
+  AddOverlayGeoms(ParseOverlays("goal,hud"), info, info.achieved, trail, false, &scene);
+  EXPECT_EQ(scene.ngeom, without - 3);  // neither the achieved marker (2 geoms, halo) nor the ghost
   mjv_freeScene(&scene);
 }
 
