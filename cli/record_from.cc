@@ -66,6 +66,7 @@ std::string DescribeDivergence(int k, const EpisodeDivergence& d) {
     return line + "replays within " + Num(d.tolerance) + " (largest difference " +
            Num(d.max_difference) + ")";
   }
+  if (d.first_step == 0) line += "the reset differs from the dataset's first row: ";
   return line + "diverges at step " + std::to_string(d.first_step) + ", " + d.where + " off by " +
          Num(d.difference) + " (tolerance " + Num(d.tolerance) + "; largest difference " +
          Num(d.max_difference) + ")";

@@ -31,7 +31,10 @@ bool IsTrajectoryPath(const std::string& path) {
   for (const auto& entry : fs::directory_iterator(path, ec)) {
     if (std::regex_match(entry.path().filename().string(), name)) return true;
   }
-  return false;
+  // a folder with no dataset in it either: LoadTrajectorySource says what --from accepts
+  const fs::path dir(path);
+  return !fs::exists(dir / "data", ec) && !fs::exists(dir / "main_data.hdf5", ec) &&
+         !fs::exists(dir / "metadata.json", ec);
 }
 
 MinariSource LoadMinariSource(const MinariSourceRequest& r) {

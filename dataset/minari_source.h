@@ -29,9 +29,9 @@ struct MinariSource {
 /// env_spec and no --env-id, or --episodes beyond the dataset's episodes.
 MinariSource LoadMinariSource(const MinariSourceRequest& request);
 
-/// True when `path` is a record run folder (holding episode_NNN.json) or a file other than an
-/// .hdf5 one (a trajectory JSON): what LoadTrajectorySource reads. Anything else is taken as a
-/// Minari dataset.
+/// True when `path` is a record run folder (holding episode_NNN.json, or no dataset either) or
+/// a file other than an .hdf5 one (a trajectory JSON): what LoadTrajectorySource reads.
+/// Anything else is taken as a Minari dataset.
 bool IsTrajectoryPath(const std::string& path);
 
 }  // namespace fetchscope

@@ -76,8 +76,9 @@ TrajectorySource LoadTrajectorySource(const std::string& path) {
     std::sort(files.begin(), files.end());
     if (files.empty()) {
       throw UsageError("--from '" + path +
-                       "' holds no episode_NNN.json; accepted: a run folder of record, or one "
-                       "trajectory JSON file");
+                       "' holds no episode_NNN.json; accepted: a run folder of record, one "
+                       "trajectory JSON file, or a Minari dataset (its id, folder or "
+                       "main_data.hdf5)");
     }
     for (size_t i = 0; i < files.size(); ++i) AddFile(files[i], &source, i == 0);
   } else if (fs::is_regular_file(path, ec)) {

@@ -198,6 +198,14 @@ TEST(RecordFromDataset, RoundTripIsBitForBit) {
   EXPECT_EQ(m["env_id"], "FetchPush-v4");
   EXPECT_EQ(m["from"], "rt/push-v0");
   EXPECT_NE(m["dataset"]["found"].get<std::string>().find("rt/push-v0"), std::string::npos);
+  // --jobs 2: the same episode files, byte for byte
+  const fs::path run2 = tmp.path() / "run2";
+  r = RunFetchscope("record --from rt/push-v0 --minari-root " + root.string() + " --jobs 2" +
+                    kSmall + "--out " + run2.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  for (const char* file : {"episode_000.json", "episode_002.json", "episode_002.mp4"}) {
+    EXPECT_TRUE(ReadFile(run / file) == ReadFile(run2 / file)) << file;
+  }
   // --episodes picks the first ones; a conflicting --env-id is refused naming both
   r = RunFetchscope("record --from rt/push-v0 --minari-root " + root.string() +
                     " --episodes 1 --overwrite" + kSmall + "--out " + run.string());
