@@ -82,6 +82,7 @@ struct RecordOptions {
   std::string layers = "rgb";   // --layers: rgb plus depth, segmentation
   std::string minari;           // --minari: also write the run as this Minari dataset
   std::string minari_root;      // --minari-root
+  double tolerance = 1e-6;      // --tolerance: record --from DATASET
 };
 
 // record --from: the recorded episodes' indices, ascending.
@@ -96,8 +97,10 @@ int RunRecord(const RecordOptions& o, const std::string& command_line,
 
 // record --from: the trajectory sets env, seed, policy, steps and episodes; then as record.
 int RunRecordFrom(RecordOptions o, const CLI::App& sub, const std::string& command_line) {
-  CheckFromFlags(sub, o.from);
-  const TrajectorySource source = LoadTrajectorySource(o.from);
+  const TrajectorySource source =
+      LoadFromSource(sub, {o.from, o.minari_root, sub.count("--episodes") ? o.episodes : 0,
+                           sub.count("--env-id") ? o.env.env_id : "", o.tolerance,
+                           sub.count("--assets") ? o.env.assets : "", o.quiet});
   ApplyFromSource(source, sub, &o.env.env_id, &o.env.seed, &o.policy, &o.steps, &o.episodes,
                   &o.env.assets);
   return RunRecord(o, command_line, &source);
@@ -363,6 +366,7 @@ int RunRecord(const RecordOptions& options, const std::string& command_line,
   manifest.steps_per_episode = o.steps;
   manifest.sheet_every = o.sheet_every;
   manifest.episodes = std::move(entries);
+  if (from) AddDivergence(*from, &manifest.episodes, &manifest.extra);  // a dataset's drift
   manifest.missing = result.missing;
   for (const WorkerFailure& f : result.failures) {
     manifest.failures.push_back({f.worker, f.episodes, f.message});
@@ -528,7 +532,7 @@ Command AddRecord(CLI::App& app) {
                   "Indexed Job's completions)");
   sub->add_flag("--no-report", o->no_report,
                 "Do not write the run's HTML report (index.html; see `fetchscope report`)");
-  AddFromOption(sub, &o->from);
+  AddFromOption(sub, &o->from, &o->tolerance);
   return {sub, [o, sub] {
             o->episodes_given = sub->count("--episodes") > 0;
             if (!o->from.empty()) return RunRecordFrom(*o, *sub, CommandLine());

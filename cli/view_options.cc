@@ -19,7 +19,9 @@ void AddViewOptions(CLI::App* sub, ViewOptions* o) {
                   "Comma list of goal, achieved, hud, action, trail, labels (camera names on "
                   "tiled views; on by default), hindsight (record only: the goals HER's future "
                   "strategy relabels each transition with, green = relabelled success, red = "
-                  "failure); or all, or none. Spaces after the commas are fine")
+                  "failure), ghost (record --from DATASET: the dataset's own achieved goal, a "
+                  "translucent violet sphere; on with achieved); or all, or none. Spaces after "
+                  "the commas are fine")
       ->capture_default_str();
   sub->add_option("--width", o->width,
                   "Width in pixels of each camera's view: N tiled cameras make a frame N views "

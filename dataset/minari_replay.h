@@ -1,5 +1,6 @@
-// Replaying a Minari episode on our env and measuring how far it drifts from the dataset: the
-// check under `record --from DATASET` (not wired into record yet, see README "Datasets").
+// Replaying one Minari episode on our env and measuring how far it drifts from the dataset (a
+// seedless episode continues the generator here). record --from DATASET does the same through
+// src/episode_source.h (MeasureDivergence), rebuilding a seedless reset from its first row.
 #pragma once
 
 #include <string>

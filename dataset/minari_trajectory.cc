@@ -47,6 +47,53 @@ MinariEpisode ToMinariEpisode(const EpisodeRecord& episode, std::optional<uint64
   return m;
 }
 
+TrajectoryEpisode FromMinariEpisode(const MinariEpisode& m, const EnvSpec& spec,
+                                    const std::string& file) {
+  TrajectoryEpisode e;
+  e.index = static_cast<int>(m.id);
+  e.seed = m.seed;
+  e.file = file;
+  const int rows = m.steps() + 1;
+  for (int t = 0; t < rows; ++t) {
+    TrajectoryStep s;
+    s.t = t;
+    s.obs.observation.assign(m.observation.begin() + t * m.obs_dim,
+                             m.observation.begin() + (t + 1) * m.obs_dim);
+    for (int i = 0; i < 3; ++i) {
+      s.obs.achieved_goal[i] = m.achieved_goal[t * 3 + i];
+      s.obs.desired_goal[i] = m.desired_goal[t * 3 + i];
+    }
+    s.is_success = m.is_success.empty() ? GoalDistance(s.obs.achieved_goal, s.obs.desired_goal) <
+                                              spec.distance_threshold
+                                        : m.is_success[t] != 0.0f;
+    if (t > 0) {
+      Action a;
+      a.is_float32 = true;  // the action space's dtype: Gymnasium scales them in float32
+      for (int i = 0; i < 4; ++i) a.value[i] = m.actions[(t - 1) * 4 + i];
+      s.action = a;
+      s.reward = m.rewards[t - 1];
+      e.episode_return += *s.reward;
+    }
+    e.steps.push_back(std::move(s));
+  }
+  return e;
+}
+
+EpisodeStart MinariEpisodeStart(const MinariEpisode& m, const EnvSpec& spec) {
+  EpisodeStart start;
+  start.seed = m.seed;
+  for (int i = 0; i < 3; ++i) start.goal[i] = m.desired_goal[i];
+  if (spec.has_object && m.obs_dim == 25) {  // observation[3:6] object_pos, [11:14] object_rot
+    ObjectPose pose;
+    for (int i = 0; i < 3; ++i) {
+      pose.position[i] = m.observation[3 + i];
+      pose.euler[i] = m.observation[11 + i];
+    }
+    start.object = pose;
+  }
+  return start;
+}
+
 std::filesystem::path WriteMinariDataset(const Trajectory& trajectory, MinariWriteOptions options) {
   options.spec = &FindEnvSpec(trajectory.env_id);
   std::vector<const TrajectoryEpisode*> episodes;

@@ -296,6 +296,7 @@ json ReportData(const RecordedRun& run) {
   std::vector<double> returns;  // of the complete episodes
   int incomplete = 0;
   bool has_hindsight = false;
+  bool has_replay = false;  // record --from DATASET
   std::set<int> all(run.expected.begin(), run.expected.end());
   for (const auto& [k, entry] : run.recorded) all.insert(k);
   for (int k : all) {
@@ -385,6 +386,13 @@ json ReportData(const RecordedRun& run) {
       e["hindsight"] = *hindsight;
       has_hindsight = true;
     }
+    // record --from DATASET: the reset used and how far the replay drifted from the dataset
+    const auto divergence = entry.extra.find("divergence");
+    if (divergence != entry.extra.end() && divergence->is_object()) {
+      e["replay"] = *divergence;
+      e["replay"]["reset"] = entry.extra.value("reset", "");
+      has_replay = true;
+    }
     json distances = json::array();
     e["final_distance"] = nullptr;
     if (e["trajectory"].is_string()) {
@@ -455,6 +463,7 @@ json ReportData(const RecordedRun& run) {
           {"steps_per_episode", steps_requested},
           {"fps", m.video.contains("fps") ? m.video.at("fps") : json(25)},
           {"has_hindsight", has_hindsight},
+          {"has_replay", has_replay},
           {"episodes", std::move(episodes)},
           {"summary",
            {{"expected", all.size()},

@@ -16,7 +16,7 @@ namespace {
 
 constexpr char kAcceptedOverlays[] =
     "accepted: default, none, all, or a comma list of goal, achieved, hud, action, trail, labels, "
-    "hindsight";
+    "hindsight, ghost";
 
 // Colours (rgba).
 constexpr float kGoalRed[4] = {1.0f, 0.0f, 0.0f, 1.0f};       // as target0
@@ -25,10 +25,12 @@ constexpr float kSuccessGreen[4] = {0.1f, 0.85f, 0.2f, 1.0f};
 constexpr float kMissOrange[4] = {1.0f, 0.55f, 0.0f, 1.0f};
 constexpr float kArrowYellow[4] = {1.0f, 0.85f, 0.0f, 1.0f};
 constexpr float kTrailCyan[4] = {0.0f, 0.75f, 1.0f, 1.0f};
+constexpr float kGhostViolet[4] = {0.8f, 0.3f, 1.0f, 0.6f};  // translucent: a dataset's own
 
 constexpr double kTargetRadius = 0.02;     // target0's size in the Fetch XMLs
 constexpr double kAchievedRadius = 0.012;  // opaque core
 constexpr double kAchievedHalo = 0.032;    // translucent halo: shows even around the 5 cm block
+constexpr double kGhostRadius = 0.022;     // a dataset's achieved goal: between core and halo
 constexpr double kArrowWidth = 0.008;      // m
 constexpr double kLineWidth = 2.0;         // pixels for mjGEOM_LINE
 
@@ -112,13 +114,13 @@ std::string Format(const char* format, double value) {
 OverlaySet ParseOverlays(const std::string& spec) {
   const std::string trimmed = TrimSpaces(spec);
   if (trimmed == "default") return OverlaySet{};
-  OverlaySet set{false, false, false, false, false, false, false};
+  OverlaySet set{false, false, false, false, false, false, false, false};
   if (trimmed == "none") return set;
   for (const std::string& token : SplitCommaList(spec)) {
     if (token == "goal") {
       set.goal = true;
     } else if (token == "achieved") {
-      set.achieved = true;
+      set.achieved = set.ghost = true;  // a dataset's ghost goes with the achieved marker
     } else if (token == "hud") {
       set.hud = true;
     } else if (token == "action") {
@@ -129,14 +131,16 @@ OverlaySet ParseOverlays(const std::string& spec) {
       set.labels = true;
     } else if (token == "hindsight") {
       set.hindsight = true;
+    } else if (token == "ghost") {
+      set.ghost = true;
     } else if (token == "default") {
-      set.goal = set.achieved = set.hud = set.labels = true;
+      set.goal = set.achieved = set.hud = set.labels = set.ghost = true;
     } else if (token == "all") {
-      set = OverlaySet{true, true, true, true, true, true, true};
+      set = OverlaySet{true, true, true, true, true, true, true, true};
     } else {
       const std::string suggestion =
           DidYouMean(token, {"goal", "achieved", "hud", "action", "trail", "labels", "hindsight",
-                             "default", "none", "all"});
+                             "ghost", "default", "none", "all"});
       throw UsageError("overlay '" + token + "' in '" + spec + "' is not known" + suggestion +
                        "; " + kAcceptedOverlays);
     }
@@ -223,6 +227,10 @@ void AddOverlayGeoms(const OverlaySet& overlays, const FrameInfo& info,
       AddConnector(scene, mjGEOM_LINE, kLineWidth, points[i - 1], points[i], kTrailCyan);
     }
   }
+  if (overlays.ghost && info.ghost) {  // translucent, the replayed marker's size: both show
+    AddSphere(scene, *info.ghost, kGhostRadius, kGhostViolet);
+    AddConnector(scene, mjGEOM_LINE, kLineWidth, *info.ghost, info.achieved, kGhostViolet);
+  }
   if (overlays.achieved) {
     const float halo[4] = {achieved_rgba[0], achieved_rgba[1], achieved_rgba[2], 0.35f};
     AddSphere(scene, info.achieved, kAchievedHalo, halo);
@@ -256,6 +264,12 @@ HudText FormatHud(const FrameInfo& info, const OverlaySet& overlays) {
                     ? std::string("-")
                     : std::to_string(info.relabelled_successes) + "/" +
                           std::to_string(info.relabelled.size()) + " successes");
+  }
+  if (overlays.ghost && info.ghost) {  // the ghost marker's legend: how far the replay is off
+    const auto& g = *info.ghost;
+    const double dx = g[0] - info.achieved[0], dy = g[1] - info.achieved[1],
+                 dz = g[2] - info.achieved[2];
+    line("ghost", Format("%.5f m off", std::sqrt(dx * dx + dy * dy + dz * dz)));
   }
   hud.labels.pop_back();  // no trailing newline
   hud.values.pop_back();

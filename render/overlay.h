@@ -26,6 +26,10 @@ struct OverlaySet {
   bool trail = false;      ///< polyline of recent achieved-goal positions
   bool labels = true;      ///< tiled cameras: each tile labelled with its camera name
   bool hindsight = false;  ///< goals HER's `future` strategy relabels this transition with
+  /// record --from DATASET: the dataset's own achieved goal (FrameInfo::ghost) as a translucent
+  /// violet sphere with a line to the replayed one, and a HUD row with their distance; on with
+  /// `achieved` (so by default) or alone as `ghost`
+  bool ghost = true;
 };
 
 /// Where the HUD box sits in the frame (in the tile at that corner).
@@ -44,7 +48,7 @@ double CheckHudOpacity(double opacity);
 
 /// Throws UsageError naming the bad token and listing the accepted ones.
 /// Parses --overlay: "default", "none", "all", or a comma list of
-/// goal|achieved|hud|action|trail|labels|hindsight|default|all (spaces around items are
+/// goal|achieved|hud|action|trail|labels|hindsight|ghost|default|all (spaces around items are
 /// ignored). Throws UsageError naming the bad token, the nearest accepted one and listing the
 /// accepted ones.
 OverlaySet ParseOverlays(const std::string& spec);
@@ -69,6 +73,8 @@ struct FrameInfo {
   };
   std::vector<Relabel> relabelled;
   int relabelled_successes = -1;  ///< shown by the HUD when >= 0 (this transition's count)
+  /// The dataset's achieved goal at this step (record --from DATASET); unset otherwise.
+  std::optional<std::array<double, 3>> ghost;
 };
 
 /// The env moves the mocap by 0.05 m per unit action; the arrow is drawn this many times
@@ -121,7 +127,7 @@ inline constexpr float kHindsightRed[4] = {0.95f, 0.1f, 0.1f, 1.0f};
 
 /// Geoms the overlays may add at most (so the scene can reserve room for them): 3 per
 /// hindsight pin, up to 16 pins.
-inline constexpr int kMaxOverlayGeoms = 8 + 3 * 16 + static_cast<int>(Trail::kMaxPoints);
+inline constexpr int kMaxOverlayGeoms = 10 + 3 * 16 + static_cast<int>(Trail::kMaxPoints);
 
 /// Moves the scene geom of site `site_id` (the target0 marker) to `goal`, as Gymnasium's
 /// _render_callback does through site_pos + mj_forward, but without touching mjData.

@@ -125,6 +125,7 @@ void RecordRunner::Run(int k, WorkerChannel& channel) {
     FetchEnv& env = render_env_ ? *render_env_ : sequence_.env();
     FrameInfo info = MakeFrameInfo(env, record);
     AddRelabelled(record.t, &info);
+    if (plan_.from) info.ghost = RecordedAchieved(*plan_.from, k, record.t);  // a dataset's own
     f->t = record.t;
     f->label = TileLabel(info);
     in_flight.push_back(f);
@@ -201,8 +202,8 @@ EpisodeRecord RecordRunner::PlayEpisode(int k, const StepCallback& on_step,
   }
   // the replay renders from the env of sequence_ (--from) or replay_env_ (hindsight)
   render_env_ = plan_.from ? &sequence_.env() : replay_env_.get();
-  const std::string check = plan_.from ? plan_.from->episodes.at(k).file : std::string();
-  EpisodeRecord episode = replayer_->Replay(k, *script, script_complete, check, on_step);
+  EpisodeRecord episode = plan_.from ? replayer_->ReplaySource(*plan_.from, k, on_step)
+                                     : replayer_->Replay(k, *script, script_complete, "", on_step);
   render_env_ = nullptr;
   return episode;
 }

@@ -76,8 +76,9 @@ TrajectorySource LoadTrajectorySource(const std::string& path) {
     std::sort(files.begin(), files.end());
     if (files.empty()) {
       throw UsageError("--from '" + path +
-                       "' holds no episode_NNN.json; accepted: a run folder of record, or one "
-                       "trajectory JSON file");
+                       "' holds no episode_NNN.json; accepted: a run folder of record, one "
+                       "trajectory JSON file, or a Minari dataset (its id, folder or "
+                       "main_data.hdf5)");
     }
     for (size_t i = 0; i < files.size(); ++i) AddFile(files[i], &source, i == 0);
   } else if (fs::is_regular_file(path, ec)) {
@@ -132,17 +133,38 @@ std::string FirstDifference(const StepRecord& replayed, const StepRecord& record
   return "";
 }
 
+EpisodeRecord EpisodeReplayer::ReplaySource(const TrajectorySource& source, int k,
+                                            const StepCallback& on_step) {
+  const TrajectoryEpisode& recorded = source.episodes.at(k);
+  const auto start = source.starts.find(k);
+  if (start == source.starts.end()) {
+    return Replay(k, recorded.steps, recorded.complete, source.dataset ? "" : recorded.file,
+                  on_step);
+  }
+  next_ = 0;  // the generator no longer stands where a sequential run's would
+  return ReplayFrom(k, ResetForStart(env_, start->second), recorded.steps, recorded.complete, "",
+                    on_step);
+}
+
 EpisodeRecord EpisodeReplayer::Replay(int k, const std::vector<StepRecord>& recorded,
                                       bool recorded_complete, const std::string& check,
                                       const StepCallback& on_step) {
   if (k < next_) next_ = 0;  // start over from the seeded reset
   for (; next_ < k; ++next_) env_.Reset(next_ == 0 ? std::optional<uint64_t>(seed_) : std::nullopt);
   next_ = k + 1;
+  return ReplayFrom(k, env_.Reset(k == 0 ? std::optional<uint64_t>(seed_) : std::nullopt), recorded,
+                    recorded_complete, check, on_step);
+}
+
+EpisodeRecord EpisodeReplayer::ReplayFrom(int k, const Observation& reset,
+                                          const std::vector<StepRecord>& recorded,
+                                          bool recorded_complete, const std::string& check,
+                                          const StepCallback& on_step) {
   EpisodeRecord episode;
   episode.index = k;
   episode.complete = false;  // until the last recorded step is replayed
   StepRecord row;
-  row.obs = env_.Reset(k == 0 ? std::optional<uint64_t>(seed_) : std::nullopt);
+  row.obs = reset;
   row.is_success = env_.IsSuccess(row.obs.achieved_goal, row.obs.desired_goal);
   auto verify = [&](const StepRecord& replayed, size_t t) {
     if (check.empty()) return;
@@ -178,7 +200,69 @@ EpisodeRecord EpisodeReplayer::Replay(int k, const std::vector<StepRecord>& reco
   return episode;
 }
 
+Observation ResetForStart(FetchEnv& env, const EpisodeStart& start) {
+  if (start.seed) return env.Reset(start.seed);
+  return env.ResetTo(start.goal, start.object);
+}
+
+namespace {
+
+// compares one row; keeps the first value beyond the tolerance and the largest difference
+void CompareValues(const char* name, const std::vector<double>& recorded, const double* replayed,
+                   size_t n, int t, EpisodeDivergence& d) {
+  if (recorded.size() != n) {
+    throw RunError("the dataset's " + std::string(name) + " has " +
+                   std::to_string(recorded.size()) + " values, the env's " + std::to_string(n));
+  }
+  for (size_t i = 0; i < n; ++i) {
+    const double diff = replayed[i] - recorded[i];
+    const double size = std::isnan(diff) ? HUGE_VAL : std::fabs(diff);
+    d.max_difference = std::max(d.max_difference, size);
+    if (d.first_step < 0 && size > d.tolerance) {
+      d.first_step = t;
+      d.where = std::string(name) + "[" + std::to_string(i) + "]";
+      d.difference = diff;
+    }
+  }
+}
+
+void CompareRow(const StepRecord& recorded, const Observation& obs, int t, EpisodeDivergence& d) {
+  CompareValues("observation", recorded.obs.observation, obs.observation.data(),
+                obs.observation.size(), t, d);
+  const auto& a = recorded.obs.achieved_goal;
+  const auto& g = recorded.obs.desired_goal;
+  CompareValues("achieved_goal", {a.begin(), a.end()}, obs.achieved_goal.data(), 3, t, d);
+  CompareValues("desired_goal", {g.begin(), g.end()}, obs.desired_goal.data(), 3, t, d);
+}
+
+}  // namespace
+
+void MeasureDivergence(FetchEnv& env, TrajectorySource* source) {
+  for (const auto& [k, episode] : source->episodes) {
+    const EpisodeStart& start = source->starts.at(k);
+    EpisodeDivergence d;
+    d.reset = start.Rule();
+    d.tolerance = source->tolerance;
+    CompareRow(episode.steps.at(0), ResetForStart(env, start), 0, d);
+    for (size_t t = 1; t < episode.steps.size(); ++t) {
+      CompareRow(episode.steps[t], env.Step(*episode.steps[t].action).obs, static_cast<int>(t), d);
+    }
+    source->divergence[k] = d;
+  }
+}
+
+std::optional<std::array<double, 3>> RecordedAchieved(const TrajectorySource& source, int k,
+                                                      int t) {
+  if (!source.dataset || t < 0) return std::nullopt;
+  const auto it = source.episodes.find(k);
+  if (it == source.episodes.end() || t >= static_cast<int>(it->second.steps.size())) {
+    return std::nullopt;
+  }
+  return it->second.steps[t].obs.achieved_goal;
+}
+
 void VerifyRecording(FetchEnv& env, const TrajectorySource& source) {
+  if (source.dataset) return;  // a dataset may drift: MeasureDivergence reports it
   EpisodeReplayer replayer(env, source.seed);
   for (const auto& [k, episode] : source.episodes) {
     replayer.Replay(k, episode.steps, episode.complete, episode.file, nullptr);

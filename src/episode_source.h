@@ -4,6 +4,7 @@
 // sequential run reaches there, so an episode is the same whichever worker plays it.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <map>
 #include <memory>
@@ -42,8 +43,29 @@ class EpisodeSequence {
   int next_ = 0;  // the episode the generators stand at
 };
 
+/// How a dataset episode starts (record --from DATASET): reset with its own seed, or, where it
+/// has none, rebuilt from its first observation (FetchEnv::ResetTo).
+struct EpisodeStart {
+  std::optional<uint64_t> seed;      ///< the episode's `seed`; nullopt: rebuilt
+  std::array<double, 3> goal{};      ///< desired_goal[0]
+  std::optional<ObjectPose> object;  ///< observation[0]'s object pose (object tasks)
+  /// "seed" or "first observation": said per episode in the console, manifest and report.
+  const char* Rule() const { return seed ? "seed" : "first observation"; }
+};
+
+/// How far a replayed dataset episode drifts from the dataset, row by row.
+struct EpisodeDivergence {
+  std::string reset;          ///< EpisodeStart::Rule()
+  double tolerance = 0;       ///< --tolerance
+  int first_step = -1;        ///< first row t (0 = the reset) off by more than it; -1: none
+  std::string where;          ///< its first value off, e.g. "observation[3]"
+  double difference = 0;      ///< replayed - recorded there
+  double max_difference = 0;  ///< largest |replayed - recorded| over every row
+};
+
 /// Recorded episodes to replay (record --from): one trajectory file, or every episode_NNN.json
-/// of a run folder, which must all be one run (one env id and seed).
+/// of a run folder, which must all be one run (one env id and seed); or a Minari dataset
+/// (dataset/minari_source.h), whose episodes each start as `starts` says.
 struct TrajectorySource {
   std::string path;                           ///< as given
   std::string env_id;                         ///< trajectory env_id
@@ -52,6 +74,15 @@ struct TrajectorySource {
   AssetSource assets;                         ///< trajectory assets (kind, root, sha256, origin)
   std::map<int, TrajectoryEpisode> episodes;  ///< by index; each names the file it came from
   int max_steps = 0;                          ///< the longest episode's steps
+  /// A dataset: how each episode starts (by index); empty for fetchscope recordings, whose
+  /// episode 0 resets with `seed` and the others continue the generator.
+  std::map<int, EpisodeStart> starts;
+  /// A dataset: replayed steps are compared within `tolerance` and any divergence is reported
+  /// (MeasureDivergence), never fatal; the dataset's achieved goal shows as a ghost marker.
+  bool dataset = false;
+  double tolerance = 0;                         ///< --tolerance (a dataset)
+  std::string found;                            ///< a dataset: what was found, one line
+  std::map<int, EpisodeDivergence> divergence;  ///< by index, once measured
 };
 
 /// Reads a trajectory JSON file, or every episode_NNN.json of a run folder. Throws UsageError
@@ -78,8 +109,15 @@ class EpisodeReplayer {
   /// may stop it early).
   EpisodeRecord Replay(int k, const std::vector<StepRecord>& recorded, bool recorded_complete,
                        const std::string& check, const StepCallback& on_step);
+  /// Replays episode `k` of `source`: as Replay with the exact check for a recording; for a
+  /// dataset, from its EpisodeStart and unchecked (MeasureDivergence measured it).
+  EpisodeRecord ReplaySource(const TrajectorySource& source, int k, const StepCallback& on_step);
 
  private:
+  EpisodeRecord ReplayFrom(int k, const Observation& reset, const std::vector<StepRecord>& recorded,
+                           bool recorded_complete, const std::string& check,
+                           const StepCallback& on_step);
+
   FetchEnv& env_;
   uint64_t seed_;
   int next_ = 0;  // the episode whose reset the generator stands before
@@ -99,6 +137,18 @@ std::string FirstDifference(const StepRecord& replayed, const StepRecord& record
 /// EpisodeReplayer does: an edited recording stops the run before anything is written. Throws
 /// ReplayMismatch.
 void VerifyRecording(FetchEnv& env, const TrajectorySource& source);
+
+/// Resets `env` as `start` says (its seed, else FetchEnv::ResetTo).
+Observation ResetForStart(FetchEnv& env, const EpisodeStart& start);
+
+/// Replays every episode of the dataset `source` on `env` (no rendering) and fills
+/// `source->divergence`: every observation, achieved_goal and desired_goal row against the
+/// dataset's, within `source->tolerance`.
+void MeasureDivergence(FetchEnv& env, TrajectorySource* source);
+
+/// The dataset's own achieved goal at row `t` of episode `k` (the ghost marker); nullopt for a
+/// recording (it replays exactly) or a row the dataset does not have.
+std::optional<std::array<double, 3>> RecordedAchieved(const TrajectorySource& source, int k, int t);
 
 /// For `--policy replay:FILE.json` holding a trajectory: the file's episode indices, ascending,
 /// which a run replaying it plays (each under its own index, so with its own reset); nullopt

@@ -49,6 +49,14 @@ void InstallMujocoHandlers() {
   mju_user_warning = WarningHandler;
 }
 
+std::array<double, 4> Euler2Quat(const std::array<double, 3>& euler) {
+  const double ai = euler[2] / 2, aj = -euler[1] / 2, ak = euler[0] / 2;
+  const double si = std::sin(ai), sj = std::sin(aj), sk = std::sin(ak);
+  const double ci = std::cos(ai), cj = std::cos(aj), ck = std::cos(ak);
+  const double cc = ci * ck, cs = ci * sk, sc = si * ck, ss = si * sk;
+  return {cj * cc + sj * ss, cj * cs - sj * sc, -(cj * ss + sj * cc), cj * sc - sj * cs};
+}
+
 std::array<double, 3> Mat2Euler(const double* mat) {
   // M[r][c] = mat[3r + c]; thresholds and signs as in gymnasium_robotics/utils/rotations.py.
   const double eps4 = 4 * 2.220446049250313e-16;
@@ -143,10 +151,7 @@ Observation FetchEnv::Reset(std::optional<uint64_t> seed) {
   }
   mjModel* m = model_.get();
   mjData* d = data_.get();
-  mj_resetData(m, d);
-  d->time = initial_time_;
-  std::copy(initial_qpos_.begin(), initial_qpos_.end(), d->qpos);
-  std::copy(initial_qvel_.begin(), initial_qvel_.end(), d->qvel);
+  RestoreInitialState();
   if (spec_.has_object) {
     const double gx = initial_gripper_xpos_[0], gy = initial_gripper_xpos_[1];
     double x = gx, y = gy;
@@ -159,6 +164,38 @@ Observation FetchEnv::Reset(std::optional<uint64_t> seed) {
   }
   mj_forward(m, d);
   goal_ = SampleGoal();
+  elapsed_steps_ = 0;
+  has_reset_ = true;
+  return Observe();
+}
+
+// _reset_sim up to the object placement: mj_resetData, then time, qpos, qvel as saved
+void FetchEnv::RestoreInitialState() {
+  mjData* d = data_.get();
+  mj_resetData(model_.get(), d);
+  d->time = initial_time_;
+  std::copy(initial_qpos_.begin(), initial_qpos_.end(), d->qpos);
+  std::copy(initial_qvel_.begin(), initial_qvel_.end(), d->qvel);
+}
+
+Observation FetchEnv::ResetTo(const std::array<double, 3>& goal,
+                              const std::optional<ObjectPose>& object) {
+  mjModel* m = model_.get();
+  mjData* d = data_.get();
+  RestoreInitialState();
+  if (spec_.has_object && object) {
+    double* q = d->qpos + object_qpos_;
+    for (int k = 0; k < 3; ++k) q[k] = object->position[k];
+    // kinematics alone (no solver, so the warm start stays as mj_resetData left it): does the
+    // settled quaternion give these angles? A reset never rotates the object, so it usually does
+    mj_kinematics(m, d);
+    if (Mat2Euler(d->site_xmat + 9 * object_site_) != object->euler) {
+      const std::array<double, 4> quat = Euler2Quat(object->euler);
+      std::copy(quat.begin(), quat.end(), q + 3);
+    }
+  }
+  mj_forward(m, d);
+  goal_ = goal;
   elapsed_steps_ = 0;
   has_reset_ = true;
   return Observe();

@@ -35,6 +35,13 @@ struct StepResult {
   std::array<double, 4> applied{};  ///< the action after clipping, as promoted to double
 };
 
+/// The object's pose at a reset as the observation gives it: object_pos (obs[3:6]) and
+/// object_rot, the Euler angles of mat2euler (obs[11:14]).
+struct ObjectPose {
+  std::array<double, 3> position{};  ///< m, world
+  std::array<double, 3> euler{};     ///< rad, as mat2euler gives them
+};
+
 /// A Fetch environment. Not copyable; one per thread.
 class FetchEnv {
  public:
@@ -46,6 +53,12 @@ class FetchEnv {
 
   /// env.reset(seed=...): a seed restarts the generator; none continues it.
   Observation Reset(std::optional<uint64_t> seed = std::nullopt);
+
+  /// A reset to a known start instead of a sampled one (re-rendering a dataset episode that
+  /// was reset without a seed): _reset_sim with the object at `object` (object tasks; ignored
+  /// for Reach), one mj_forward as reset does, then goal = `goal`. The generator is untouched.
+  /// The settled quaternion is kept where its Euler angles are `object->euler` exactly.
+  Observation ResetTo(const std::array<double, 3>& goal, const std::optional<ObjectPose>& object);
 
   /// env.step(action) with TimeLimit semantics. Requires a prior Reset().
   StepResult Step(const Action& action);
@@ -74,6 +87,7 @@ class FetchEnv {
 
  private:
   void Setup();
+  void RestoreInitialState();
   std::array<double, 3> SampleGoal();
 
   EnvSpec spec_;
@@ -110,5 +124,8 @@ double GoalDistance(const std::array<double, 3>& a, const std::array<double, 3>&
 
 /// rotations.mat2euler of Gymnasium-Robotics for one row-major 3x3 matrix.
 std::array<double, 3> Mat2Euler(const double* mat);
+
+/// rotations.euler2quat of Gymnasium-Robotics: (w, x, y, z) of Euler angles (ex, ey, ez).
+std::array<double, 4> Euler2Quat(const std::array<double, 3>& euler);
 
 }  // namespace fetchscope

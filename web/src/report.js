@@ -121,6 +121,12 @@
     columns.push({label: 'original successes', value: (e) => (e.hindsight ? e.hindsight.original_successes : null),
                   render: (e) => (e.hindsight ? String(e.hindsight.original_successes) : '—'), numeric: true});
   }
+  if (data.has_replay) {  // record --from DATASET: the reset used, and the first divergence
+    columns.push({label: 'reset', value: (e) => (e.replay ? e.replay.reset : null), render: (e) => (e.replay ? e.replay.reset : '—')});
+    columns.push({label: 'divergence', value: (e) => (e.replay ? (e.replay.first_step ?? -1) : null),
+                  render: (e) => (!e.replay ? '—' : e.replay.first_step === null ? `none (within ${e.replay.tolerance})`
+                    : `step ${e.replay.first_step}, ${e.replay.where} off by ${e.replay.difference.toPrecision(3)}`), numeric: true});
+  }
   columns.push({label: 'first / last frame', value: () => null,
                 render: (e) => (e.thumbs && e.sheet ? el('span', {class: 'thumbs'}, thumb(e, 'first'), thumb(e, 'last')) : '')});
   // a per-layer video "episode_000_segmentation.mp4" is linked as "segmentation.mp4"
