@@ -10,6 +10,7 @@
 #   webm     16 FetchPush episodes at 480x480, --jobs 8, mp4 against webm, alternating, twice
 #   minari   10,000 scripted FetchPush episodes with `rollout --jobs 16`, trajectory JSON against
 #            a Minari dataset, alternating, twice
+# PARTS="golden minari" runs only those parts (default: all five).
 set -uo pipefail
 fs=$1
 out=$2
@@ -18,20 +19,27 @@ mkdir -p "$out"
 work=$(mktemp -d)
 log() { echo "== $* ($(date -u +%H:%M:%S))"; }
 TIMEFORMAT='%R s wall, %U s user, %S s sys'
+parts=" ${PARTS:-node golden jobs webm minari} "
+want() { [[ $parts == *" $1 "* ]]; }
 
 log "machine"
 nvidia-smi --query-gpu=name,driver_version,memory.total --format=csv,noheader 2>&1 | head -2
 echo "cores: $(nproc); $(grep -m1 'model name' /proc/cpuinfo)"
 "$fs" --version 2>&1 | head -3
 
+if want node; then
 log "node"
 "$fs" bench --what node --backends egl --json-out "$out/node.json" 2>&1 | tail -40
+fi
 
+if want golden; then
 log "golden"
 golden_args=(--backend egl --out "$work/golden")
 [[ -n $genuine ]] && golden_args+=(--genuine-assets "$genuine")
 "$fs" golden check "${golden_args[@]}" 2>&1 | tail -20
+fi
 
+if want jobs; then
 log "jobs"
 for j in 1 4; do
   "$fs" record --env-id FetchPush-v4 --episodes 4 --jobs "$j" --format mp4,webm --quiet \
@@ -44,7 +52,9 @@ if cmp -s "$work/j1.sum" "$work/j4.sum"; then
 else
   echo "jobs: DIFFERENT bytes"; diff "$work/j1.sum" "$work/j4.sum" | head
 fi
+fi
 
+if want webm; then
 log "webm"
 for round in 1 2; do
   for f in mp4 webm; do
@@ -55,7 +65,9 @@ for round in 1 2; do
 done
 du -sb "$work"/fmt_mp4/episode_*.mp4 | awk '{s+=$1} END {print "mp4 bytes", s}'
 du -sb "$work"/fmt_webm/episode_*.webm | awk '{s+=$1} END {print "webm bytes", s}'
+fi
 
+if want minari; then
 log "minari"
 export MINARI_DATASETS_PATH=$work/minari
 for round in 1 2; do
@@ -67,5 +79,6 @@ for round in 1 2; do
       --minari fetchscope/FetchPush/scripted-v0 --overwrite >/dev/null; } 2>&1
 done
 ls -l "$work/push10k.json" "$MINARI_DATASETS_PATH/fetchscope/FetchPush/scripted-v0/data/"
+fi
 log "done"
 rm -rf "$work"
