@@ -54,7 +54,7 @@ class MinariSink {
     while (next_ < indices_.size()) {
       const auto it = pending_.find(indices_[next_]);
       if (it == pending_.end()) break;
-      const Trajectory one = ParseTrajectory(
+      const Trajectory one = ParseTrajectoryJson(
           TrajectoryJson(*spec_, assets_, seed_, o_.policy, nlohmann::json::array({it->second})),
           "rollout");
       // episode 0 was reset with the run's seed; the others continued its generator

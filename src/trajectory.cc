@@ -277,7 +277,7 @@ Trajectory ParseTrajectory(const std::string& text, const std::string& file) {
   return TrajectoryReader(file).Read(root);
 }
 
-Trajectory ParseTrajectory(const nlohmann::json& root, const std::string& file) {
+Trajectory ParseTrajectoryJson(const nlohmann::json& root, const std::string& file) {
   return TrajectoryReader(file).Read(root);
 }
 

@@ -97,7 +97,7 @@ Trajectory ParseTrajectory(const std::string& text, const std::string& file);
 
 /// ParseTrajectory of a document already parsed (or built in memory): the same checks, with no
 /// text in between.
-Trajectory ParseTrajectory(const nlohmann::json& root, const std::string& file);
+Trajectory ParseTrajectoryJson(const nlohmann::json& root, const std::string& file);
 
 /// Reads and parses the trajectory file `path` (ParseTrajectory). Throws RunError when it
 /// cannot be read.
