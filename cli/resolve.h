@@ -19,6 +19,10 @@ namespace fetchscope::cli {
 /// naming both. Any other policy leaves `env` as it is.
 void ApplyReplayedEnv(const std::string& policy, EnvOptions* env);
 
+/// Says once on stderr (unless `quiet`) that `steps` run past `spec`'s TimeLimit and how those
+/// steps are marked; nothing when steps <= max_episode_steps.
+void NotePastTimeLimit(const EnvSpec& spec, int steps, bool quiet);
+
 /// --env-id, --seed and --assets, resolved (bad values are UsageError/RunError naming them).
 struct ResolvedEnv {
   const EnvSpec* spec = nullptr;  ///< the v4 id (auto: FetchReachDense-v4)

@@ -169,6 +169,7 @@ EpisodeRecord EpisodeReplayer::Replay(int k, const std::vector<StepRecord>& reco
     r.action = action;
     r.reward = result.reward;
     r.is_success = result.is_success;
+    r.past_time_limit = r.t > env_.spec().max_episode_steps;
     verify(r, t);
     episode.episode_return += result.reward;
     episode.steps.push_back(std::move(r));
