@@ -19,9 +19,9 @@ void NotePastTimeLimit(const EnvSpec& spec, int steps, bool quiet) {
   const int limit = spec.max_episode_steps;
   if (quiet || steps <= limit) return;
   std::fprintf(stderr,
-               "fetchscope: note: --steps %d runs past %s's TimeLimit of %d steps (gym.make's env "
-               "is truncated there); steps %d..%d are marked past_time_limit in the trajectory "
-               "JSON and in the HUD\n",
+               "fetchscope: note: episodes of %d steps run past %s's TimeLimit of %d steps "
+               "(gym.make's env is truncated there); steps %d..%d are marked past_time_limit in "
+               "the trajectory JSON and in the HUD\n",
                steps, spec.id.c_str(), limit, limit + 1, steps);
 }
 
