@@ -198,7 +198,7 @@ int RunRecord(const RecordOptions& options, const std::string& command_line,
   plan.seed_text = o.env.seed;
   plan.policy = o.policy;
   plan.steps = o.steps;
-  NotePastTimeLimit(*plan.spec, o.steps, o.quiet);
+  NotePastTimeLimit(*plan.spec, o.steps, o.quiet, "in the trajectory JSON and the HUD");
   plan.view = o.view;
   plan.out = o.out;
   plan.sheet_every = o.sheet_every;

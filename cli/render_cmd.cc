@@ -50,6 +50,7 @@ int RunRender(const RenderCommandOptions& o) {
   EpisodeRequest request;
   request.policy = o.policy_spec;
   request.steps = o.steps;
+  request.past_limit_marks = "in the HUD";
   ResolvedRun run = ResolveRun(o.env, request);
   // a trajectory JSON (replay:episode_003.json) renders its first episode, under its own
   // index and so from its own reset; any other policy plays episode 0

@@ -15,14 +15,13 @@ void ApplyReplayedEnv(const std::string& policy, EnvOptions* env) {
   if (!env->seed_option || env->seed_option->count() == 0) env->seed = std::to_string(file->seed);
 }
 
-void NotePastTimeLimit(const EnvSpec& spec, int steps, bool quiet) {
+void NotePastTimeLimit(const EnvSpec& spec, int steps, bool quiet, const std::string& where) {
   const int limit = spec.max_episode_steps;
   if (quiet || steps <= limit) return;
   std::fprintf(stderr,
                "fetchscope: note: episodes of %d steps run past %s's TimeLimit of %d steps "
-               "(gym.make's env is truncated there); steps %d..%d are marked past_time_limit in "
-               "the trajectory JSON and in the HUD\n",
-               steps, spec.id.c_str(), limit, limit + 1, steps);
+               "(gym.make's env is truncated there); steps %d..%d are marked past_time_limit %s\n",
+               steps, spec.id.c_str(), limit, limit + 1, steps, where.c_str());
 }
 
 ResolvedEnv ResolveEnv(const EnvOptions& env, bool with_seed) {
@@ -45,7 +44,7 @@ ResolvedRun ResolveRun(const EnvOptions& options, const EpisodeRequest& request)
   } else {
     for (int k = 0; k < request.episodes; ++k) run.episodes.push_back(k);
   }
-  NotePastTimeLimit(*run.env.spec, request.steps, request.quiet);
+  NotePastTimeLimit(*run.env.spec, request.steps, request.quiet, request.past_limit_marks);
   PolicyContext& context = run.policy_context;
   context.seed = run.env.seed;
   context.steps_per_episode = request.steps;
