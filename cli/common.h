@@ -52,6 +52,16 @@ inline constexpr const char* kJsonOverwriteHelp =
     "Let --json-out replace a result file of another env, seed or task (one of the same is "
     "replaced without it)";
 
+/// The most --steps rollout, record and render take: steps beyond the env's TimeLimit (50) are
+/// allowed and marked (README "Steps past the TimeLimit").
+inline constexpr int kMaxSteps = 10000;
+
+/// The help text of rollout's and record's --steps.
+inline constexpr const char* kStepsHelp =
+    "Steps per episode, 1..10000. Gymnasium's TimeLimit truncates at 50; steps after it are "
+    "allowed, said once on stderr and marked \"past_time_limit\" in the trajectory JSON and "
+    "in the HUD";
+
 /// The command line as typed (set by main), recorded in manifests.
 std::string& CommandLine();
 

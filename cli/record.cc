@@ -189,6 +189,7 @@ int RunRecord(const RecordOptions& options, const std::string& command_line,
   plan.seed_text = o.env.seed;
   plan.policy = o.policy;
   plan.steps = o.steps;
+  NotePastTimeLimit(*plan.spec, o.steps, o.quiet, "in the trajectory JSON and the HUD");
   plan.view = o.view;
   plan.out = o.out;
   plan.sheet_every = o.sheet_every;
@@ -456,9 +457,9 @@ Command AddRecord(CLI::App& app) {
   sub->add_option("--episodes", o->episodes, "Number of episodes")
       ->capture_default_str()
       ->check(CLI::Range(1, 1000000));
-  sub->add_option("--steps", o->steps, "Steps per episode (TimeLimit is 50)")
+  sub->add_option("--steps", o->steps, kStepsHelp)
       ->capture_default_str()
-      ->check(CLI::Range(1, 50));
+      ->check(CLI::Range(1, kMaxSteps));
   sub->add_option("--policy", o->policy, kPolicyHelp)->capture_default_str();
   sub->add_option("--exec-timeout", o->exec_timeout, "Seconds an exec: policy may take per answer")
       ->capture_default_str()

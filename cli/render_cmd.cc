@@ -17,19 +17,6 @@
 namespace fetchscope::cli {
 namespace {
 
-// frame.png + "depth" -> frame_depth.png
-std::string LayerPath(const std::string& path, const std::string& layer) {
-  std::filesystem::path p(path);
-  return (p.parent_path() / (p.stem().string() + "_" + layer + p.extension().string())).string();
-}
-
-// -o frame.png -> frame_segmentation_legend.json, whether the segmentation layer went to
-// frame_segmentation.png (beside other layers) or to frame.png (alone)
-std::string LegendPath(const std::string& output) {
-  std::filesystem::path p(output);
-  return (p.parent_path() / (p.stem().string() + "_segmentation_legend.json")).string();
-}
-
 nlohmann::json SegmentationLegendJson(const std::vector<SegmentObject>& objects) {
   nlohmann::json list = nlohmann::json::array();
   for (const SegmentObject& o : objects) list.push_back(SegmentObjectJson(o));
@@ -54,6 +41,7 @@ struct RenderCommandOptions {
 };
 
 int RunRender(const RenderCommandOptions& o) {
+  CheckPngOutput("-o", o.output);
   const std::vector<Layer> wanted = ParseLayers(o.layers);
   auto want = [&](Layer l) { return std::find(wanted.begin(), wanted.end(), l) != wanted.end(); };
   const bool want_rgb = want(Layer::kRgb), want_depth = want(Layer::kDepth),
@@ -62,6 +50,7 @@ int RunRender(const RenderCommandOptions& o) {
   EpisodeRequest request;
   request.policy = o.policy_spec;
   request.steps = o.steps;
+  request.past_limit_marks = "in the HUD";
   ResolvedRun run = ResolveRun(o.env, request);
   // a trajectory JSON (replay:episode_003.json) renders its first episode, under its own
   // index and so from its own reset; any other policy plays episode 0
@@ -90,22 +79,22 @@ int RunRender(const RenderCommandOptions& o) {
   if (want_rgb) {
     std::vector<uint8_t> rgb(static_cast<size_t>(renderer.width()) * renderer.height() * 3);
     renderer.Render(fetch.data(), info, rgb.data());
-    WritePng(o.output, renderer.width(), renderer.height(), 3, 8, rgb.data());
-    std::printf("wrote %s\n", o.output.c_str());
+    const std::string path = LayerFilePath(o.output, Layer::kRgb, wanted.size());
+    WritePng(path, renderer.width(), renderer.height(), 3, 8, rgb.data());
+    std::printf("wrote %s\n", path.c_str());
   }
   std::vector<uint8_t> layer;
   if (want_depth) {
     renderer.RenderLayer(fetch.data(), info, Layer::kDepth, &layer);
-    const std::string path = want_rgb ? LayerPath(o.output, "depth") : o.output;
+    const std::string path = LayerFilePath(o.output, Layer::kDepth, wanted.size());
     WritePng(path, renderer.width(), renderer.height(), 1, 16, layer.data());
     std::printf("wrote %s (depth, 16-bit, millimetres)\n", path.c_str());
   }
   if (want_seg) {
     renderer.RenderLayer(fetch.data(), info, Layer::kSegmentation, &layer);
-    const std::string path =
-        (want_rgb || want_depth) ? LayerPath(o.output, "segmentation") : o.output;
+    const std::string path = LayerFilePath(o.output, Layer::kSegmentation, wanted.size());
     WritePng(path, renderer.width(), renderer.height(), 3, 8, layer.data());
-    const std::string legend = LegendPath(o.output);
+    const std::string legend = LegendFilePath(o.output);
     WriteJson(legend, SegmentationLegendJson(renderer.segmentation_legend()));
     std::printf("wrote %s (segmentation) and %s (its colours)\n", path.c_str(), legend.c_str());
   }
@@ -120,18 +109,24 @@ Command AddRender(CLI::App& app) {
       app.add_subcommand("render", "Render one frame to PNG (after reset, or after --steps K)");
   AddEnvOptions(sub, &o->env);
   AddViewOptions(sub, &o->view);
-  sub->add_option("--steps", o->steps, "Steps of --policy to take before the frame")
+  sub->add_option("--steps", o->steps,
+                  "Steps of --policy to take before the frame, 0..10000 (past the TimeLimit of 50 "
+                  "the HUD and stderr say so)")
       ->capture_default_str()
-      ->check(CLI::Range(0, 50));
+      ->check(CLI::Range(0, kMaxSteps));
   sub->add_option("--policy", o->policy_spec, kPolicyHelp)->capture_default_str();
   sub->add_option("--layers", o->layers,
                   "Comma list of rgb, depth (16-bit PNG, millimetres), segmentation (a fixed, "
                   "distinct colour per body or site, black background, with a legend JSON "
                   "NAME_segmentation_legend.json naming each colour's body and geoms). With -o "
-                  "NAME.png, NAME.png holds rgb if listed, else depth, else segmentation; the "
-                  "other layers go to NAME_depth.png and NAME_segmentation.png")
+                  "NAME.png and one layer, NAME.png holds it; with several, NAME.png holds rgb "
+                  "(when listed) and each other layer goes to NAME_depth.png or "
+                  "NAME_segmentation.png, as record names its layer videos. The files written "
+                  "are printed")
       ->capture_default_str();
-  sub->add_option("-o,--output", o->output, "Output PNG")->required();
+  sub->add_option("-o,--output", o->output,
+                  "Output PNG: a name ending in .png (other image formats are refused)")
+      ->required();
   sub->add_flag("-v,--verbose", o->verbose,
                 "Print the GL vendor, renderer and version, and the MSAA samples used and why");
   return {sub, [o] { return RunRender(*o); }};

@@ -1,5 +1,7 @@
 #include "cli/resolve.h"
 
+#include <cstdio>
+
 #include "base/stop_signal.h"
 #include "src/episode_source.h"
 
@@ -11,6 +13,15 @@ void ApplyReplayedEnv(const std::string& policy, EnvOptions* env) {
   if (!file) return;  // a CSV, .npy or JSON-lines action file: no env of its own
   if (!env->env_id_option || env->env_id_option->count() == 0) env->env_id = file->env_id;
   if (!env->seed_option || env->seed_option->count() == 0) env->seed = std::to_string(file->seed);
+}
+
+void NotePastTimeLimit(const EnvSpec& spec, int steps, bool quiet, const std::string& where) {
+  const int limit = spec.max_episode_steps;
+  if (quiet || steps <= limit) return;
+  std::fprintf(stderr,
+               "fetchscope: note: episodes of %d steps run past %s's TimeLimit of %d steps "
+               "(gym.make's env is truncated there); steps %d..%d are marked past_time_limit %s\n",
+               steps, spec.id.c_str(), limit, limit + 1, steps, where.c_str());
 }
 
 ResolvedEnv ResolveEnv(const EnvOptions& env, bool with_seed) {
@@ -33,6 +44,7 @@ ResolvedRun ResolveRun(const EnvOptions& options, const EpisodeRequest& request)
   } else {
     for (int k = 0; k < request.episodes; ++k) run.episodes.push_back(k);
   }
+  NotePastTimeLimit(*run.env.spec, request.steps, request.quiet, request.past_limit_marks);
   PolicyContext& context = run.policy_context;
   context.seed = run.env.seed;
   context.steps_per_episode = request.steps;

@@ -19,6 +19,11 @@ namespace fetchscope::cli {
 /// naming both. Any other policy leaves `env` as it is.
 void ApplyReplayedEnv(const std::string& policy, EnvOptions* env);
 
+/// Says once on stderr (unless `quiet`) that `steps` run past `spec`'s TimeLimit and that those
+/// steps are marked `where` (e.g. "in the trajectory JSON"); nothing when steps <=
+/// max_episode_steps.
+void NotePastTimeLimit(const EnvSpec& spec, int steps, bool quiet, const std::string& where);
+
 /// --env-id, --seed and --assets, resolved (bad values are UsageError/RunError naming them).
 struct ResolvedEnv {
   const EnvSpec* spec = nullptr;  ///< the v4 id (auto: FetchReachDense-v4)
@@ -38,6 +43,8 @@ struct EpisodeRequest {
   double exec_timeout_s = 10.0;   ///< --exec-timeout
   std::string replay_dtype;       ///< --replay-dtype
   bool quiet = false;             ///< no warnings on stderr
+  /// where this command marks steps past the TimeLimit (NotePastTimeLimit)
+  std::string past_limit_marks = "in the trajectory JSON";
 };
 
 /// A run of episodes, resolved: the env, the episode indices played (a replay:FILE.json

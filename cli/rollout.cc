@@ -186,9 +186,9 @@ Command AddRollout(CLI::App& app) {
                   "Number of episodes (a replay:FILE.json trajectory plays its own episodes)")
       ->capture_default_str()
       ->check(CLI::Range(1, 1000000));
-  sub->add_option("--steps", o->steps, "Steps per episode (TimeLimit is 50)")
+  sub->add_option("--steps", o->steps, kStepsHelp)
       ->capture_default_str()
-      ->check(CLI::Range(1, 50));
+      ->check(CLI::Range(1, kMaxSteps));
   sub->add_option("--policy", o->policy, kPolicyHelp)->capture_default_str();
   sub->add_option("--exec-timeout", o->exec_timeout, "Seconds an exec: policy may take per answer")
       ->capture_default_str()

@@ -1,6 +1,13 @@
 #include "encode/frame_pool.h"
 
+#include <algorithm>
+
 namespace fetchscope {
+
+size_t BoundedFrameCount(size_t floor, size_t wanted, size_t frame_bytes) {
+  const size_t fit = kFramePoolBudgetBytes / std::max<size_t>(1, frame_bytes);
+  return std::max(floor, std::min(wanted, fit));
+}
 
 FramePool::FramePool(size_t count, size_t bytes, size_t layers)
     : count_(count), bytes_(bytes), layers_(layers) {}

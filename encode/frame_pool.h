@@ -21,6 +21,15 @@ struct Frame {
   std::string label;                         ///< the frame's contact sheet label
 };
 
+/// The memory a frame pool may fill beyond its floor: frames that only let the render thread run
+/// ahead of its encoders stop there, so that large frames or many --steps never hold more.
+inline constexpr size_t kFramePoolBudgetBytes = size_t{128} << 20;
+
+/// The frames a pool of `frame_bytes` frames (rgb and layers together) may hold: `wanted`, but
+/// no more than fit kFramePoolBudgetBytes, and never fewer than `floor` (the frames the render
+/// thread and encoders hold at once, below which they would wait on each other).
+size_t BoundedFrameCount(size_t floor, size_t wanted, size_t frame_bytes);
+
 /// A bounded pool of frame buffers: no per-frame allocation, and a render thread that runs
 /// ahead of its encoders waits for a free buffer. Thread-safe.
 class FramePool {

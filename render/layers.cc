@@ -1,8 +1,10 @@
 #include "render/layers.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 
 #include "base/errors.h"
 #include "base/suggest.h"
@@ -50,6 +52,26 @@ std::vector<Layer> ParseRecordLayers(const std::string& list) {
     if (layer != Layer::kRgb) extra.push_back(layer);
   }
   return extra;
+}
+
+std::string LayerFilePath(const std::string& output, Layer layer, size_t listed) {
+  if (listed <= 1 || layer == Layer::kRgb) return output;
+  const std::filesystem::path p(output);
+  return (p.parent_path() / (p.stem().string() + "_" + LayerName(layer) + p.extension().string()))
+      .string();
+}
+
+std::string LegendFilePath(const std::string& output) {
+  const std::filesystem::path p(output);
+  return (p.parent_path() / (p.stem().string() + "_segmentation_legend.json")).string();
+}
+
+void CheckPngOutput(const std::string& option, const std::string& output) {
+  std::string ext = std::filesystem::path(output).extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (ext == ".png") return;
+  throw UsageError(option + " '" + output +
+                   "': render writes PNG images only; accepted: a name ending in .png");
 }
 
 std::string LayersLabel(const std::vector<Layer>& layers) {

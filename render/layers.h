@@ -28,6 +28,20 @@ std::vector<Layer> ParseLayers(const std::string& list);
 /// episode video, sheet and report need it). Throws as ParseLayers.
 std::vector<Layer> ParseRecordLayers(const std::string& list);
 
+/// render -o's file for `layer` when `listed` layers are asked for: with one layer, `output`
+/// itself; with several, `output` for rgb and NAME_<layer>.png for the others (-o NAME.png), as
+/// record names episode_NNN.mp4 and episode_NNN_depth.mp4. The name never depends on which
+/// other layers are listed, only on how many.
+std::string LayerFilePath(const std::string& output, Layer layer, size_t listed);
+
+/// render -o's segmentation legend: NAME_segmentation_legend.json for -o NAME.png, wherever
+/// the segmentation image goes (record: episode_NNN_segmentation_legend.json).
+std::string LegendFilePath(const std::string& output);
+
+/// Throws UsageError unless `output` (render's -o) ends in .png (any case): the image files
+/// are PNG, and a .jpg or .bmp name would hold PNG data.
+void CheckPngOutput(const std::string& option, const std::string& output);
+
 /// The --layers list the manifest and --resume compare: "rgb" and `layers` (those beyond rgb)
 /// in order, e.g. "rgb,depth".
 std::string LayersLabel(const std::vector<Layer>& layers);

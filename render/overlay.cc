@@ -245,7 +245,10 @@ HudText FormatHud(const FrameInfo& info, const OverlaySet& overlays) {
     hud.labels += label + "\n";
     hud.values += value + "\n";
   };
-  line("step", std::to_string(info.step));
+  // a step Gymnasium's TimeLimit would not give (--steps beyond it) says so
+  line("step", info.past_time_limit > 0 ? std::to_string(info.step) + " past limit " +
+                                              std::to_string(info.past_time_limit)
+                                        : std::to_string(info.step));
   line("reward", std::isnan(info.reward) ? "-" : Format("%.4f", info.reward));
   line("distance", Format("%.4f m", info.distance));
   line("success", info.success ? "yes" : "no");

@@ -75,6 +75,9 @@ struct FrameInfo {
   int relabelled_successes = -1;  ///< shown by the HUD when >= 0 (this transition's count)
   /// The dataset's achieved goal at this step (record --from DATASET); unset otherwise.
   std::optional<std::array<double, 3>> ghost;
+  /// The env's max_episode_steps when `step` is past it (--steps beyond the TimeLimit): the
+  /// HUD's step row says so; 0 for every step within it.
+  int past_time_limit = 0;
 };
 
 /// The env moves the mocap by 0.05 m per unit action; the arrow is drawn this many times

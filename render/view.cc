@@ -5,6 +5,7 @@
 #include <string>
 
 #include "base/errors.h"
+#include "render/frame_limits.h"
 
 namespace fetchscope {
 
@@ -35,6 +36,9 @@ RenderOptions MakeRenderOptions(const ViewOptions& view, const mjModel* model) {
   options.readback = ParseReadback(view.readback);
   options.hud_position = ParseHudPosition(view.hud_position);
   options.hud_opacity = CheckHudOpacity(view.hud_opacity);
+  const FrameDims frame = FrameSize(options);  // too large for memory: refused before any work
+  CheckFrameSize(view.width, view.height, static_cast<int>(options.cameras.size()), frame.width,
+                 frame.height);
   return options;
 }
 
@@ -78,6 +82,7 @@ FrameInfo MakeFrameInfo(const FetchEnv& env, const StepRecord& record) {
   info.achieved = a;
   info.distance_threshold = env.spec().distance_threshold;
   info.title = env.spec().id;
+  if (record.past_time_limit) info.past_time_limit = env.spec().max_episode_steps;
   return info;
 }
 

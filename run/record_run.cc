@@ -52,8 +52,10 @@ EpisodeSinkOptions MakeEpisodeSinkOptions(const RecordPlan& plan) {
   return sink;
 }
 
-size_t FramePoolSize(int encoders, int steps) {
-  return 4 + kReadbackDepth + encoders + static_cast<size_t>(encoders - 1) * (steps + 1);
+size_t FramePoolSize(int encoders, int steps, size_t frame_bytes) {
+  const size_t floor = 4 + kReadbackDepth + encoders;
+  return BoundedFrameCount(floor, floor + static_cast<size_t>(encoders - 1) * (steps + 1),
+                           frame_bytes);
 }
 
 RecordRunner::RecordRunner(const RecordPlan& plan, int worker)
@@ -76,7 +78,8 @@ nlohmann::json RecordRunner::Start() {
   renderer_.emplace(*gl_, sequence_.env().model(),
                     MakeRenderOptions(plan_.view, sequence_.env().model()));
   const size_t frame_bytes = static_cast<size_t>(renderer_->width()) * renderer_->height() * 3;
-  pool_.emplace(FramePoolSize(plan_.encoders, plan_.steps), frame_bytes, plan_.layers.size());
+  pool_.emplace(FramePoolSize(plan_.encoders, plan_.steps, frame_bytes * (1 + plan_.layers.size())),
+                frame_bytes, plan_.layers.size());
   const GlInfo& gi = gl_->info();
   return {{"worker", worker_},
           {"pid", static_cast<long>(getpid())},

@@ -57,8 +57,9 @@ EpisodeSinkOptions MakeEpisodeSinkOptions(const RecordPlan& plan);
 
 /// Frames in a worker's pool: those being read back, 4 in flight between rendering and
 /// encoding, one held by each encoder, and a whole episode (steps + 1 frames) for each further
-/// encoder so that the render thread can run an episode ahead.
-size_t FramePoolSize(int encoders, int steps);
+/// encoder so that the render thread can run an episode ahead, those within the pool's memory
+/// budget (BoundedFrameCount, `frame_bytes`: one frame with its layers).
+size_t FramePoolSize(int encoders, int steps, size_t frame_bytes);
 
 /// One worker of a record run. Each episode is played one of three ways: live from the policy;
 /// replayed from a recording (record --from); or, for the hindsight overlay, run first without

@@ -30,6 +30,7 @@ EpisodeRecord RunEpisode(FetchEnv& env, Policy& policy, int index, std::optional
     record.action = action;
     record.reward = result.reward;
     record.is_success = result.is_success;
+    record.past_time_limit = record.t > env.spec().max_episode_steps;
     episode.episode_return += result.reward;
     episode.steps.push_back(std::move(record));
     if (t + 1 == steps) episode.complete = true;

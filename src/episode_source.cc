@@ -191,6 +191,7 @@ EpisodeRecord EpisodeReplayer::ReplayFrom(int k, const Observation& reset,
     r.action = action;
     r.reward = result.reward;
     r.is_success = result.is_success;
+    r.past_time_limit = r.t > env_.spec().max_episode_steps;
     verify(r, t);
     episode.episode_return += result.reward;
     episode.steps.push_back(std::move(r));

@@ -16,11 +16,23 @@ using nlohmann::json;
 
 json FileJson(const std::string& env_id, uint64_t seed, const std::string& policy,
               const AssetSource& assets, json episodes) {
-  return {{"env_id", env_id},
-          {"seed", seed},
-          {"policy", policy},
-          {"assets", AssetsJson(assets)},
-          {"episodes", std::move(episodes)}};
+  std::string past;  // the note, when an episode ran past the TimeLimit
+  for (const json& e : episodes) {
+    if (!e.is_object() || !e.contains("past_time_limit")) continue;
+    past = "steps after " + e["past_time_limit"]["max_episode_steps"].dump() +
+           " run past the env's TimeLimit (--steps above max_episode_steps) and are marked "
+           "\"past_time_limit\": true; gym.make's env sets truncated = True at step " +
+           e["past_time_limit"]["max_episode_steps"].dump() +
+           " and callers reset it there, so such steps are not in Gymnasium's episodes";
+    break;
+  }
+  json file = {{"env_id", env_id},
+               {"seed", seed},
+               {"policy", policy},
+               {"assets", AssetsJson(assets)},
+               {"episodes", std::move(episodes)}};
+  if (!past.empty()) file["note"] = past;
+  return file;
 }
 
 // The reader: walks the document and names the key of anything it refuses.
@@ -34,6 +46,11 @@ class TrajectoryReader {
     }
     Trajectory out;
     out.env_id = String(root, "env_id", "", /*required=*/true);
+    try {
+      FindEnvSpec(out.env_id);  // an edited id is named here, with the file and the key
+    } catch (const UsageError& e) {
+      Fail("env_id", e.what());
+    }
     const json* seed = Find(root, "seed");
     if (!seed || !seed->is_number_unsigned()) {
       Fail("seed", "expected a non-negative integer below 2^64");
@@ -166,6 +183,10 @@ class TrajectoryReader {
     const json* success = Find(s, "is_success");
     if (!success || !success->is_boolean()) Fail(key + ".is_success", "expected true or false");
     step.is_success = success->get<bool>();
+    if (const json* past = Find(s, "past_time_limit")) {
+      if (!past->is_boolean()) Fail(key + ".past_time_limit", "expected true or false");
+      step.past_time_limit = past->get<bool>();
+    }
     return step;
   }
 
@@ -235,6 +256,7 @@ nlohmann::json StepsJson(const TrajectoryEpisode& episode) {
     row["action"] = s.action ? JsonVector(s.action->value.data(), 4) : json(nullptr);
     row["reward"] = s.reward ? JsonDouble(*s.reward) : json(nullptr);
     row["is_success"] = s.is_success;
+    if (s.past_time_limit) row["past_time_limit"] = true;
     steps.push_back(std::move(row));
   }
   return steps;
@@ -242,13 +264,23 @@ nlohmann::json StepsJson(const TrajectoryEpisode& episode) {
 
 nlohmann::json EpisodeJson(const TrajectoryEpisode& episode) {
   json steps = StepsJson(episode);
-  return {{"index", episode.index},
-          {"length", static_cast<int>(episode.steps.size()) - 1},
-          {"complete", episode.complete},
-          {"return", JsonDouble(episode.episode_return)},
-          {"is_success", !episode.steps.empty() && episode.steps.back().is_success},
-          {"action_dtype", ActionDtype(episode)},
-          {"steps", std::move(steps)}};
+  json out = {{"index", episode.index},
+              {"length", static_cast<int>(episode.steps.size()) - 1},
+              {"complete", episode.complete},
+              {"return", JsonDouble(episode.episode_return)},
+              {"is_success", !episode.steps.empty() && episode.steps.back().is_success},
+              {"action_dtype", ActionDtype(episode)},
+              {"steps", std::move(steps)}};
+  int past = 0, first = 0;  // steps past the TimeLimit, and the first of them
+  for (const TrajectoryStep& s : episode.steps) {
+    if (!s.past_time_limit) continue;
+    if (past++ == 0) first = s.t;
+  }
+  if (past > 0) {
+    out["past_time_limit"] = {
+        {"max_episode_steps", first - 1}, {"first_step", first}, {"steps", past}};
+  }
+  return out;
 }
 
 nlohmann::json TrajectoryJson(const EnvSpec& spec, const AssetSource& assets, uint64_t seed,

@@ -8,7 +8,10 @@
 //    "episodes": [{"index", "length", "complete", "return", "is_success", "action_dtype",
 //                  "steps": [{"t", "observation", "achieved_goal", "desired_goal", "action",
 //                             "reward", "is_success"}, ...]}, ...]}
-// Step 0 is the reset (action and reward null). Non-finite values are written as the strings
+// Step 0 is the reset (action and reward null). Steps past the env's TimeLimit (--steps above
+// max_episode_steps) carry "past_time_limit": true, their episode "past_time_limit":
+// {"max_episode_steps", "first_step", "steps"} and the file a "note"; files without such steps
+// have none of these keys. Non-finite values are written as the strings
 // "inf", "-inf" and "nan" (JSON has no literal for them) and read back as such.
 #pragma once
 
@@ -32,6 +35,9 @@ struct TrajectoryStep {
   std::optional<Action> action;  ///< what the policy gave, in its dtype (none at t = 0)
   std::optional<double> reward;  ///< none at t = 0
   bool is_success = false;       ///< distance < threshold
+  /// t > the env's max_episode_steps: a step Gymnasium's TimeLimit would not give before a
+  /// reset (--steps beyond it); written as "past_time_limit": true, and only then
+  bool past_time_limit = false;
 };
 
 /// One episode: its reset and its steps.

@@ -228,7 +228,7 @@ INSTANTIATE_TEST_SUITE_P(
                  "answer 'hello'"},
         BadInput{"rollout --steps 3 --exec-timeout 0.5 --policy 'exec:sleep 5'", 1,
                  "no answer for step 0 within 0.5 s"},
-        BadInput{"rollout --steps 51", 2, "--steps"}));
+        BadInput{"rollout --steps 10001", 2, "--steps"}));
 
 TEST(Cli, UnwritableOutputIsARunError) {
   auto r = RunFetchscope("describe --json-out /proc/nope/x.json");
