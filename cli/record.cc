@@ -264,6 +264,11 @@ int RunRecord(const RecordOptions& options, const std::string& command_line,
   if (!node.warnings.empty() && !o.quiet) {
     std::fprintf(stderr, "fetchscope: warning: %s\n", node.warnings.c_str());
   }
+  const std::string gif_note =
+      GifHudNote(MakeEpisodeSinkOptions(plan), o.view.width, o.view.height);
+  if (!gif_note.empty() && ParseOverlays(o.view.overlay).hud && !o.quiet) {
+    std::fprintf(stderr, "fetchscope: note: %s\n", gif_note.c_str());
+  }
 
   // never two runs in one folder; a failure below leaves nothing this run made. From here a
   // SIGINT/SIGTERM is an interruption (the scheduler takes over the handlers when it starts).

@@ -2,8 +2,8 @@
 
 namespace fetchscope {
 
-FramePool::FramePool(size_t count, size_t bytes, size_t layers)
-    : count_(count), bytes_(bytes), layers_(layers) {}
+FramePool::FramePool(size_t count, size_t bytes, size_t layers, bool gif_copy)
+    : count_(count), bytes_(bytes), layers_(layers), gif_copy_(gif_copy) {}
 
 Frame* FramePool::Acquire() {
   std::unique_lock<std::mutex> lock(mutex_);
@@ -11,6 +11,7 @@ Frame* FramePool::Acquire() {
     pool_.push_back(std::make_unique<Frame>());
     pool_.back()->rgb.resize(bytes_);
     pool_.back()->layers.assign(layers_, std::vector<uint8_t>(bytes_));
+    if (gif_copy_) pool_.back()->gif_rgb.resize(bytes_);
     return pool_.back().get();
   }
   cv_.wait(lock, [&] { return !free_.empty(); });

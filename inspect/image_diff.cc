@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <string>
 
 #include "render/canvas.h"
 
@@ -10,6 +11,7 @@ namespace fetchscope {
 namespace {
 
 constexpr Rgb kSideBySideBackground = {40, 40, 40};
+constexpr Rgb kSideBySideText = {235, 235, 235};
 
 int PixelDiff(const uint8_t* a, const uint8_t* b) {
   int d = 0;
@@ -82,15 +84,29 @@ std::vector<uint8_t> DiffHeatMap(const uint8_t* golden, const uint8_t* actual, i
   return heat;
 }
 
+int SideBySideLabelPixels(int width) { return std::clamp((width + 10) / 20, 10, 32); }
+
+int SideBySideLabelHeight(int width) {
+  const int pixels = SideBySideLabelPixels(width);
+  const TextMetrics m = Font::Default().Measure("golden", pixels);
+  return m.ascent + m.descent + 2 * (pixels / 4);
+}
+
 std::vector<uint8_t> SideBySide(const uint8_t* golden, const uint8_t* actual, const uint8_t* diff,
                                 int width, int height) {
-  const int out_width = SideBySideWidth(width);
-  std::vector<uint8_t> out(static_cast<size_t>(out_width) * height * 3);
-  Canvas canvas(out.data(), out_width, height);
-  canvas.FillRect(0, 0, out_width, height, kSideBySideBackground);
+  const int out_width = SideBySideWidth(width), strip = SideBySideLabelHeight(width);
+  const int out_height = strip + height, pixels = SideBySideLabelPixels(width);
+  std::vector<uint8_t> out(static_cast<size_t>(out_width) * out_height * 3);
+  Canvas canvas(out.data(), out_width, out_height);
+  canvas.FillRect(0, 0, out_width, out_height, kSideBySideBackground);
   const uint8_t* panels[3] = {golden, actual, diff};
-  for (int p = 0; p < 3; ++p)
-    canvas.Paste(panels[p], width, height, p * (width + kSideBySideGap), 0);
+  for (int p = 0; p < 3; ++p) {
+    const int x = p * (width + kSideBySideGap);
+    canvas.Paste(panels[p], width, height, x, strip);
+    // cut to the panel, so that a label never runs into the next one
+    const std::string label = Font::Default().Fit(kSideBySideLabels[p], pixels, width, "");
+    canvas.Text(x + pixels / 4, pixels / 4, label, pixels, kSideBySideText);
+  }
   return out;
 }
 
