@@ -60,6 +60,11 @@ std::optional<ShownScale> GifTextScale(const EpisodeSinkOptions& options) {
   return ShownScale{options.video.gif_width, options.video.width};
 }
 
+bool NeedsGifCopy(const EpisodeSinkOptions& options, int t) {
+  const VideoOptions& v = options.video;
+  return GifTextScale(options) && GifKeepsFrame(t, v.fps, std::min(v.gif_fps, v.fps));
+}
+
 std::string GifHudNote(const EpisodeSinkOptions& options, int tile_width, int tile_height) {
   const std::optional<ShownScale> scale = GifTextScale(options);
   // no note where the frames have no HUD either, or where the GIF keeps it

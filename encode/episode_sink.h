@@ -66,6 +66,11 @@ VideoOptions EpisodeVideoOptions(const EpisodeSinkOptions& options, int k,
 /// frame (Frame::gif_rgb) whose HUD and tile labels are sized for the GIF's width.
 std::optional<ShownScale> GifTextScale(const EpisodeSinkOptions& options);
 
+/// Whether the frame of step `t` needs its GIF copy (Frame::gif_rgb): there is a scaled GIF and
+/// it keeps that frame (GifKeepsFrame at the run's fps and GIF fps). The GIF takes gif_rgb for
+/// every frame; those it drops are never read.
+bool NeedsGifCopy(const EpisodeSinkOptions& options, int t);
+
 /// The one line a run prints when its GIF leaves the HUD out (each `tile_width` x `tile_height`
 /// view shows smaller in the GIF than the HUD needs, kHudMinTileWidth x kHudMinTileHeight);
 /// empty when the GIF has the HUD or there is no scaled GIF.

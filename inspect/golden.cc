@@ -144,7 +144,7 @@ void WriteFailureImages(const std::string& out, const GoldenScene& s, const Imag
   const std::vector<uint8_t> side =
       SideBySide(golden->pixels.data(), actual.data(), heat.data(), width, height);
   WritePng((dir / (s.name + "_side.png")).string(), SideBySideWidth(width),
-           SideBySideHeight(width, height), 3, 8, side.data());
+           SideBySideHeight(height), 3, 8, side.data());
 }
 
 CheckRow CheckScene(GlContext& gl, const GoldenManifest& m, const GoldenScene& s,

@@ -84,28 +84,30 @@ std::vector<uint8_t> DiffHeatMap(const uint8_t* golden, const uint8_t* actual, i
   return heat;
 }
 
-int SideBySideLabelPixels(int width) { return std::clamp((width + 10) / 20, 10, 32); }
+int SideBySideLabelPixels(int height) { return std::clamp(height / 16, 9, 24); }
 
-int SideBySideLabelHeight(int width) {
-  const int pixels = SideBySideLabelPixels(width);
-  const TextMetrics m = Font::Default().Measure("golden", pixels);
-  return m.ascent + m.descent + 2 * (pixels / 4);
+int SideBySideLabelHeight(int height) {
+  const int pixels = SideBySideLabelPixels(height);
+  const TextMetrics m = Font::Default().Measure("Ag", pixels);
+  return m.ascent + m.descent + 2 * std::max(2, pixels / 4);
 }
 
 std::vector<uint8_t> SideBySide(const uint8_t* golden, const uint8_t* actual, const uint8_t* diff,
                                 int width, int height) {
-  const int out_width = SideBySideWidth(width), strip = SideBySideLabelHeight(width);
-  const int out_height = strip + height, pixels = SideBySideLabelPixels(width);
-  std::vector<uint8_t> out(static_cast<size_t>(out_width) * out_height * 3);
-  Canvas canvas(out.data(), out_width, out_height);
-  canvas.FillRect(0, 0, out_width, out_height, kSideBySideBackground);
+  const int out_width = SideBySideWidth(width), strip = SideBySideLabelHeight(height);
+  const int pixels = SideBySideLabelPixels(height), pad = std::max(2, pixels / 4);
+  std::vector<uint8_t> out(static_cast<size_t>(out_width) * (strip + height) * 3);
+  Canvas canvas(out.data(), out_width, strip + height);
+  canvas.FillRect(0, 0, out_width, strip + height, kSideBySideBackground);
+  const Font& font = Font::Default();
   const uint8_t* panels[3] = {golden, actual, diff};
   for (int p = 0; p < 3; ++p) {
     const int x = p * (width + kSideBySideGap);
     canvas.Paste(panels[p], width, height, x, strip);
-    // cut to the panel, so that a label never runs into the next one
-    const std::string label = Font::Default().Fit(kSideBySideLabels[p], pixels, width, "");
-    canvas.Text(x + pixels / 4, pixels / 4, label, pixels, kSideBySideText);
+    // centred over the panel (as compare's strip names its panels), cut to fit it
+    const std::string label = font.Fit(kSideBySideLabels[p], pixels, width - 2 * pad);
+    const int label_x = x + std::max(pad, (width - font.Measure(label, pixels).width) / 2);
+    canvas.Text(label_x, pad, label, pixels, kSideBySideText);
   }
   return out;
 }

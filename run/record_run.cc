@@ -117,9 +117,10 @@ void RecordRunner::Run(int k, WorkerChannel& channel) {
     f->t = record.t;
     f->label = SheetCaption(info);
     in_flight.push_back(f);
-    // a scaled-down GIF gets its own copy, its HUD sized for the GIF's width
+    // a scaled-down GIF gets its own copy of the frames it keeps, its HUD sized for its width
     const std::optional<ShownScale> gif_scale = GifTextScale(sink_);
-    renderer_->Submit(env.data(), info, f->rgb.data(), gif_scale ? f->gif_rgb.data() : nullptr,
+    renderer_->Submit(env.data(), info, f->rgb.data(),
+                      NeedsGifCopy(sink_, record.t) ? f->gif_rgb.data() : nullptr,
                       gif_scale.value_or(ShownScale{}));
     // the layers are drawn after the rgb frame's readback has been queued, and read at once
     for (size_t i = 0; i < plan_.layers.size(); ++i) {

@@ -17,6 +17,7 @@
 #include "encode/contact_sheet.h"
 #include "encode/png_io.h"
 #include "encode/video_reader.h"
+#include "encode/video_writer.h"
 #include "inspect/image_diff.h"
 #include "render/overlay.h"
 #include "tests/test_util.h"
@@ -199,6 +200,16 @@ TEST(GifHud, SizedForTheGifWidthWhileTheMp4KeepsItsOwn) {
   EXPECT_NEAR(BlackRun(mp4[0], w, h, mp4_box.x + 2), mp4_box.height, 3);
 }
 
+TEST(GifHud, CopiesOnlyTheFramesTheGifKeeps) {
+  for (int fps : {10, 25, 30}) {
+    for (int gif_fps : {1, 7, 10, 25}) {
+      int kept = 0;
+      for (int i = 0; i < 51; ++i) kept += GifKeepsFrame(i, fps, std::min(gif_fps, fps));
+      EXPECT_EQ(kept, GifFrameCount(51, fps, std::min(gif_fps, fps))) << fps << " " << gif_fps;
+    }
+  }
+}
+
 TEST(GifHud, LeftOutWhereTheGifShowsViewsTooSmallForIt) {
   // two 480-pixel views side by side in a 320-pixel GIF: each shows at 160 x 160
   EXPECT_EQ(HudTextPixels(480, 480, ShownScale{320, 960}), 0);
@@ -243,7 +254,7 @@ TEST(GoldenSide, PanelsAreLabelledAndTheTableNamesEveryColumn) {
 
   // the side-by-side: golden | actual | diff, each named in a strip above it
   const Image side = ReadPng((out / "reach_reset_side.png").string());
-  const int w = 320, strip = SideBySideLabelHeight(w);
+  const int w = 320, strip = SideBySideLabelHeight(240);
   ASSERT_EQ(side.width, SideBySideWidth(w));
   ASSERT_EQ(side.height, 240 + strip);
   ASSERT_GE(strip, 12);
