@@ -503,7 +503,9 @@ Command AddRecord(CLI::App& app) {
       ->capture_default_str();
   sub->add_option(
          "--gif-width", o->gif_width,
-         "GIF width in pixels, 16..4096 (never wider than the frames; height keeps the aspect)")
+         "GIF width in pixels, 16..4096 (never wider than the frames; height keeps the aspect); "
+         "the GIF's HUD is sized for this width, and left out where a view would show smaller "
+         "than 320x240")
       ->capture_default_str();
   sub->add_option("--layers", o->layers,
                   "Comma list of rgb (always recorded), depth, segmentation: each extra layer is "

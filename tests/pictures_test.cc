@@ -200,6 +200,36 @@ TEST(GifHud, SizedForTheGifWidthWhileTheMp4KeepsItsOwn) {
   EXPECT_NEAR(BlackRun(mp4[0], w, h, mp4_box.x + 2), mp4_box.height, 3);
 }
 
+TEST(GifHud, LeftOutOfAGifTooNarrowForItAndSaidOnce) {
+  TempDir tmp;
+  const fs::path out = tmp.path() / "run";
+  // two 480-pixel views side by side in a 320-pixel GIF: each shows at 160 x 160
+  const CommandResult r = RunFetchscope(
+      "record --no-report --env-id FetchReach-v4 --episodes 2 --steps 1 --camera "
+      "default,head_camera_rgb --format mp4,gif --hud-opacity 1 --out " +
+      out.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const std::string note = "the GIF (320 px wide) shows each view at 160x160";
+  const size_t at = r.output.find(note);
+  ASSERT_NE(at, std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find(note, at + 1), std::string::npos) << "said more than once";
+  int w = 0, h = 0;
+  const auto gif = ReadAllFrames((out / "episode_000.gif").string(), &w, &h);
+  ASSERT_EQ(w, 320);
+  // the HUD's corner, left of the tile label: the shrunken HUD box made it mostly black
+  int dark = 0;
+  for (int y = 0; y < 40; ++y) {
+    for (int x = 0; x < 40; ++x) {
+      const uint8_t* p = &gif[0][(y * w + x) * 3];
+      dark += std::max({p[0], p[1], p[2]}) < 48;
+    }
+  }
+  EXPECT_LT(dark, 50) << "the GIF still has a HUD box";
+  const auto mp4 = ReadAllFrames((out / "episode_000.mp4").string(), &w, &h);
+  ASSERT_EQ(w, 960);
+  EXPECT_GT(BlackRun(mp4[0], w, h, 8), 60) << "the MP4 keeps its HUD";
+}
+
 TEST(GifHud, CopiesOnlyTheFramesTheGifKeeps) {
   for (int fps : {10, 25, 30}) {
     for (int gif_fps : {1, 7, 10, 25}) {
