@@ -256,6 +256,11 @@ int RunRecord(const RecordOptions& options, const std::string& command_line,
   if (!node.warnings.empty() && !o.quiet) {
     std::fprintf(stderr, "fetchscope: warning: %s\n", node.warnings.c_str());
   }
+  const std::string gif_note =
+      GifHudNote(MakeEpisodeSinkOptions(plan), o.view.width, o.view.height);
+  if (!gif_note.empty() && ParseOverlays(o.view.overlay).hud && !o.quiet) {
+    std::fprintf(stderr, "fetchscope: note: %s\n", gif_note.c_str());
+  }
 
   // never two runs in one folder; a failure below leaves nothing this run made. From here a
   // SIGINT/SIGTERM is an interruption (the scheduler takes over the handlers when it starts).
@@ -484,7 +489,9 @@ Command AddRecord(CLI::App& app) {
       ->capture_default_str();
   sub->add_option(
          "--gif-width", o->gif_width,
-         "GIF width in pixels, 16..4096 (never wider than the frames; height keeps the aspect)")
+         "GIF width in pixels, 16..4096 (never wider than the frames; height keeps the aspect); "
+         "the GIF's HUD is sized for this width, and left out where a view would show smaller "
+         "than 320x240")
       ->capture_default_str();
   sub->add_option("--layers", o->layers,
                   "Comma list of rgb (always recorded), depth, segmentation: each extra layer is "

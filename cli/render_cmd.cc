@@ -5,6 +5,7 @@
 #include <filesystem>
 
 #include "base/errors.h"
+#include "base/text_table.h"
 #include "cli/command.h"
 #include "cli/common.h"
 #include "cli/resolve.h"
@@ -142,15 +143,21 @@ int RunListCameras(const ListCamerasOptions& o) {
   const ResolvedEnv env = ResolveEnv(o.env, /*with_seed=*/false);
   FetchEnv fetch(*env.spec, env.assets);
   const mjModel* m = fetch.model();
-  std::printf(
-      "default   Gymnasium's free camera: distance 2.5, azimuth 132, elevation -14, lookat 1.3 "
-      "0.75 0.55\n");
-  std::printf("track     follows robot0:gripper_link\n");
-  std::printf("free:...  free:lookat=x,y,z,distance=d,azimuth=a,elevation=e (any subset)\n");
+  // columns as wide as their widest name (a model camera's name can be long)
+  std::vector<std::vector<std::string>> rows = {
+      {"default",
+       "Gymnasium's free camera: distance 2.5, azimuth 132, elevation -14, lookat 1.3 0.75 0.55"},
+      {"track", "follows robot0:gripper_link"},
+      {"free:...", "free:lookat=x,y,z,distance=d,azimuth=a,elevation=e (any subset)"}};
+  auto name = [&](int type, int id) {
+    const char* n = mj_id2name(m, type, id);
+    return std::string(n ? n : "(unnamed)");
+  };
   for (int i = 0; i < m->ncam; ++i) {
-    std::printf("%-26s model camera %d (body %s)\n", mj_id2name(m, mjOBJ_CAMERA, i), i,
-                mj_id2name(m, mjOBJ_BODY, m->cam_bodyid[i]));
+    rows.push_back({name(mjOBJ_CAMERA, i), "model camera " + std::to_string(i) + " (body " +
+                                               name(mjOBJ_BODY, m->cam_bodyid[i]) + ")"});
   }
+  std::fputs(AlignColumns(rows).c_str(), stdout);
   return 0;
 }
 

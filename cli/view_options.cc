@@ -37,7 +37,8 @@ void AddViewOptions(CLI::App* sub, ViewOptions* o) {
                   "than 320x240 pixels get no HUD")
       ->capture_default_str();
   sub->add_option("--hud-opacity", o->hud_opacity,
-                  "Opacity of the black box behind the HUD and tile labels: 0 (none) .. 1")
+                  "Opacity of the black box behind the HUD and tile labels: 0 (none) .. 1; below "
+                  "0.5 their text gets a black outline")
       ->capture_default_str();
   sub->add_option("--backend", o->backend,
                   "auto (EGL, then OSMesa), egl or osmesa; default: $MUJOCO_GL, else auto");

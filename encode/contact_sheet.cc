@@ -6,6 +6,7 @@
 #include <string>
 
 #include "base/errors.h"
+#include "base/number_format.h"
 #include "render/canvas.h"
 
 namespace fetchscope {
@@ -179,6 +180,15 @@ SheetImage MakeContactSheet(const std::string& title, const std::vector<SheetTil
                 layout.label_pixel_size, kSheetText);
   }
   return sheet;
+}
+
+std::string SheetCaption(const FrameInfo& info) {
+  const std::string first =
+      info.step == 0 ? std::string("t=0 reset")
+                     : "t=" + std::to_string(info.step) + PictureNumber(" r=%.3g", info.reward);
+  // "d=0.123 " ends in a space when it is no success, as it always has
+  return first + "\n" + PictureNumber("d=%.3f", info.distance) + " " +
+         (info.success ? "SUCCESS" : "");
 }
 
 std::vector<int> SheetFrameIndices(int num_frames, int every) {

@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "render/overlay.h"
 #include "render/text.h"
 
 namespace fetchscope {
@@ -67,6 +68,11 @@ struct SheetImage {
 /// buffer does not match its size (naming the tile).
 SheetImage MakeContactSheet(const std::string& title, const std::vector<SheetTile>& tiles,
                             int tile_width = 240, int columns = 0);
+
+/// A frame's caption on an episode's sheet: "t=0 reset" at the reset, else "t=STEP r=REWARD",
+/// then "d=DISTANCE" and "SUCCESS" when it is one. Numbers through PictureNumber
+/// (base/number_format.h): a sparse reward of -0.0 reads r=0.
+std::string SheetCaption(const FrameInfo& info);
 
 /// Which frames go on the sheet of an episode with `num_frames` frames
 /// (frame 0 = reset, frame num_frames - 1 = last step: T + 1 frames for T

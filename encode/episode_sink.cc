@@ -1,5 +1,6 @@
 #include "encode/episode_sink.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -50,6 +51,33 @@ VideoOptions EpisodeVideoOptions(const EpisodeSinkOptions& options, int k,
                     {"episode", std::to_string(k)},
                     {"fetchscope_version", FETCHSCOPE_VERSION}};
   return video;
+}
+
+std::optional<ShownScale> GifTextScale(const EpisodeSinkOptions& options) {
+  const bool gif =
+      std::find(options.formats.begin(), options.formats.end(), "gif") != options.formats.end();
+  if (!gif || options.video.gif_width >= options.video.width) return std::nullopt;
+  return ShownScale{options.video.gif_width, options.video.width};
+}
+
+bool NeedsGifCopy(const EpisodeSinkOptions& options, int t) {
+  const VideoOptions& v = options.video;
+  return GifTextScale(options) && GifKeepsFrame(t, v.fps, std::min(v.gif_fps, v.fps));
+}
+
+std::string GifHudNote(const EpisodeSinkOptions& options, int tile_width, int tile_height) {
+  const std::optional<ShownScale> scale = GifTextScale(options);
+  // no note where the frames have no HUD either, or where the GIF keeps it
+  if (!scale || HudTextPixels(tile_width, tile_height) == 0 ||
+      HudTextPixels(tile_width, tile_height, *scale) > 0) {
+    return "";
+  }
+  const long shown_w = static_cast<long>(tile_width) * scale->shown / scale->drawn;
+  const long shown_h = static_cast<long>(tile_height) * scale->shown / scale->drawn;
+  return "the GIF (" + std::to_string(scale->shown) + " px wide) shows each view at " +
+         std::to_string(shown_w) + "x" + std::to_string(shown_h) + ", smaller than the " +
+         std::to_string(kHudMinTileWidth) + "x" + std::to_string(kHudMinTileHeight) +
+         " the HUD needs to be read: the GIF has no HUD (raise --gif-width to keep it)";
 }
 
 EpisodeEncoder::EpisodeEncoder(const EpisodeSinkOptions& options, int k, FramePool* pool,
@@ -121,7 +149,11 @@ void EpisodeEncoder::Body() {
       if (!error_) {
         try {
           const auto t0 = Clock::now();
-          for (VideoWriter& writer : writers_) writer.AddFrame(f->rgb.data());
+          for (size_t i = 0; i < writers_.size(); ++i) {
+            // a scaled-down GIF takes the copy whose text is sized for it
+            const bool gif_copy = options_.formats[i] == "gif" && !f->gif_rgb.empty();
+            writers_[i].AddFrame(gif_copy ? f->gif_rgb.data() : f->rgb.data());
+          }
           const size_t formats = options_.formats.size();
           for (size_t i = 0; i < layer_writers_.size(); ++i) {
             layer_writers_[i].AddFrame(f->layers[i / formats].data());

@@ -13,6 +13,7 @@
 #include <functional>
 #include <mutex>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <set>
 #include <string>
 #include <thread>
@@ -59,6 +60,21 @@ std::string FormatCodec(const std::string& format, const std::string& h264);
 /// that trace a clip found alone back to its run (ffprobe -show_format lists them).
 VideoOptions EpisodeVideoOptions(const EpisodeSinkOptions& options, int k,
                                  const std::string& format);
+
+/// The scale at which the run's GIF shows its frames, {GIF width, frame width}, when the run
+/// writes a GIF narrower than its frames; nullopt otherwise. Such a GIF gets its own copy of each
+/// frame (Frame::gif_rgb) whose HUD and tile labels are sized for the GIF's width.
+std::optional<ShownScale> GifTextScale(const EpisodeSinkOptions& options);
+
+/// Whether the frame of step `t` needs its GIF copy (Frame::gif_rgb): there is a scaled GIF and
+/// it keeps that frame (GifKeepsFrame at the run's fps and GIF fps). The GIF takes gif_rgb for
+/// every frame; those it drops are never read.
+bool NeedsGifCopy(const EpisodeSinkOptions& options, int t);
+
+/// The one line a run prints when its GIF leaves the HUD out (each `tile_width` x `tile_height`
+/// view shows smaller in the GIF than the HUD needs, kHudMinTileWidth x kHudMinTileHeight);
+/// empty when the GIF has the HUD or there is no scaled GIF.
+std::string GifHudNote(const EpisodeSinkOptions& options, int tile_width, int tile_height);
 
 /// Receives an episode's manifest entry once its files are written (on the sink's thread).
 using EpisodeDone = std::function<void(int episode, nlohmann::json entry)>;

@@ -9,8 +9,8 @@ size_t BoundedFrameCount(size_t floor, size_t wanted, size_t frame_bytes) {
   return std::max(floor, std::min(wanted, fit));
 }
 
-FramePool::FramePool(size_t count, size_t bytes, size_t layers)
-    : count_(count), bytes_(bytes), layers_(layers) {}
+FramePool::FramePool(size_t count, size_t bytes, size_t layers, bool gif_copy)
+    : count_(count), bytes_(bytes), layers_(layers), gif_copy_(gif_copy) {}
 
 Frame* FramePool::Acquire() {
   std::unique_lock<std::mutex> lock(mutex_);
@@ -18,6 +18,7 @@ Frame* FramePool::Acquire() {
     pool_.push_back(std::make_unique<Frame>());
     pool_.back()->rgb.resize(bytes_);
     pool_.back()->layers.assign(layers_, std::vector<uint8_t>(bytes_));
+    if (gif_copy_) pool_.back()->gif_rgb.resize(bytes_);
     return pool_.back().get();
   }
   cv_.wait(lock, [&] { return !free_.empty(); });

@@ -17,8 +17,11 @@ namespace fetchscope {
 struct Frame {
   std::vector<uint8_t> rgb;                  ///< width * height * 3 bytes, row 0 at the top
   std::vector<std::vector<uint8_t>> layers;  ///< the extra layers as rgb, in the run's order
-  int t = 0;                                 ///< the step the frame shows (0: the reset)
-  std::string label;                         ///< the frame's contact sheet label
+  /// The frame for the GIF when it is scaled down: text sized for the GIF's width (render/
+  /// overlay.h ShownScale); empty when the run writes no scaled GIF (the GIF then takes `rgb`).
+  std::vector<uint8_t> gif_rgb;
+  int t = 0;          ///< the step the frame shows (0: the reset)
+  std::string label;  ///< the frame's contact sheet label
 };
 
 /// The memory a frame pool may fill beyond its floor: frames that only let the render thread run
@@ -34,10 +37,10 @@ size_t BoundedFrameCount(size_t floor, size_t wanted, size_t frame_bytes);
 /// ahead of its encoders waits for a free buffer. Thread-safe.
 class FramePool {
  public:
-  /// At most `count` frames of `bytes` each (and `layers` layer images of as many), made when
-  /// first needed: a run whose render thread never gets ahead of its encoders never holds more
-  /// than the few it cycles through.
-  FramePool(size_t count, size_t bytes, size_t layers);
+  /// At most `count` frames of `bytes` each (and `layers` layer images of as many, and a
+  /// gif_rgb of as many when `gif_copy`), made when first needed: a run whose render thread
+  /// never gets ahead of its encoders never holds more than the few it cycles through.
+  FramePool(size_t count, size_t bytes, size_t layers, bool gif_copy = false);
   FramePool(const FramePool&) = delete;
   FramePool& operator=(const FramePool&) = delete;
 
@@ -55,6 +58,7 @@ class FramePool {
   const size_t count_;
   const size_t bytes_;
   const size_t layers_;
+  const bool gif_copy_;
   std::vector<std::unique_ptr<Frame>> pool_;
   std::deque<Frame*> free_;
   mutable std::mutex mutex_;

@@ -111,6 +111,13 @@ std::string VideoFormatExtension(const std::string& format) {
   return format == "webm" ? "webm" : format == "gif" ? "gif" : "mp4";
 }
 
+bool GifKeepsFrame(int index, int fps, int gif_fps) {
+  if (gif_fps >= fps || index == 0) return true;
+  const long tick = static_cast<long>(index) * gif_fps / fps;
+  const long before = static_cast<long>(index - 1) * gif_fps / fps;
+  return tick != before;
+}
+
 int GifFrameCount(int frames, int fps, int gif_fps) {
   if (frames <= 0) return 0;
   if (gif_fps >= fps) return frames;

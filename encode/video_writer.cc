@@ -416,11 +416,7 @@ void VideoWriter::Impl::Finish() {
 }
 
 bool VideoWriter::Impl::GifKeeps(int index) const {
-  if (gif_fps >= options.fps || index == 0) return true;
-  // the first frame at or after each 1/gif_fps tick
-  const long tick = static_cast<long>(index) * gif_fps / options.fps;
-  const long before = static_cast<long>(index - 1) * gif_fps / options.fps;
-  return tick != before;
+  return GifKeepsFrame(index, options.fps, gif_fps);  // the first frame at or after each tick
 }
 
 void VideoWriter::Impl::OpenGifFilter() {

@@ -57,6 +57,11 @@ std::string VideoFormatExtension(const std::string& format);
 /// gif_fps >= fps, else libavfilter's fps filter picks the frame nearest each 1/gif_fps tick.
 int GifFrameCount(int frames, int fps, int gif_fps);
 
+/// Whether frame `index` (0 = the first) of a clip at `fps` is one of the GifFrameCount frames
+/// a GIF at `gif_fps` keeps: every frame when gif_fps >= fps, else frame 0 and the first at or
+/// after each later 1/gif_fps tick.
+bool GifKeepsFrame(int index, int fps, int gif_fps);
+
 /// The preset used when VideoOptions::preset is empty. "veryfast" encodes
 /// several times faster than x264's "medium" at a modest size cost, which
 /// suits rendered scenes (flat colours, little noise) and keeps encoding

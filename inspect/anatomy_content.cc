@@ -3,6 +3,8 @@
 #include <cstdio>
 #include <string>
 
+#include "base/number_format.h"
+
 namespace fetchscope {
 namespace {
 
@@ -18,9 +20,7 @@ Vec3 BodyPosition(const FetchEnv& env, const char* name, const Vec3& fallback) {
 }
 
 std::string Fixed(double v, int digits) {
-  char buf[64];
-  std::snprintf(buf, sizeof(buf), "%.*f", digits, v);
-  return buf;
+  return PictureNumber(("%." + std::to_string(digits) + "f").c_str(), v);  // never "-0.00"
 }
 
 // The parts both panels have: grip_pos with the axes that a[0:3] move it along, the fingers with

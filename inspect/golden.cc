@@ -143,8 +143,8 @@ void WriteFailureImages(const std::string& out, const GoldenScene& s, const Imag
   WritePng((dir / (s.name + "_diff.png")).string(), width, height, 3, 8, heat.data());
   const std::vector<uint8_t> side =
       SideBySide(golden->pixels.data(), actual.data(), heat.data(), width, height);
-  WritePng((dir / (s.name + "_side.png")).string(), SideBySideWidth(width), height, 3, 8,
-           side.data());
+  WritePng((dir / (s.name + "_side.png")).string(), SideBySideWidth(width),
+           SideBySideHeight(height), 3, 8, side.data());
 }
 
 CheckRow CheckScene(GlContext& gl, const GoldenManifest& m, const GoldenScene& s,
@@ -213,8 +213,9 @@ CheckRow CheckScene(GlContext& gl, const GoldenManifest& m, const GoldenScene& s
 void PrintTable(const std::vector<CheckRow>& rows) {
   size_t name_width = 5;
   for (const CheckRow& r : rows) name_width = std::max(name_width, r.scene->name.size());
-  std::printf("%-*s  %-4s  %9s %8s  %4s  %6s %6s  %s\n", static_cast<int>(name_width), "scene", "",
-              "over thr", "limit", "max", "rms", "limit", "verdict");
+  // every column named: "result" is ok or FAIL
+  std::printf("%-*s  %-6s  %9s %8s  %4s  %6s %6s  %s\n", static_cast<int>(name_width), "scene",
+              "result", "over thr", "limit", "max", "rms", "limit", "verdict");
   for (const CheckRow& r : rows) {
     const GoldenTolerance& t = r.scene->tolerance;
     char over[32] = "-", max[16] = "-", rms[16] = "-";
@@ -223,7 +224,7 @@ void PrintTable(const std::vector<CheckRow>& rows) {
       std::snprintf(max, sizeof(max), "%d", r.stats.max_diff);
       std::snprintf(rms, sizeof(rms), "%.3f", r.stats.rms);
     }
-    std::printf("%-*s  %-4s  %9s %7.3f%%  %4s  %6s %6.3f  %s\n", static_cast<int>(name_width),
+    std::printf("%-*s  %-6s  %9s %7.3f%%  %4s  %6s %6.3f  %s\n", static_cast<int>(name_width),
                 r.scene->name.c_str(), r.pass ? "ok" : "FAIL", over, 100 * t.max_fraction, max, rms,
                 t.max_rms, r.verdict.c_str());
   }

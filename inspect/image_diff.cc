@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <string>
 
 #include "render/canvas.h"
 
@@ -10,6 +11,7 @@ namespace fetchscope {
 namespace {
 
 constexpr Rgb kSideBySideBackground = {40, 40, 40};
+constexpr Rgb kSideBySideText = {235, 235, 235};
 
 int PixelDiff(const uint8_t* a, const uint8_t* b) {
   int d = 0;
@@ -82,15 +84,31 @@ std::vector<uint8_t> DiffHeatMap(const uint8_t* golden, const uint8_t* actual, i
   return heat;
 }
 
+int SideBySideLabelPixels(int height) { return std::clamp(height / 16, 9, 24); }
+
+int SideBySideLabelHeight(int height) {
+  const int pixels = SideBySideLabelPixels(height);
+  const TextMetrics m = Font::Default().Measure("Ag", pixels);
+  return m.ascent + m.descent + 2 * std::max(2, pixels / 4);
+}
+
 std::vector<uint8_t> SideBySide(const uint8_t* golden, const uint8_t* actual, const uint8_t* diff,
                                 int width, int height) {
-  const int out_width = SideBySideWidth(width);
-  std::vector<uint8_t> out(static_cast<size_t>(out_width) * height * 3);
-  Canvas canvas(out.data(), out_width, height);
-  canvas.FillRect(0, 0, out_width, height, kSideBySideBackground);
+  const int out_width = SideBySideWidth(width), strip = SideBySideLabelHeight(height);
+  const int pixels = SideBySideLabelPixels(height), pad = std::max(2, pixels / 4);
+  std::vector<uint8_t> out(static_cast<size_t>(out_width) * (strip + height) * 3);
+  Canvas canvas(out.data(), out_width, strip + height);
+  canvas.FillRect(0, 0, out_width, strip + height, kSideBySideBackground);
+  const Font& font = Font::Default();
   const uint8_t* panels[3] = {golden, actual, diff};
-  for (int p = 0; p < 3; ++p)
-    canvas.Paste(panels[p], width, height, p * (width + kSideBySideGap), 0);
+  for (int p = 0; p < 3; ++p) {
+    const int x = p * (width + kSideBySideGap);
+    canvas.Paste(panels[p], width, height, x, strip);
+    // centred over the panel (as compare's strip names its panels), cut to fit it
+    const std::string label = font.Fit(kSideBySideLabels[p], pixels, width - 2 * pad);
+    const int label_x = x + std::max(pad, (width - font.Measure(label, pixels).width) / 2);
+    canvas.Text(label_x, pad, label, pixels, kSideBySideText);
+  }
   return out;
 }
 

@@ -34,12 +34,28 @@ std::vector<uint8_t> DiffHeatMap(const uint8_t* golden, const uint8_t* actual, i
 /// Gap between the panels of SideBySide, pixels.
 inline constexpr int kSideBySideGap = 4;
 
+/// Em size of SideBySide's panel labels for panels `height` high: height / 16, 9..24 (15 at
+/// 240), as compare's side-by-side videos label theirs.
+int SideBySideLabelPixels(int height);
+
+/// Height of SideBySide's label strip above panels `height` high, pixels: one label line and a
+/// margin of a quarter em (at least 2 pixels) above and below it.
+int SideBySideLabelHeight(int height);
+
 /// golden | actual | diff side by side on a dark background, each panel width x height with
-/// kSideBySideGap pixels between them: (3 * width + 2 * gap) x height, RGB24, row 0 = top.
+/// kSideBySideGap pixels between them, under a strip (SideBySideLabelHeight) that names each
+/// panel, centred ("golden", "actual", "diff"), in the default font:
+/// SideBySideWidth(width) x SideBySideHeight(height), RGB24, row 0 = top.
 std::vector<uint8_t> SideBySide(const uint8_t* golden, const uint8_t* actual, const uint8_t* diff,
                                 int width, int height);
 
 /// The width of SideBySide's image for panels `width` wide.
 inline int SideBySideWidth(int width) { return 3 * width + 2 * kSideBySideGap; }
+
+/// The height of SideBySide's image for panels `height` high: the label strip and a panel.
+inline int SideBySideHeight(int height) { return SideBySideLabelHeight(height) + height; }
+
+/// The panel names of SideBySide, left to right.
+inline constexpr const char* kSideBySideLabels[3] = {"golden", "actual", "diff"};
 
 }  // namespace fetchscope

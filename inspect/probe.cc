@@ -10,6 +10,7 @@
 
 #include "base/errors.h"
 #include "base/json_util.h"
+#include "base/number_format.h"
 #include "render/vec.h"
 #include "src/episode.h"
 
@@ -178,11 +179,12 @@ Measurement RunProbe(FetchEnv& env, uint64_t seed, int steps, const Probe& probe
   if (renderer) {
     char label[96];
     if (probe.axis >= 0) {
-      std::snprintf(label, sizeof(label), "%s end t=%d\n%.4f m/step cos %.2f", probe.name.c_str(),
-                    steps, m.norm, m.cosine);
+      std::snprintf(label, sizeof(label), "%s end t=%d\n%s m/step cos %s", probe.name.c_str(),
+                    steps, PictureNumber("%.4f", m.norm).c_str(),
+                    PictureNumber("%.2f", m.cosine).c_str());
     } else {
-      std::snprintf(label, sizeof(label), "%s end t=%d\nfingers %+.4f m", probe.name.c_str(), steps,
-                    m.finger_delta);
+      std::snprintf(label, sizeof(label), "%s end t=%d\nfingers %s m", probe.name.c_str(), steps,
+                    PictureNumber("%+.4f", m.finger_delta).c_str());
     }
     m.last = RenderTile(*renderer, env, steps, probe, label);
   }

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "base/errors.h"
+#include "base/number_format.h"
 #include "base/suggest.h"
 #include "render/canvas.h"
 #include "render/text.h"
@@ -97,6 +98,18 @@ constexpr char kHudWidestValue[] = "+0.00 +0.00 +0.00 +0.00";
 // The HUD's and tile labels' box: black blended over `r` at `opacity` (0: none, 1: opaque).
 void DrawBox(Canvas* canvas, const PixelRect& r, double opacity) {
   canvas->FillRect(r.x, r.y, r.width, r.height, kBoxBlack, opacity);
+}
+
+// Frame text over a box: with a box lighter than kHudOutlineBelowOpacity (0 = none) the text
+// gets a black outline, so that white text reads on the white table; over the darker box
+// (the default 0.6) it is drawn as it always was.
+void BoxedText(Canvas* canvas, int x, int y, const std::string& text, int pixels, Rgb color,
+               double opacity) {
+  TextStyle style;
+  style.pixel_size = pixels;
+  style.color = color;
+  if (opacity < kHudOutlineBelowOpacity) style.outline = kBoxBlack;
+  Font::Default().Draw(canvas, x, y, text, style);
 }
 
 bool Overlaps(const PixelRect& a, const PixelRect& b) {
@@ -249,14 +262,14 @@ HudText FormatHud(const FrameInfo& info, const OverlaySet& overlays) {
   line("step", info.past_time_limit > 0 ? std::to_string(info.step) + " past limit " +
                                               std::to_string(info.past_time_limit)
                                         : std::to_string(info.step));
-  line("reward", std::isnan(info.reward) ? "-" : Format("%.4f", info.reward));
-  line("distance", Format("%.4f m", info.distance));
+  // PictureNumber: a sparse reward of -0.0 shows as 0.0000, an action of -0.001 as +0.00
+  line("reward", std::isnan(info.reward) ? "-" : PictureNumber("%.4f", info.reward));
+  line("distance", PictureNumber("%.4f m", info.distance));
   line("success", info.success ? "yes" : "no");
   if (info.has_action) {
-    char buf[96];
-    std::snprintf(buf, sizeof(buf), "%+.2f %+.2f %+.2f %+.2f", info.action[0], info.action[1],
-                  info.action[2], info.action[3]);
-    line("action", buf);
+    std::string action;
+    for (double a : info.action) action += (action.empty() ? "" : " ") + PictureNumber("%+.2f", a);
+    line("action", action);
   } else {
     line("action", "-");
   }
@@ -327,6 +340,29 @@ int HudTextPixels(int tile_width, int tile_height) {
 
 namespace {
 
+// `pixels` of the shown view in drawn pixels, rounded; integers only (the same on every machine).
+int Drawn(int pixels, ShownScale scale) {
+  return static_cast<int>((static_cast<long>(pixels) * scale.drawn + scale.shown / 2) /
+                          scale.shown);
+}
+
+// A drawn length as shown (rounded down: a view is as big as the pixels it fills).
+int Shown(int length, ShownScale scale) {
+  return static_cast<int>(static_cast<long>(length) * scale.shown / scale.drawn);
+}
+
+}  // namespace
+
+int FrameTextPixels(int tile_width, int tile_height, ShownScale scale) {
+  return Drawn(FrameTextPixels(Shown(tile_width, scale), Shown(tile_height, scale)), scale);
+}
+
+int HudTextPixels(int tile_width, int tile_height, ShownScale scale) {
+  return Drawn(HudTextPixels(Shown(tile_width, scale), Shown(tile_height, scale)), scale);
+}
+
+namespace {
+
 std::vector<std::string> Lines(const std::string& text) {
   std::vector<std::string> out;
   size_t start = 0;
@@ -351,9 +387,9 @@ int RowPitch(int pixels) { return (5 * pixels + 2) / 4; }
 
 // The box depends on the tile and on the rows (labels) only, never on the values.
 std::optional<HudGeometry> LayoutHud(const HudText& hud, const PixelRect& tile,
-                                     HudPosition position) {
+                                     HudPosition position, ShownScale scale) {
   HudGeometry g;
-  g.pixels = HudTextPixels(tile.width, tile.height);
+  g.pixels = HudTextPixels(tile.width, tile.height, scale);
   if (g.pixels == 0) return std::nullopt;
   g.pitch = RowPitch(g.pixels);
   g.pad = std::max(3, g.pixels * 2 / 5);
@@ -373,15 +409,16 @@ std::optional<HudGeometry> LayoutHud(const HudText& hud, const PixelRect& tile,
 
 }  // namespace
 
-std::optional<PixelRect> PlaceHud(const HudText& hud, const PixelRect& tile, HudPosition position) {
-  const auto g = LayoutHud(hud, tile, position);
+std::optional<PixelRect> PlaceHud(const HudText& hud, const PixelRect& tile, HudPosition position,
+                                  ShownScale scale) {
+  const auto g = LayoutHud(hud, tile, position, scale);
   if (!g) return std::nullopt;
   return g->box;
 }
 
 bool DrawHud(uint8_t* rgb, int width, int height, const PixelRect& tile, const HudText& hud,
-             HudPosition position, double opacity) {
-  const auto g = LayoutHud(hud, tile, position);
+             HudPosition position, double opacity, ShownScale scale) {
+  const auto g = LayoutHud(hud, tile, position, scale);
   if (!g) return false;
   Canvas canvas(rgb, width, height);
   DrawBox(&canvas, g->box, opacity);
@@ -390,25 +427,26 @@ bool DrawHud(uint8_t* rgb, int width, int height, const PixelRect& tile, const H
   int y = g->box.y + g->pad;
   if (!hud.title.empty()) {
     const int title_w = g->box.width - 2 * g->pad;
-    canvas.Text(x, y, font.Fit(hud.title, g->pixels, title_w), g->pixels, kHudValueColor);
+    BoxedText(&canvas, x, y, font.Fit(hud.title, g->pixels, title_w), g->pixels, kHudValueColor,
+              opacity);
     y += g->pitch;
   }
   const std::vector<std::string> labels = Lines(hud.labels), values = Lines(hud.values);
   for (size_t i = 0; i < labels.size(); ++i, y += g->pitch) {
-    canvas.Text(x, y, labels[i], g->pixels, kHudLabelColor);
+    BoxedText(&canvas, x, y, labels[i], g->pixels, kHudLabelColor, opacity);
     // each value cut to its column: the box never grows with the frame's text
     if (i < values.size()) {
-      canvas.Text(value_x, y, font.Fit(values[i], g->pixels, g->value_w), g->pixels,
-                  kHudValueColor);
+      BoxedText(&canvas, value_x, y, font.Fit(values[i], g->pixels, g->value_w), g->pixels,
+                kHudValueColor, opacity);
     }
   }
   return true;
 }
 
 bool DrawTileLabel(uint8_t* rgb, int width, int height, const PixelRect& tile,
-                   const std::string& label, double opacity,
-                   const std::optional<PixelRect>& avoid) {
-  const int pixels = FrameTextPixels(tile.width, tile.height);
+                   const std::string& label, double opacity, const std::optional<PixelRect>& avoid,
+                   ShownScale scale) {
+  const int pixels = FrameTextPixels(tile.width, tile.height, scale);
   const TextMetrics m = FrameText(label, pixels);
   const int pad = std::max(2, pixels / 4);
   PixelRect box;
@@ -421,7 +459,7 @@ bool DrawTileLabel(uint8_t* rgb, int width, int height, const PixelRect& tile,
   if (avoid && Overlaps(box, *avoid)) return false;
   Canvas canvas(rgb, width, height);
   DrawBox(&canvas, box, opacity);
-  canvas.Text(box.x + pad, box.y + pad, label, pixels, kHudValueColor);
+  BoxedText(&canvas, box.x + pad, box.y + pad, label, pixels, kHudValueColor, opacity);
   return true;
 }
 

@@ -180,21 +180,47 @@ int FrameTextPixels(int tile_width, int tile_height);
 /// the HUD is on every frame of a run or on none.
 int HudTextPixels(int tile_width, int tile_height);
 
+/// How a frame is shown: `drawn` of its pixels become `shown` pixels ({1, 1}: as drawn). A GIF
+/// 320 wide of 480-wide frames is {320, 480}: its frame text is sized for the 320-pixel view it
+/// becomes and drawn 1.5 times larger into the 480-pixel frame, so that once scaled down it
+/// reads as in a 320-pixel video (10 px, not the 8.7 px that 13 px text shrinks to).
+struct ShownScale {
+  int shown = 1;  ///< pixels on screen ...
+  int drawn = 1;  ///< ... per this many pixels drawn
+};
+
+/// FrameTextPixels of the view that a `tile_width` x `tile_height` tile becomes when shown at
+/// `scale`, in drawn pixels (rounded).
+int FrameTextPixels(int tile_width, int tile_height, ShownScale scale);
+
+/// HudTextPixels likewise: 0 where the shown view is too small for the HUD (a GIF 320 wide of
+/// two 480-pixel views side by side shows each at 160 x 160: no HUD).
+int HudTextPixels(int tile_width, int tile_height, ShownScale scale);
+
+/// Below this --hud-opacity (the box then dims the scene by less than half) HUD and tile-label
+/// text gets a 1-pixel black outline, so that it reads on white; at and above it (the default
+/// 0.6 included) the text is drawn without one.
+inline constexpr double kHudOutlineBelowOpacity = 0.5;
+
 /// Where the HUD box of `hud` goes in `tile` at `position`, or nullopt where the tile is too
 /// small for it (HudTextPixels is 0). The box's size depends on the tile and on which rows
 /// `hud` has, not on the values in them: a value wider than its column is cut with "...".
-std::optional<PixelRect> PlaceHud(const HudText& hud, const PixelRect& tile, HudPosition position);
+/// With `scale`, the HUD is sized for the tile as shown (HudTextPixels(..., scale)).
+std::optional<PixelRect> PlaceHud(const HudText& hud, const PixelRect& tile, HudPosition position,
+                                  ShownScale scale = {});
 
 /// Draws `hud` into `rgb` (`width` x `height` RGB24, row 0 on top) inside `tile` at `position`:
-/// a black box blended at `opacity` and the text over it. Returns false (nothing drawn) where
+/// a black box blended at `opacity` and the text over it (outlined in black below
+/// kHudOutlineBelowOpacity). Returns false (nothing drawn) where
 /// the tile is too small for it.
 bool DrawHud(uint8_t* rgb, int width, int height, const PixelRect& tile, const HudText& hud,
-             HudPosition position, double opacity);
+             HudPosition position, double opacity, ShownScale scale = {});
 
 /// Draws the camera name `label` at the top centre of `tile` (the bottom centre where that
-/// would overlap `avoid`, the HUD box) on a box blended at `opacity`; nothing where the tile is
-/// too small. Returns whether it was drawn.
+/// would overlap `avoid`, the HUD box) on a box blended at `opacity`, its text sized for the tile
+/// as shown at `scale`; nothing where the tile is too small. Returns whether it was drawn.
 bool DrawTileLabel(uint8_t* rgb, int width, int height, const PixelRect& tile,
-                   const std::string& label, double opacity, const std::optional<PixelRect>& avoid);
+                   const std::string& label, double opacity, const std::optional<PixelRect>& avoid,
+                   ShownScale scale = {});
 
 }  // namespace fetchscope

@@ -357,6 +357,11 @@ void Renderer::StartAsyncRead(int slot) {
 }
 
 void Renderer::Submit(const mjData* data, const FrameInfo& info, uint8_t* rgb) {
+  Submit(data, info, rgb, nullptr, ShownScale{});
+}
+
+void Renderer::Submit(const mjData* data, const FrameInfo& info, uint8_t* rgb, uint8_t* copy,
+                      ShownScale copy_scale) {
   if (pending() >= pipeline_depth()) {
     throw RunError("internal error: Renderer::Submit with " + std::to_string(pending()) +
                    " frames pending; Collect first");
@@ -364,14 +369,22 @@ void Renderer::Submit(const mjData* data, const FrameInfo& info, uint8_t* rgb) {
   Draw(data, info, /*overlays=*/true);
   if (!async_) {
     ReadRgb(rgb);
-    DrawText2d(info, rgb);
+    FinishFrame({rgb, -1, {}, copy, copy_scale}, info);
     pending_.push_back({rgb, -1, {}});
     return;
   }
   const int slot = next_slot_;
   next_slot_ = (next_slot_ + 1) % kReadbackDepth;
   StartAsyncRead(slot);
-  pending_.push_back({rgb, slot, info});
+  pending_.push_back({rgb, slot, info, copy, copy_scale});
+}
+
+void Renderer::FinishFrame(const PendingFrame& frame, const FrameInfo& info) const {
+  if (frame.copy) {
+    std::memcpy(frame.copy, frame.rgb, static_cast<size_t>(frame_.width) * frame_.height * 3);
+    DrawText2d(info, frame.copy, frame.copy_scale);
+  }
+  DrawText2d(info, frame.rgb);
 }
 
 uint8_t* Renderer::Collect() {
@@ -398,7 +411,7 @@ uint8_t* Renderer::Collect() {
   for (int r = 0; r < h; ++r) std::memcpy(frame.rgb + r * row, mapped + (h - 1 - r) * stride, row);
   g.UnmapBuffer(kGlPixelPackBuffer);
   g.BindBuffer(kGlPixelPackBuffer, 0);
-  DrawText2d(frame.info, frame.rgb);  // the HUD and tile labels, as Render draws them
+  FinishFrame(frame, frame.info);  // the HUD and tile labels, as Render draws them
   if (profile_) {
     profile_->readback_ms += std::chrono::duration<double, std::milli>(copy_start - start).count();
     profile_->flip_ms += MsSince(copy_start);
@@ -516,7 +529,7 @@ void Renderer::Render(const mjData* data, const FrameInfo& info, uint8_t* rgb) {
   DrawText2d(info, rgb);
 }
 
-void Renderer::DrawText2d(const FrameInfo& info, uint8_t* rgb) const {
+void Renderer::DrawText2d(const FrameInfo& info, uint8_t* rgb, ShownScale scale) const {
   const OverlaySet& o = options_.overlays;
   std::optional<PixelRect> hud_box;
   size_t hud_tile = 0;
@@ -533,14 +546,14 @@ void Renderer::DrawText2d(const FrameInfo& info, uint8_t* rgb) const {
     }
     const HudText hud = FormatHud(info, o);
     const PixelRect tile = TopDown(tiles_[hud_tile], frame_.height);
-    hud_box = PlaceHud(hud, tile, pos);
-    DrawHud(rgb, frame_.width, frame_.height, tile, hud, pos, options_.hud_opacity);
+    hud_box = PlaceHud(hud, tile, pos, scale);
+    DrawHud(rgb, frame_.width, frame_.height, tile, hud, pos, options_.hud_opacity, scale);
   }
   if (o.labels && tiles_.size() > 1) {
     for (size_t i = 0; i < tiles_.size(); ++i) {
       DrawTileLabel(rgb, frame_.width, frame_.height, TopDown(tiles_[i], frame_.height),
                     CameraLabel(options_.cameras[i]), options_.hud_opacity,
-                    i == hud_tile ? hud_box : std::nullopt);
+                    i == hud_tile ? hud_box : std::nullopt, scale);
     }
   }
 }

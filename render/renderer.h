@@ -125,6 +125,11 @@ class Renderer {
   /// synchronous readback the frame is complete on return but still counts as pending until
   /// collected. The pixels equal Render's. Call Collect when pending() == pipeline_depth().
   void Submit(const mjData* data, const FrameInfo& info, uint8_t* rgb);
+  /// Submit, and when collected also writes `copy` (as many bytes as `rgb`): the same frame with
+  /// its HUD and tile labels sized for a view shown at `copy_scale` (a GIF scaled down from the
+  /// frame, render/overlay.h ShownScale).
+  void Submit(const mjData* data, const FrameInfo& info, uint8_t* rgb, uint8_t* copy,
+              ShownScale copy_scale);
   /// Completes the oldest pending frame (waits for the GPU if needed) and returns the `rgb`
   /// it was submitted with; nullptr when nothing is pending.
   uint8_t* Collect();
@@ -184,7 +189,10 @@ class Renderer {
   void StartAsyncRead(int slot);
   // Draws the HUD (once, in the tile at options_.hud_position's corner) and the tile labels
   // into the read-back frame.
-  void DrawText2d(const FrameInfo& info, uint8_t* rgb) const;
+  void DrawText2d(const FrameInfo& info, uint8_t* rgb, ShownScale scale = {}) const;
+  // The frame just read back into `frame.rgb`: its copy (if any) and the text of both.
+  struct PendingFrame;
+  void FinishFrame(const PendingFrame& frame, const FrameInfo& info) const;
   // Copies the bottom-up rows of `src` (row_bytes each) into `dst` top-down.
   void FlipRows(const uint8_t* src, size_t row_bytes, uint8_t* dst) const;
 
@@ -220,8 +228,10 @@ class Renderer {
   int next_slot_ = 0;
   struct PendingFrame {
     uint8_t* rgb;
-    int slot;        // -1: read synchronously, already in rgb (text included)
-    FrameInfo info;  // for the text drawn once the pixels are back (async only)
+    int slot;                 // -1: read synchronously, already in rgb (text included)
+    FrameInfo info;           // for the text drawn once the pixels are back (async only)
+    uint8_t* copy = nullptr;  // Submit's copy with text sized for copy_scale, or none
+    ShownScale copy_scale = {};
   };
   std::deque<PendingFrame> pending_;
   std::vector<float> depth_bottom_up_;

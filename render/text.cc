@@ -109,6 +109,36 @@ void CheckPixelSize(int pixel_size) {
   }
 }
 
+// The outline of text drawn at (x, y) with metrics `m`: the glyphs' coverage (the largest where
+// glyphs overlap) grown by one pixel each way, i.e. the largest coverage in each pixel's 3 x 3
+// neighbourhood, blended in style.outline's colour. Glyph pixels further than an em outside the
+// text box (none in DejaVu Sans) get no outline.
+template <typename ForEachGlyphPixel>
+void DrawOutline(Canvas* canvas, int x, int y, const TextMetrics& m, const TextStyle& style,
+                 ForEachGlyphPixel&& for_each_glyph_pixel) {
+  const int margin = style.pixel_size;
+  const int x0 = x - margin, y0 = y - margin;
+  const int w = m.width + 2 * margin, h = m.height + 2 * margin;
+  std::vector<unsigned char> mask(static_cast<size_t>(w) * h, 0);
+  for_each_glyph_pixel([&](int px, int py, unsigned char coverage) {
+    const int mx = px - x0, my = py - y0;
+    if (mx < 0 || my < 0 || mx >= w || my >= h) return;
+    unsigned char& at = mask[static_cast<size_t>(my) * w + mx];
+    at = std::max(at, coverage);
+  });
+  for (int my = 0; my < h; ++my) {
+    for (int mx = 0; mx < w; ++mx) {
+      unsigned char grown = 0;
+      for (int dy = std::max(0, my - 1); dy <= std::min(h - 1, my + 1); ++dy) {
+        for (int dx = std::max(0, mx - 1); dx <= std::min(w - 1, mx + 1); ++dx) {
+          grown = std::max(grown, mask[static_cast<size_t>(dy) * w + dx]);
+        }
+      }
+      if (grown > 0) canvas->Blend(x0 + mx, y0 + my, *style.outline, grown / 255.0);
+    }
+  }
+}
+
 }  // namespace
 
 fs::path FindFontFile() {
@@ -240,31 +270,38 @@ TextMetrics Font::Draw(Canvas* canvas, int x, int y, const std::string& utf8,
                      m.height + 2 * style.padding, *style.background);
   }
   if (utf8.empty()) return m;
-  int baseline = y + m.ascent;
   FT_Face face = impl_->face;
-  for (const std::string& line : SplitLines(utf8)) {
-    FT_Pos pen = static_cast<FT_Pos>(x) * 64;
-    for (size_t at = 0; at < line.size();) {
-      if (!impl_->Load(NextCodePoint(line, &at), true)) continue;
-      const FT_GlyphSlot g = face->glyph;
-      const FT_Bitmap& bitmap = g->bitmap;
-      const int left = static_cast<int>((pen + 32) >> 6) + g->bitmap_left;
-      const int top = baseline - g->bitmap_top;
-      if (bitmap.pixel_mode == FT_PIXEL_MODE_GRAY) {
-        for (int row = 0; row < static_cast<int>(bitmap.rows); ++row) {
-          const int py = top + row;
-          if (py < 0 || py >= canvas->height()) continue;
-          const unsigned char* src = bitmap.buffer + static_cast<long>(row) * bitmap.pitch;
-          for (int col = 0; col < static_cast<int>(bitmap.width); ++col) {
-            // coverage 0..255 as alpha: exactly the integer blend it replaced (canvas.h)
-            canvas->Blend(left + col, py, style.color, src[col] / 255.0);
+  // Calls blend(px, py, coverage 0..255) for every pixel of every glyph, in drawing order.
+  auto for_each_glyph_pixel = [&](auto&& blend) {
+    int baseline = y + m.ascent;
+    for (const std::string& line : SplitLines(utf8)) {
+      FT_Pos pen = static_cast<FT_Pos>(x) * 64;
+      for (size_t at = 0; at < line.size();) {
+        if (!impl_->Load(NextCodePoint(line, &at), true)) continue;
+        const FT_GlyphSlot g = face->glyph;
+        const FT_Bitmap& bitmap = g->bitmap;
+        const int left = static_cast<int>((pen + 32) >> 6) + g->bitmap_left;
+        const int top = baseline - g->bitmap_top;
+        if (bitmap.pixel_mode == FT_PIXEL_MODE_GRAY) {
+          for (int row = 0; row < static_cast<int>(bitmap.rows); ++row) {
+            const int py = top + row;
+            if (py < 0 || py >= canvas->height()) continue;
+            const unsigned char* src = bitmap.buffer + static_cast<long>(row) * bitmap.pitch;
+            for (int col = 0; col < static_cast<int>(bitmap.width); ++col) {
+              blend(left + col, py, src[col]);
+            }
           }
         }
+        pen += g->advance.x;
       }
-      pen += g->advance.x;
+      baseline += m.line_height;
     }
-    baseline += m.line_height;
-  }
+  };
+  if (style.outline) DrawOutline(canvas, x, y, m, style, for_each_glyph_pixel);
+  for_each_glyph_pixel([&](int px, int py, unsigned char coverage) {
+    // coverage 0..255 as alpha: exactly the integer blend it replaced (canvas.h)
+    canvas->Blend(px, py, style.color, coverage / 255.0);
+  });
   return m;
 }
 

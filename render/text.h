@@ -48,6 +48,9 @@ struct TextStyle {
   Rgb color = {255, 255, 255};    ///< glyph colour, blended by coverage
   std::optional<Rgb> background;  ///< when set, a filled box behind the text
   int padding = 0;                ///< box margin around the text box, pixels (>= 0)
+  /// When set, a 1-pixel outline in this colour around every glyph (the glyphs' coverage grown
+  /// by one pixel each way, blended under the text), so that text reads on any background.
+  std::optional<Rgb> outline;
 };
 
 /// The font file text is drawn with, found in the order given at the top of this file.

@@ -21,18 +21,6 @@ double Since(Clock::time_point t) {
   return std::chrono::duration<double>(Clock::now() - t).count();
 }
 
-// The contact sheet's label of a frame: the step and reward, the distance and success.
-std::string TileLabel(const FrameInfo& info) {
-  char line1[96], line2[96];
-  if (info.step == 0) {
-    std::snprintf(line1, sizeof(line1), "t=0 reset");
-  } else {
-    std::snprintf(line1, sizeof(line1), "t=%d r=%.3g", info.step, info.reward);
-  }
-  std::snprintf(line2, sizeof(line2), "d=%.3f %s", info.distance, info.success ? "SUCCESS" : "");
-  return std::string(line1) + "\n" + line2;
-}
-
 }  // namespace
 
 EpisodeSinkOptions MakeEpisodeSinkOptions(const RecordPlan& plan) {
@@ -79,7 +67,7 @@ nlohmann::json RecordRunner::Start() {
                     MakeRenderOptions(plan_.view, sequence_.env().model()));
   const size_t frame_bytes = static_cast<size_t>(renderer_->width()) * renderer_->height() * 3;
   pool_.emplace(FramePoolSize(plan_.encoders, plan_.steps, frame_bytes * (1 + plan_.layers.size())),
-                frame_bytes, plan_.layers.size());
+                frame_bytes, plan_.layers.size(), GifTextScale(sink_).has_value());
   const GlInfo& gi = gl_->info();
   return {{"worker", worker_},
           {"pid", static_cast<long>(getpid())},
@@ -130,9 +118,13 @@ void RecordRunner::Run(int k, WorkerChannel& channel) {
     AddRelabelled(record.t, &info);
     if (plan_.from) info.ghost = RecordedAchieved(*plan_.from, k, record.t);  // a dataset's own
     f->t = record.t;
-    f->label = TileLabel(info);
+    f->label = SheetCaption(info);
     in_flight.push_back(f);
-    renderer_->Submit(env.data(), info, f->rgb.data());
+    // a scaled-down GIF gets its own copy of the frames it keeps, its HUD sized for its width
+    const std::optional<ShownScale> gif_scale = GifTextScale(sink_);
+    renderer_->Submit(env.data(), info, f->rgb.data(),
+                      NeedsGifCopy(sink_, record.t) ? f->gif_rgb.data() : nullptr,
+                      gif_scale.value_or(ShownScale{}));
     // the layers are drawn after the rgb frame's readback has been queued, and read at once
     for (size_t i = 0; i < plan_.layers.size(); ++i) {
       const Layer layer = plan_.layers[i];

@@ -73,10 +73,11 @@ TEST(ImageDiff, SideBySidePlacesThreePanels) {
   const int w = 3, h = 2;
   std::vector<uint8_t> g(w * h * 3, 10), a(w * h * 3, 20), d(w * h * 3, 30);
   const std::vector<uint8_t> side = SideBySide(g.data(), a.data(), d.data(), w, h);
-  const int sw = SideBySideWidth(w);
+  const int sw = SideBySideWidth(w), strip = SideBySideLabelHeight(h);
   ASSERT_EQ(sw, 3 * w + 2 * kSideBySideGap);
-  ASSERT_EQ(side.size(), static_cast<size_t>(sw * h * 3));
-  auto at = [&](int x, int y) { return side[(y * sw + x) * 3]; };
+  ASSERT_EQ(SideBySideHeight(h), strip + h);
+  ASSERT_EQ(side.size(), static_cast<size_t>(sw * (strip + h) * 3));
+  auto at = [&](int x, int y) { return side[((strip + y) * sw + x) * 3]; };  // under the labels
   EXPECT_EQ(at(0, 1), 10);
   EXPECT_EQ(at(w + kSideBySideGap, 1), 20);
   EXPECT_EQ(at(2 * (w + kSideBySideGap) + w - 1, 1), 30);
@@ -246,7 +247,7 @@ TEST(GoldenSensitivity, CameraAzimuthPlusTwoDegreesFailsInPixels) {
   ExpectFailureNaming(r, copy, "reach_reset", kPixelLayer);
   const Image side = ReadPng((copy.out() / "reach_reset_side.png").string());
   EXPECT_EQ(side.width, SideBySideWidth(320));
-  EXPECT_EQ(side.height, 240);
+  EXPECT_EQ(side.height, SideBySideHeight(240));  // the panel labels' strip and the panels
 }
 
 TEST(GoldenSensitivity, BlockColourChangeFailsInPixels) {
