@@ -131,6 +131,10 @@ try {
     // capture draws in their not-yet-loaded state)
     await page.$$eval('video', (vs) => vs.forEach((v) => { v.controls = false; }));
   }
+  // the episode cards are content-visibility: auto (a 1,000-episode page lays out only those near
+  // the viewport); a whole-page picture must draw them all, as scrolling to each would
+  await page.addStyleTag({content: '.episode { content-visibility: visible !important; }'});
+  await page.evaluate(() => new Promise((done) => requestAnimationFrame(() => requestAnimationFrame(done))));
   await page.screenshot({path: args.screenshot, fullPage: true});
   result.screenshot = resolve(args.screenshot);
 } catch (e) {
