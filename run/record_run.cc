@@ -50,6 +50,7 @@ RecordRunner::RecordRunner(const RecordPlan& plan, int worker)
     : plan_(plan),
       worker_(worker),
       sink_(MakeEpisodeSinkOptions(plan)),
+      gif_scale_(GifTextScale(sink_)),
       sequence_(std::make_unique<FetchEnv>(*plan.spec, plan.assets),
                 // --from replays recorded actions: the policy that made them is not run
                 MakePolicy(plan.from ? "zero" : plan.policy, *plan.spec, plan.policy_context),
@@ -67,7 +68,7 @@ nlohmann::json RecordRunner::Start() {
                     MakeRenderOptions(plan_.view, sequence_.env().model()));
   const size_t frame_bytes = static_cast<size_t>(renderer_->width()) * renderer_->height() * 3;
   pool_.emplace(FramePoolSize(plan_.encoders, plan_.steps, frame_bytes * (1 + plan_.layers.size())),
-                frame_bytes, plan_.layers.size(), GifTextScale(sink_).has_value());
+                frame_bytes, plan_.layers.size(), gif_scale_.has_value());
   const GlInfo& gi = gl_->info();
   return {{"worker", worker_},
           {"pid", static_cast<long>(getpid())},
@@ -121,10 +122,9 @@ void RecordRunner::Run(int k, WorkerChannel& channel) {
     f->label = SheetCaption(info);
     in_flight.push_back(f);
     // a scaled-down GIF gets its own copy of the frames it keeps, its HUD sized for its width
-    const std::optional<ShownScale> gif_scale = GifTextScale(sink_);
     renderer_->Submit(env.data(), info, f->rgb.data(),
                       NeedsGifCopy(sink_, record.t) ? f->gif_rgb.data() : nullptr,
-                      gif_scale.value_or(ShownScale{}));
+                      gif_scale_.value_or(ShownScale{}));
     // the layers are drawn after the rgb frame's readback has been queued, and read at once
     for (size_t i = 0; i < plan_.layers.size(); ++i) {
       const Layer layer = plan_.layers[i];

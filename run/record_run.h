@@ -91,6 +91,8 @@ class RecordRunner : public EpisodeRunner {
   const RecordPlan& plan_;
   const int worker_;
   const EpisodeSinkOptions sink_;
+  const std::optional<ShownScale>
+      gif_scale_;  // GifTextScale(sink_): a scaled-down GIF's own HUD size
   EpisodeSequence sequence_;
   std::unique_ptr<FetchEnv> replay_env_;       // hindsight: the env the replay renders
   std::unique_ptr<EpisodeReplayer> replayer_;  // --from, hindsight

@@ -33,21 +33,12 @@ namespace {
 
 namespace fs = std::filesystem;
 using nlohmann::json;
+using testing::PythonWithH5py;
 using testing::ReadFile;
 using testing::RunCommand;
 using testing::RunFetchscope;
 using testing::SourceDir;
 using testing::TempDir;
-
-// a python3 that imports h5py: the one on PATH, else Debian's (a pyenv python may lack it)
-std::string PythonWithH5py() {
-  for (const char* py : {"python3", "/usr/bin/python3"}) {
-    if (RunCommand(std::string(py) + " -c 'import h5py, numpy' 2>/dev/null").exit_code == 0) {
-      return py;
-    }
-  }
-  return "";
-}
 
 std::string Script() { return (SourceDir() / "tests/data/minari/minari_h5py.py").string(); }
 

@@ -29,7 +29,9 @@ namespace {
 using testing::EpisodeFiles;
 using testing::ReadFile;
 using testing::RunFetchscope;
+using testing::SpawnFetchscope;
 using testing::TempDir;
+using testing::WaitExit;
 namespace fs = std::filesystem;
 
 const std::string kSmall =
@@ -43,24 +45,6 @@ std::set<std::string> Names(const fs::path& dir) {
   std::set<std::string> names;
   for (const auto& e : fs::directory_iterator(dir)) names.insert(e.path().filename().string());
   return names;
-}
-
-// Starts `fetchscope ARGS` in the background; returns its pid.
-pid_t Spawn(const std::string& args, const fs::path& log) {
-  const std::string command =
-      "exec " + std::string(FETCHSCOPE_BIN) + " " + args + " </dev/null >" + log.string() + " 2>&1";
-  const pid_t pid = fork();
-  if (pid == 0) {
-    execl("/bin/sh", "sh", "-c", command.c_str(), static_cast<char*>(nullptr));
-    _exit(127);
-  }
-  return pid;
-}
-
-int WaitExit(pid_t pid) {
-  int status = 0;
-  waitpid(pid, &status, 0);
-  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
 }
 
 class RunFolderTest : public ::testing::Test {
@@ -209,11 +193,12 @@ TEST_F(RunFolderTest, OverwriteThatFailsKeepsTheEarlierRun) {
   unchanged("a failing policy");
 
   // SIGINT once the earlier run is set aside, while the slow policy's first episode runs
-  const pid_t pid = Spawn(base +
-                              "--episodes 1 --seed 3 --policy "
-                              "'exec:while read l; do sleep 0.5; echo 0 0 0 0; done' --out " +
-                              out.string(),
-                          tmp.path() / "log");
+  const pid_t pid =
+      SpawnFetchscope(base +
+                          "--episodes 1 --seed 3 --policy "
+                          "'exec:while read l; do sleep 0.5; echo 0 0 0 0; done' --out " +
+                          out.string(),
+                      tmp.path() / "log");
   auto aside = [&] {
     for (const auto& e : fs::directory_iterator(out)) {
       if (e.path().filename().string().rfind(".manifest.replaced-", 0) == 0) return true;
@@ -273,7 +258,7 @@ TEST_F(RunFolderTest, ResumeAfterSigintGivesTheBytesOfAnUninterruptedRun) {
   auto r = RunFetchscope(run + "--out " + whole.string());
   ASSERT_EQ(r.exit_code, 0) << r.output;
 
-  const pid_t pid = Spawn(run + "--out " + out.string(), tmp.path() / "log");
+  const pid_t pid = SpawnFetchscope(run + "--out " + out.string(), tmp.path() / "log");
   for (int i = 0; i < 1200 && !fs::exists(out / "episode_002.json"); ++i) {
     std::this_thread::sleep_for(std::chrono::milliseconds(50));
   }

@@ -27,7 +27,9 @@ namespace {
 using testing::EpisodeFiles;
 using testing::ReadFile;
 using testing::RunFetchscope;
+using testing::SpawnFetchscope;
 using testing::TempDir;
+using testing::WaitExit;
 namespace fs = std::filesystem;
 
 const std::string kSmall =
@@ -185,23 +187,6 @@ TEST_F(RunSafetyTest, ReadOnlyFolderIsRefusedBeforeRendering) {
 
 // --- 4. interrupted runs, --resume
 
-pid_t Spawn(const std::string& args, const fs::path& log) {
-  const std::string command =
-      "exec " + std::string(FETCHSCOPE_BIN) + " " + args + " </dev/null >" + log.string() + " 2>&1";
-  const pid_t pid = fork();
-  if (pid == 0) {
-    execl("/bin/sh", "sh", "-c", command.c_str(), static_cast<char*>(nullptr));
-    _exit(127);
-  }
-  return pid;
-}
-
-int WaitExit(pid_t pid) {
-  int status = 0;
-  waitpid(pid, &status, 0);
-  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-}
-
 // {successes, complete} from the summary's "success S/C complete"; {-1, -1} when absent.
 std::pair<int, int> SummarySuccess(const std::string& output) {
   std::smatch m;
@@ -216,7 +201,7 @@ TEST_F(RunSafetyTest, InterruptedRunSummaryAndReportAgreeAndResumeCountsTheWhole
       "record --env-id FetchPickAndPlace-v4 --width 48 --height 48 --policy random --seed 7 "
       "--out " +
       out.string();
-  const pid_t pid = Spawn(run + " --episodes 12", log);
+  const pid_t pid = SpawnFetchscope(run + " --episodes 12", log);
   for (int i = 0; i < 1200 && !fs::exists(out / "episode_002.json"); ++i) {
     std::this_thread::sleep_for(std::chrono::milliseconds(50));
   }

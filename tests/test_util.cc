@@ -1,6 +1,7 @@
 #include "tests/test_util.h"
 
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <array>
 #include <cstdio>
@@ -73,6 +74,32 @@ std::map<std::string, std::string> EpisodeFiles(const std::filesystem::path& dir
     if (name.rfind("episode_", 0) == 0) files[name] = ReadFile(e.path());
   }
   return files;
+}
+
+pid_t SpawnFetchscope(const std::string& args, const std::filesystem::path& log) {
+  const std::string command =
+      "exec " + std::string(FETCHSCOPE_BIN) + " " + args + " </dev/null >" + log.string() + " 2>&1";
+  const pid_t pid = fork();
+  if (pid == 0) {
+    execl("/bin/sh", "sh", "-c", command.c_str(), static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  return pid;
+}
+
+int WaitExit(pid_t pid) {
+  int status = 0;
+  waitpid(pid, &status, 0);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+}
+
+std::string PythonWithH5py() {
+  for (const char* py : {"python3", "/usr/bin/python3"}) {
+    if (RunCommand(std::string(py) + " -c 'import h5py, numpy' 2>/dev/null").exit_code == 0) {
+      return py;
+    }
+  }
+  return "";
 }
 
 }  // namespace fetchscope::testing

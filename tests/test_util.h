@@ -1,6 +1,8 @@
 // Helpers shared by the test binaries: temp folders, running the CLI.
 #pragma once
 
+#include <sys/types.h>
+
 #include <filesystem>
 #include <map>
 #include <string>
@@ -45,5 +47,14 @@ std::string ReadFile(const std::filesystem::path& path);
 
 /// The per-episode output files of a record run folder (episode_*, not manifests): name -> bytes.
 std::map<std::string, std::string> EpisodeFiles(const std::filesystem::path& dir);
+
+/// Starts `fetchscope ARGS` in the background, its output in `log`; returns its pid.
+pid_t SpawnFetchscope(const std::string& args, const std::filesystem::path& log);
+
+/// Waits for `pid`: its exit status, or 128 + the signal that ended it.
+int WaitExit(pid_t pid);
+
+/// A python3 that imports h5py and numpy: the one on PATH, else Debian's; "" when none.
+std::string PythonWithH5py();
 
 }  // namespace fetchscope::testing
