@@ -200,6 +200,13 @@ TEST(SchedulerUnit, ResultsAreTheSameBytesInEpisodeOrderWhateverTheJobs) {
 // A worker process that crashes (abort, as a failed assertion does; _exit, as a library's
 // exit might) is reported as failed with the episode it was playing, which is missing; the
 // others' results stay, and no new episode starts.
+// "2, 3": how DescribeFailures lists a failure's lost episodes.
+std::string JoinedEpisodes(const std::vector<int>& episodes) {
+  std::string out;
+  for (int k : episodes) out += (out.empty() ? "" : ", ") + std::to_string(k);
+  return out;
+}
+
 TEST(SchedulerUnit, ACrashedWorkerProcessIsAFailureNamingItsEpisode) {
   struct Crash {
     Misdeed misdeed;
@@ -215,13 +222,26 @@ TEST(SchedulerUnit, ACrashedWorkerProcessIsAFailureNamingItsEpisode) {
         RunEpisodes(Episodes({0, 1, 2, 3, 4, 5, 6, 7, 8, 9}, 2, WorkerMode::kProcess), Fake(plan));
     ASSERT_EQ(result.failures.size(), 1u) << DescribeFailures(result);
     const WorkerFailure& failure = result.failures[0];
-    EXPECT_EQ(failure.episodes, std::vector<int>{3});
+    // The worker dies at episode 3; on a busy machine it may have asked for episode 3 while an
+    // earlier one of its own was still encoding, so it can lose that one too. Whatever it held
+    // is lost, listed in order, named in the message and missing from the results.
+    const std::vector<int>& lost = failure.episodes;
+    ASSERT_FALSE(lost.empty());
+    EXPECT_EQ(lost.back(), 3) << JoinedEpisodes(lost);
+    EXPECT_TRUE(std::is_sorted(lost.begin(), lost.end())) << JoinedEpisodes(lost);
+    EXPECT_LE(lost.size(), 2u) << "a worker holds at most its episode and the one encoding";
     EXPECT_FALSE(failure.usage);
     EXPECT_NE(failure.message.find(crash.says), std::string::npos) << failure.message;
     EXPECT_EQ(failure.message.rfind("worker " + std::to_string(failure.worker) + " (pid ", 0), 0u)
         << failure.message;
-    EXPECT_NE(DescribeFailures(result).find("(lost episode 3)"), std::string::npos)
-        << DescribeFailures(result);
+    const std::string said =
+        std::string("(lost episode") + (lost.size() > 1 ? "s " : " ") + JoinedEpisodes(lost) + ")";
+    EXPECT_NE(DescribeFailures(result).find(said), std::string::npos) << DescribeFailures(result);
+    for (int e : lost) {
+      EXPECT_FALSE(result.results.count(e)) << "lost episode " << e << " has a result";
+      EXPECT_NE(std::find(result.missing.begin(), result.missing.end(), e), result.missing.end())
+          << "lost episode " << e << " is not listed as missing";
+    }
     EXPECT_EQ(result.signal, 0) << "a crash is no interruption";
     EXPECT_FALSE(result.results.count(3));
     EXPECT_NE(std::find(result.missing.begin(), result.missing.end(), 3), result.missing.end());
