@@ -22,7 +22,9 @@ stamp() { echo "ci-extra: $* ($(date -u +%H:%M:%S))"; }
 launcher=()
 if command -v ccache >/dev/null; then
   # pch_defines,time_macros: what ccache needs to cache files compiled with a precompiled header
-  cc="env;CCACHE_SLOPPINESS=pch_defines,time_macros;ccache"
+  # CCACHE_BASEDIR: paths inside the checkout are hashed relative to it, so a second clone or
+  # worktree (CI's fresh clone on the same machine) hits the objects another one compiled
+  cc="env;CCACHE_SLOPPINESS=pch_defines,time_macros;CCACHE_BASEDIR=$(pwd);ccache"
   launcher=("-DCMAKE_CXX_COMPILER_LAUNCHER=$cc" "-DCMAKE_C_COMPILER_LAUNCHER=$cc")
 fi
 
