@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
 # CI's reliability stages after tools/test.sh (which leaves the Release build in build/):
-#   1. AddressSanitizer + UndefinedBehaviorSanitizer build of everything, the default ctest suite
-#      but the `external` label (browser and bundle tests: Chromium's and tar's time, run in the
-#      Release stage) and the two `bench --what node` tests (timings, meaningless under ASan)
+#   1. AddressSanitizer + UndefinedBehaviorSanitizer build of the libraries, fetchscope and the
+#      test binaries that tests/CMakeLists.txt lists in FETCHSCOPE_SANITIZER_TESTS (every unit test
+#      and the black-box tests of parsers, signals, crashes, workers and datasets), run without the
+#      `external` and `docs` labels (Chromium's, tar's and the guides' time: the Release stage
+#      runs them) and the `bench --what node` tests (timings, meaningless under ASan)
 #   2. each libFuzzer target (clang) for FUZZ_SECONDS over its seed corpus; any finding fails
 #   3. valgrind memcheck of one short `record` (build/fetchscope): no definite leaks, no errors
 # Usage: tools/ci-extra.sh [asan|fuzz|valgrind ...]   (default: all three, in that order)
@@ -42,7 +44,7 @@ run_asan() {
   ASAN_OPTIONS="detect_leaks=1:abort_on_error=0:strict_string_checks=1:check_initialization_order=1" \
   LSAN_OPTIONS="use_tls=0:suppressions=$supp/lsan.supp:print_suppressions=0" \
   UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1:suppressions=$supp/ubsan.supp" \
-    ctest --test-dir build-asan --output-on-failure -j"$jobs" -LE 'soak|external' -E 'BenchNode'
+    ctest --test-dir build-asan --output-on-failure -j"$jobs" -LE 'soak|external|docs' -E 'BenchNode'
   stamp "ASan+UBSan done in $((SECONDS - t0)) s"
 }
 
