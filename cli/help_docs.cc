@@ -57,7 +57,8 @@ const CLI::Formatter& Formatter(const CLI::App& app) {
   return *formatter;
 }
 
-/// "--jobs JOBS", "-o OUT", "COMMAND ..." as --help shows the option.
+/// "-j,--jobs JOBS", "-o,--output OUTPUT", "COMMAND ..." as --help shows the option, with all
+/// its names.
 std::string Synopsis(const CLI::Formatter& f, const CLI::Option* opt) {
   const bool positional = opt->nonpositional() == false;
   std::string name = f.make_option_name(opt, positional);
@@ -67,7 +68,13 @@ std::string Synopsis(const CLI::Formatter& f, const CLI::Option* opt) {
     if (opt->get_expected_max() == CLI::detail::expected_max_vector_size) upper += " ...";
     return upper;
   }
-  return name + f.make_option_opts(opt);
+  // every name, short ones included ("-o,--output"): --help shows only the first long one
+  // (without CLI11's "{false}" after a negated flag's name)
+  std::string names = opt->get_name(false, true);
+  for (size_t open = names.find('{'); open != std::string::npos; open = names.find('{')) {
+    names.erase(open, names.find('}', open) - open + 1);
+  }
+  return names + f.make_option_opts(opt);
 }
 
 bool TakesValue(const CLI::Formatter& f, const CLI::Option* opt) {
@@ -334,6 +341,7 @@ int RunHelp(const CLI::App& app, const HelpOptions& o) {
   } else {
     const CLI::App* target = &app;
     std::string path;
+    std::string prev;  // the usage line's words before the command's own name, as --help has them
     for (const std::string& name : o.command) {
       const CLI::App* next = nullptr;
       for (const CLI::App* sub : target->get_subcommands([](const CLI::App*) { return true; })) {
@@ -343,10 +351,11 @@ int RunHelp(const CLI::App& app, const HelpOptions& o) {
         throw UsageError("help: unknown command '" + (path.empty() ? "" : path + " ") + name +
                          "' (fetchscope --help lists them)");
       }
+      prev = target == &app ? app.get_name() : prev + " " + target->get_name();
       path += (path.empty() ? "" : " ") + name;
       target = next;
     }
-    text = target->help();
+    text = target == &app ? app.help() : target->help(prev);
   }
   std::fputs(text.c_str(), stdout);
   return 0;

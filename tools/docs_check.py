@@ -122,6 +122,30 @@ def check_links(root, ignore):
 
 def check_generated(binary, root):
     failed = 0
+    # `help COMMAND` is the command's --help; the generators take no COMMAND
+    for words in (["record"], ["golden", "check"]):
+        a = subprocess.run([binary, "help"] + words, capture_output=True, text=True)
+        b = subprocess.run([binary] + words + ["--help"], capture_output=True, text=True)
+        if a.returncode != 0 or a.stdout != b.stdout or not a.stdout:
+            print(f"fetchscope help {' '.join(words)} (exit {a.returncode}) differs from "
+                  f"fetchscope {' '.join(words)} --help:\n{a.stdout}{a.stderr}")
+            failed = 1
+    # every option that `COMMAND --help` lists is in the committed reference, in its section
+    reference = open(os.path.join(root, "docs/reference/cli.md"), encoding="utf-8").read()
+    commands = re.findall(r"^\| \[`([a-z -]+)`\]\(#", reference, re.M)
+    for command in commands:
+        section = reference.split(f"\n## {command}\n", 1)[-1].split("\n## ", 1)[0]
+        listed = subprocess.run([binary] + command.split() + ["--help"], capture_output=True,
+                                text=True).stdout
+        for option in re.findall(r"^\s+(--[a-z0-9-]+)", listed, re.M):
+            if f"{option} " not in section and f"{option}`" not in section:
+                print(f"docs/reference/cli.md: `{command}`'s option {option} is missing")
+                failed = 1
+    print(f"cli.md: the options of {len(commands)} commands checked against their --help")
+    bad = subprocess.run([binary, "help", "--markdown", "record"], capture_output=True, text=True)
+    if bad.returncode != 2:
+        print(f"fetchscope help --markdown record: exit {bad.returncode}, expected 2")
+        failed = 1
     for rel, flag in GENERATED:
         out = subprocess.run([binary, "help", flag], capture_output=True, text=True)
         if out.returncode != 0:
