@@ -12,7 +12,8 @@
                                                  a `<!-- runnable -->` line runs and exits 0: the
                                                  blocks of a page in order, in one temporary
                                                  folder holding a copy of examples/ and golden/,
-                                                 with FETCHSCOPE's folder first on PATH
+                                                 with FETCHSCOPE's folder first on PATH and
+                                                 MINARI_DATASETS_PATH inside the folder
 """
 import difflib
 import os
@@ -235,6 +236,8 @@ def check_runnable(binary, root, only):
             for folder in ("examples", "golden"):
                 if os.path.isdir(os.path.join(root, folder)):
                     shutil.copytree(os.path.join(root, folder), os.path.join(tmp, folder))
+            # datasets go into the temporary folder, not the test machine's ~/.minari/datasets
+            env["MINARI_DATASETS_PATH"] = os.path.join(tmp, "minari-datasets")
             for lineno, block in blocks:
                 count += 1
                 where = f"{os.path.relpath(page, root)}:{lineno}"
