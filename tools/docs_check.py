@@ -2,7 +2,8 @@
 """The documentation checks (ctest runs them, see tests/CMakeLists.txt; so does tools/test.sh).
 
   docs_check.py links ROOT [--ignore PAGE ...]   every relative link and #anchor in README.md
-                                                 and docs/**/*.md resolves (GitHub's slugs)
+                                                 and docs/**/*.md resolves (GitHub's slugs);
+                                                 README.md has at most 250 lines
   docs_check.py generated FETCHSCOPE ROOT        docs/reference/cli.md, docs/man/fetchscope.1 and
                                                  docs/completion/fetchscope.bash are what the
                                                  binary generates (tools/regen-docs.sh)
@@ -115,8 +116,13 @@ def check_links(root, ignore):
                         hint = f" (did you mean '#{near[0]}'?)" if near else ""
                         problems.append(f"{where}: no heading with anchor '#{anchor}' in "
                                         f"{os.path.relpath(dest, root)}{hint}")
+    readme_lines = open(os.path.join(root, "README.md"), encoding="utf-8").read().count("\n")
+    if readme_lines > 250:
+        problems.append(f"README.md: {readme_lines} lines; it stays at 250 or fewer (move the "
+                        "details into docs/guide or docs/reference and link to them)")
     for p in problems:
         print(p)
+    print(f"README.md: {readme_lines} lines (at most 250)")
     print(f"links: {checked} relative links in {len(pages(root))} pages, {len(problems)} broken")
     return 1 if problems else 0
 
