@@ -29,8 +29,9 @@ std::string ObservationSlice(bool has_object, const std::string& slice);
 /// element) plus our labels, formulas, timing, assets and the D4 answers.
 nlohmann::json DescribeJson(const FetchEnv& env);
 
-/// What the course chapter says where this environment does otherwise (README: "What the
-/// environment really does"): the gripper's sign, for every task.
+/// What the course chapter says where this environment does otherwise
+/// (docs/guide/action-semantics.md: "What the environment really does"): the gripper's sign, for
+/// every task.
 inline constexpr const char* kChapterGripper = "a[3] > 0 closes the gripper";
 /// The chapter's expected D3 mean return of the random policy on FetchReachDense-v4.
 inline constexpr double kChapterDenseReturnLow = -25, kChapterDenseReturnHigh = -15;

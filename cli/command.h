@@ -34,11 +34,12 @@ Command AddGolden(CLI::App& parent);
 Command AddListGpus(CLI::App& parent);
 Command AddReport(CLI::App& parent);
 Command AddCompare(CLI::App& parent);
+Command AddHelp(CLI::App& parent);
 
 /// Every subcommand, in the order `fetchscope --help` lists them.
 inline constexpr AddCommandFn kCommands[] = {
     AddListEnvs,       AddDescribe, AddRewardCheck, AddRandomEpisodes, AddAnatomy, AddRollout,
     AddExport,         AddRender,   AddListCameras, AddRecord,         AddBench,   AddProbeActions,
-    AddMergeManifests, AddGolden,   AddListGpus,    AddReport,         AddCompare};
+    AddMergeManifests, AddGolden,   AddListGpus,    AddReport,         AddCompare, AddHelp};
 
 }  // namespace fetchscope::cli

@@ -53,7 +53,7 @@ inline constexpr const char* kJsonOverwriteHelp =
     "replaced without it)";
 
 /// The most --steps rollout, record and render take: steps beyond the env's TimeLimit (50) are
-/// allowed and marked (README "Steps past the TimeLimit").
+/// allowed and marked (docs/guide/recording.md, "Steps past the TimeLimit").
 inline constexpr int kMaxSteps = 10000;
 
 /// The help text of rollout's and record's --steps.

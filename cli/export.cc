@@ -91,7 +91,8 @@ int RunExport(const ExportOptions& o) {
 Command AddExport(CLI::App& app) {
   auto o = std::make_shared<ExportOptions>();
   CLI::App* sub = app.add_subcommand(
-      "export", "Write a run folder or trajectory JSON as a Minari dataset (README: Datasets)");
+      "export",
+      "Write a run folder or trajectory JSON as a Minari dataset (docs/guide/datasets.md)");
   sub->add_option("input", o->input, "A run folder (its episode_NNN.json) or a trajectory JSON")
       ->required();
   sub->add_option("--minari", o->minari,

@@ -513,8 +513,8 @@ Command AddRecord(CLI::App& app) {
       ->capture_default_str();
   sub->add_flag("-q,--quiet", o->quiet, "No progress or summary on stderr");
   sub->add_option("--minari", o->minari,
-                  "Also write the recorded episodes as a Minari dataset of this id (README: "
-                  "Datasets); an existing one is refused (export --overwrite replaces it)");
+                  "Also write the recorded episodes as a Minari dataset of this id (docs/guide/"
+                  "datasets.md); an existing one is refused (export --overwrite replaces it)");
   sub->add_option("--minari-root", o->minari_root,
                   "Datasets root (default $MINARI_DATASETS_PATH, else ~/.minari/datasets)");
   sub->add_flag("--overwrite", o->overwrite,

@@ -197,10 +197,11 @@ Command AddRollout(CLI::App& app) {
   sub->add_option("--json-out", o->json_out,
                   "Write F (.json), F/rollout.json if F ends in /, or F_rollout.json; without it "
                   "JSON goes to stdout");
-  sub->add_option("--minari", o->minari,
-                  "Also write the episodes as a Minari dataset of this id, e.g. "
-                  "fetchscope/FetchPush/scripted-v0 (README: Datasets); without --json-out no "
-                  "JSON is printed");
+  sub->add_option(
+      "--minari", o->minari,
+      "Also write the episodes as a Minari dataset of this id, e.g. "
+      "fetchscope/FetchPush/scripted-v0 (docs/guide/datasets.md); without --json-out no "
+      "JSON is printed");
   sub->add_option("--minari-root", o->minari_root,
                   "Datasets root (default $MINARI_DATASETS_PATH, else ~/.minari/datasets)");
   sub->add_flag("--overwrite", o->overwrite,

@@ -1,6 +1,6 @@
 // What Minari 0.5 datasets look like, shared by the writer and the reader: the per-episode
 // arrays, where a dataset id lives on disk, and the metadata strings (spaces, env_spec) exactly
-// as Minari and Gymnasium serialise them. The layout itself is described in README "Datasets".
+// as Minari and Gymnasium serialise them. The layout itself is described in docs/guide/datasets.md.
 #pragma once
 
 #include <cstdint>

@@ -1,5 +1,5 @@
 // Writes one Minari dataset (<root>/<id>/data/{main_data.hdf5, metadata.json}) with libhdf5, in
-// the layout Minari 0.5's HDF5 storage writes (see README "Datasets"), so that
+// the layout Minari 0.5's HDF5 storage writes (see docs/guide/datasets.md), so that
 // minari.load_dataset(id) reads it with no other step.
 #pragma once
 

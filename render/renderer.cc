@@ -505,8 +505,9 @@ void Renderer::ReadRgb(uint8_t* rgb) {
   const mjrRect frame{0, 0, frame_.width, frame_.height};
   const auto start = Clock::now();
   // MuJoCo resolves the multisampled buffer (a blit) and reads GL_RGB rows bottom-up. On
-  // llvmpipe this is ~0.5 ms of a 15-40 ms frame (README, "Where a frame's time goes"); on
-  // hardware GL Submit/Collect read through pixel buffers instead, overlapping the next frame.
+  // llvmpipe this is ~0.5 ms of a 15-40 ms frame (docs/guide/recording.md, "Where a frame's time
+  // goes"); on hardware GL Submit/Collect read through pixel buffers instead, overlapping the next
+  // frame.
   mjr_readPixels(rgb_bottom_up_.data(), nullptr, frame, context_->get());
   const auto flip_start = Clock::now();
   FlipRows(rgb_bottom_up_.data(), static_cast<size_t>(frame_.width) * 3, rgb);

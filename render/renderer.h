@@ -107,8 +107,8 @@ class Renderer {
   /// positive or exceeds the GL limits (the message gives the accepted range), for a camera
   /// the model lacks, or for an msaa_samples value not listed on RenderOptions; RunError when
   /// MuJoCo cannot make its offscreen buffer. With FETCHSCOPE_PROFILE set in the environment, the
-  /// destructor prints a per-phase time breakdown to stderr (see README: "Where a frame's time
-  /// goes").
+  /// destructor prints a per-phase time breakdown to stderr (see docs/guide/recording.md: "Where a
+  /// frame's time goes").
   Renderer(GlContext& gl, mjModel* model, const RenderOptions& options);
   ~Renderer();
   Renderer(const Renderer&) = delete;

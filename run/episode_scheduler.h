@@ -1,7 +1,7 @@
 // One scheduler of episodes over workers, for every subcommand that runs episodes (record,
 // rollout, random-episodes). Workers are processes by default: each makes its own GL context,
 // environment, policy and encoders, because threads that share a process serialise in NVIDIA's
-// GL driver (reference/gpu-node-measurements.md). The parent owns progress, signals and the
+// GL driver (BENCHMARKS.md, "GPU node"). The parent owns progress, signals and the
 // results; it hands out episodes in ascending order, one at a time, to whichever worker asks.
 //
 // Results never depend on which worker ran an episode: a runner brings its generators forward

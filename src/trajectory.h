@@ -3,7 +3,7 @@
 // record --from and the report read it here, and every file is written here, with doubles
 // formatted as Python's json.dumps writes them (base/json_util.h), so that bytes are stable.
 //
-// The file (README "Trajectory JSON"):
+// The file (docs/reference/file-formats.md, "Trajectory JSON"):
 //   {"env_id", "seed", "policy", "assets": {kind, path, sha256, origin},
 //    "episodes": [{"index", "length", "complete", "return", "is_success", "action_dtype",
 //                  "steps": [{"t", "observation", "achieved_goal", "desired_goal", "action",

@@ -518,7 +518,8 @@ TEST_F(BrowserTest, ViewerFollowsDeepLinksKeysAndClicks) {
             << " steps" << std::endl;
   // once moving freely the grip covers 0.032 m a step (a constant +y or +z replay gives
   // 0.0322-0.0328 from its second step on); probe-actions' 0.0257 on PickAndPlace is the mean
-  // over 10 steps of +x, which include the first step and the arm's reach (README)
+  // over 10 steps of +x, which include the first step and the arm's reach
+  // (docs/guide/report-and-viewer.md)
   EXPECT_NEAR(sum / saturated, 0.032, 0.003);
 
   // the filter: the successes alone, the failures alone, then all again

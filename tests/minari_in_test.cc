@@ -1,4 +1,4 @@
-// record --from DATASET (README "Datasets"): a Minari dataset re-rendered. The round trip
+// record --from DATASET (docs/guide/datasets.md): a Minari dataset re-rendered. The round trip
 // rollout --minari -> record --from gives back the rollout's trajectories bit for bit; datasets
 // written in Minari 0.5's own layout by python3-h5py (create_dataset_from_buffers with per-episode
 // 64-bit seeds, DataCollector without seeds) replay with zero divergence, the seedless one from

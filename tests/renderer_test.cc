@@ -1148,7 +1148,7 @@ TEST(HudPlacement, TheTileAloneDecidesAndTheBoxKeepsItsShareOnEveryFrame) {
     }
   }
   EXPECT_GT(drawn, 100);
-  EXPECT_EQ(kHudMinTileWidth, 320);  // README: "views at least 320 x 240 pixels"
+  EXPECT_EQ(kHudMinTileWidth, 320);  // docs/guide/recording.md: "views at least 320 x 240 pixels"
   EXPECT_EQ(kHudMinTileHeight, 240);
 }
 
