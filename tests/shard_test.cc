@@ -294,6 +294,38 @@ TEST_F(ShardRunTest, ShardsTogetherEqualTheUnshardedRunAndMerge) {
   EXPECT_EQ(RunFetchscope("merge-manifests --quiet " + shared.string()).exit_code, 0);
 }
 
+// The Slurm environment through the real binary: an irregular array refuses in its first task
+// too, before anything is written; one index resubmitted into a folder holding shards of a 4-shard
+// run records that run's shard (and a different run there is still refused).
+TEST_F(ShardRunTest, SlurmResubmissionAndIrregularArrays) {
+  TempDir tmp;
+  const fs::path out = tmp.path() / "run";
+  auto slurm = [](const char* id, const char* count, const char* min, const char* max) {
+    return std::string("env SLURM_ARRAY_TASK_ID=") + id + " SLURM_ARRAY_TASK_COUNT=" + count +
+           " SLURM_ARRAY_TASK_MIN=" + min + " SLURM_ARRAY_TASK_MAX=" + max +
+           " SLURM_ARRAY_TASK_STEP=1 " + FETCHSCOPE_BIN + " ";
+  };
+  // --array=2,5,7: task 2 (the first) refuses like the others, naming the variables
+  auto r = RunCommand(slurm("2", "3", "2", "7") + kRun + " --out " + out.string());
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("the array is not a range"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(out));
+  // shards 0, 2, 3 of 4 recorded; shard 1 resubmitted alone (--array=1)
+  for (int i : {0, 2, 3}) {
+    ASSERT_EQ(RunFetchscope(kRun + " --shard " + std::to_string(i) + "/4 --out " + out.string())
+                  .exit_code,
+              0);
+  }
+  // another run (seed 12) resubmitted there: refused, naming the difference
+  r = RunCommand(slurm("1", "1", "1", "1") + Record(7, 12) + " --resume --out " + out.string());
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("--seed is 11 there and 12 here"), std::string::npos) << r.output;
+  r = RunCommand(slurm("1", "1", "1", "1") + kRun + " --resume --out " + out.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(fs::exists(out / "manifest_shard_0001_of_0004.json")) << r.output;
+  EXPECT_EQ(RunFetchscope("merge-manifests --quiet " + out.string()).exit_code, 0);
+}
+
 TEST_F(ShardRunTest, MergeAcrossFoldersWritesRelativePaths) {
   TempDir tmp;
   for (int i = 0; i < 2; ++i) {
