@@ -257,12 +257,14 @@ TEST_F(SlurmTest, KilledTaskResubmittedAloneCompletesTheRun) {
       Adapted(guide_.record, out.string(), true));
   ASSERT_TRUE(WaitForText(Log(job, 1), "paused at kill point")) << ReadFile(Log(job, 1));
   // SIGKILL to every process of the task at once, as a node failure or the OOM killer would
-  // (scancel --signal=KILL lets Slurm send SIGTERM first)
+  // (scancel --signal=KILL lets Slurm send SIGTERM first); only this cluster's task (its
+  // SLURM_CONF), should another test's cluster run a job of the same id
   Shell(
       "pids=$(for pid in $(pgrep -x fetchscope); do tr '\\0' '\\n' </proc/$pid/environ | "
       "grep -qx SLURM_ARRAY_JOB_ID=" +
       job +
       " && tr '\\0' '\\n' </proc/$pid/environ | grep -qx SLURM_ARRAY_TASK_ID=1 && "
+      "tr '\\0' '\\n' </proc/$pid/environ | grep -qxF \"SLURM_CONF=$SLURM_CONF\" && "
       "echo $pid; done); test -n \"$pids\" && kill -KILL $pids");
   WaitFor(job);
   EXPECT_FALSE(fs::exists(out / "manifest_shard_0001_of_0004.json"));
