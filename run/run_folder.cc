@@ -107,12 +107,13 @@ bool IsFetchscopeTrajectory(const fs::path& path) {
   return j.is_object() && j.contains("env_id") && j.contains("seed") && j.contains("episodes");
 }
 
-// True for a video record wrote for episode k: its metadata (MP4 and Matroska tags, the GIF
-// comment) holds fetchscope_version and the title "... episode K (POLICY)". Read in pieces, so a
-// large video costs no more memory than a small one.
+// True for a video record wrote for episode k: its metadata (MP4 tags, Matroska tags, whose names
+// are upper case, the GIF comment) holds fetchscope_version and the title "... episode K
+// (POLICY)" (or `title`). Read in pieces, so a large video costs no more memory than a small one.
 bool IsFetchscopeVideo(const fs::path& path, int k, const std::string& title = "") {
   const std::string marks[] = {"fetchscope_version",
-                               title.empty() ? " episode " + std::to_string(k) + " (" : title};
+                               title.empty() ? " episode " + std::to_string(k) + " (" : title,
+                               "FETCHSCOPE_VERSION"};
   bool found[2] = {false, false};
   std::ifstream in(path, std::ios::binary);
   constexpr size_t kPiece = 1 << 20;
@@ -125,6 +126,7 @@ bool IsFetchscopeVideo(const fs::path& path, int k, const std::string& title = "
     if (n == 0) break;
     buffer.append(piece, 0, n);
     for (int i = 0; i < 2; ++i) found[i] = found[i] || buffer.find(marks[i]) != std::string::npos;
+    found[0] = found[0] || buffer.find(marks[2]) != std::string::npos;
     if (found[0] && found[1]) return true;
     if (buffer.size() > kOverlap) buffer.erase(0, buffer.size() - kOverlap);
   }

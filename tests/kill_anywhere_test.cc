@@ -225,6 +225,25 @@ TEST_F(KillAnywhereTest, OnlyFilesThatCannotBeFetchscopesAreRefused) {
   EXPECT_EQ(r.exit_code, 0) << r.output;
 }
 
+// Matroska writes its tag names in upper case: a killed attempt's webm (then gif) is recognised
+// as fetchscope's all the same, and resumed byte-identical.
+TEST_F(KillAnywhereTest, WebmAndGifOfAKilledAttemptAreRecognised) {
+  TempDir tmp;
+  const std::string run = kRun + "--episodes 1 --format webm,gif ";
+  CommandResult r = RunFetchscope(run + "--out " + (tmp.path() / "ref").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  for (int at : {3, 6}) {  // after the webm's rename, after the gif's
+    const fs::path out = tmp.path() / ("k" + std::to_string(at));
+    r = RunKilledAt(run + "--out " + out.string(), at);
+    ASSERT_EQ(r.exit_code, 128 + SIGKILL) << r.output;
+    ASSERT_TRUE(fs::exists(out / "episode_000.webm"));
+    ASSERT_FALSE(fs::exists(out / "episode_000.json"));
+    r = RunFetchscope(run + "--resume --out " + out.string());
+    ASSERT_EQ(r.exit_code, 0) << at << ": " << r.output;
+    EXPECT_TRUE(EpisodeFiles(out) == EpisodeFiles(tmp.path() / "ref")) << at;
+  }
+}
+
 // SIGTERM (scancel, a preemption's first signal) while a --quiet run writes: it finishes the file,
 // writes its manifest, and still says how to record the rest (a batch job's log needs that line).
 TEST_F(KillAnywhereTest, QuietRunStillSaysHowToRecordTheRest) {
