@@ -11,6 +11,7 @@
 #include <utility>
 
 #include "base/errors.h"
+#include "base/kill_point.h"
 
 namespace fetchscope {
 namespace {
@@ -95,11 +96,13 @@ std::string TempPathFor(const std::string& final_path) {
 }
 
 void CommitTempFile(const std::string& temp_path, const std::string& final_path) {
+  KillPoint("file written, not renamed");
   if (std::rename(temp_path.c_str(), final_path.c_str()) != 0) {
     const int error = errno;
     std::remove(temp_path.c_str());
     throw RunError("cannot write '" + final_path + "': " + std::strerror(error));
   }
+  KillPoint("file renamed");
 }
 
 AtomicFile::AtomicFile(const std::string& final_path)

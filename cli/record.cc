@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <map>
 #include <optional>
@@ -36,6 +37,7 @@
 #include "run/node_probe.h"
 #include "run/progress.h"
 #include "run/record_run.h"
+#include "run/run_files.h"
 #include "run/run_folder.h"
 #include "run/run_summary.h"
 #include "run/shard.h"
@@ -193,7 +195,16 @@ int RunRecord(const RecordOptions& options, const std::string& command_line,
   plan.view = o.view;
   plan.out = o.out;
   plan.sheet_every = o.sheet_every;
-  const Shard shard = ResolveShard(o.shard, o.shard_count);
+  const int run_shards = RunShardCount(o.out);
+  const Shard shard = ResolveShard(o.shard, o.shard_count, nullptr, run_shards);
+  const char* task_count = std::getenv("SLURM_ARRAY_TASK_COUNT");
+  if (shard.source == "SLURM_ARRAY_TASK_ID" && run_shards > 0 && task_count &&
+      std::to_string(run_shards) != task_count && !o.quiet) {
+    std::fprintf(stderr,
+                 "fetchscope: note: --out '%s' holds a run of %d shards and this array has %s "
+                 "task(s): task %d records shard %s of that run\n",
+                 o.out.c_str(), run_shards, task_count, shard.index, ShardLabel(shard).c_str());
+  }
   const WorkerMode mode = ParseWorkerMode(o.worker_mode);
   MinariWriteOptions minari;
   if (!o.minari.empty()) {
@@ -272,6 +283,12 @@ int RunRecord(const RecordOptions& options, const std::string& command_line,
   }
   if (folder.already_complete()) {  // --resume of a whole run: say so, change nothing
     if (!o.quiet) std::fprintf(stderr, "%s\n", AlreadyCompleteText(o.out, folder.kept()).c_str());
+    // killed between its manifest and its report: the report is written now
+    const fs::path manifest_path = fs::path(o.out) / ShardManifestName(shard);
+    if (!o.no_report && !shard.sharded() &&
+        !fs::exists(manifest_path.parent_path() / kReportFileName)) {
+      WriteRunReportOrWarn(manifest_path, o.quiet);
+    }
     return 0;
   }
   const int early_signal = StopSignal();  // before the scheduler: record nothing
@@ -428,7 +445,13 @@ int RunRecord(const RecordOptions& options, const std::string& command_line,
   const fs::path manifest_path = fs::path(o.out) / ShardManifestName(shard);
   WriteManifest(manifest_path, manifest);
   folder.Commit();
-  progress.Done(RecordSummaryText(manifest, result.results.size(), folder.kept().size(), o.out));
+  const std::string summary =
+      RecordSummaryText(manifest, result.results.size(), folder.kept().size(), o.out);
+  progress.Done(summary);
+  const size_t rest = summary.find("record: to record the rest");
+  if (o.quiet && rest != std::string::npos) {  // even --quiet: a batch job's log needs the way on
+    std::fprintf(stderr, "%s\n", summary.substr(rest).c_str());
+  }
   // a shard's episodes are only part of the run: merge-manifests writes the run's report
   if (!o.no_report && !shard.sharded()) WriteRunReportOrWarn(manifest_path, o.quiet);
   if (sig) return 128 + sig;

@@ -14,6 +14,7 @@
 
 #include "base/atomic_file.h"
 #include "base/errors.h"
+#include "base/kill_point.h"
 
 namespace fetchscope {
 namespace {
@@ -157,11 +158,13 @@ void WritePng(const std::string& path, int width, int height, int channels, int 
                                          : std::string("libpng failed");
     throw RunError("cannot write " + path + ": " + why);
   }
+  KillPoint("png written, not renamed");
   if (std::rename(temp.c_str(), path.c_str()) != 0) {
     int err = errno;
     unlink(temp.c_str());
     throw RunError("cannot write " + path + ": " + std::strerror(err));
   }
+  KillPoint("png renamed");
   parents.Keep();
 }
 

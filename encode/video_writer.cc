@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "base/errors.h"
+#include "base/kill_point.h"
 #include "base/suggest.h"
 #include "encode/av_handles.h"
 #include "encode/av_log.h"
@@ -385,6 +386,7 @@ void VideoWriter::Impl::Finish() {
     PushGifFrame(nullptr);  // palettegen sees the whole clip; paletteuse then lets frames out
     DrainGifFilter();
   }
+  KillPoint("video flush");
   SendFrame(nullptr);
   ClearLastAvError();
   if (int rc = av_write_trailer(muxer.get()); rc < 0) {
@@ -396,12 +398,14 @@ void VideoWriter::Impl::Finish() {
   if (gif && !options.metadata.empty()) {
     InsertGifComment(temporary.path(), GifComment(options.metadata));
   }
+  KillPoint("video written, not renamed");
   std::error_code error;
   fs::rename(temporary.path(), final_path, error);
   if (error) {
     throw RunError("cannot rename " + Quoted(temporary.path().string()) + " to " +
                    Quoted(final_path) + ": " + error.message());
   }
+  KillPoint("video renamed");
   temporary.Release();
   finished = true;
   // The encoder's and scaler's memory is no longer needed.

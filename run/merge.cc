@@ -214,12 +214,14 @@ MergeResult MergeShardManifests(const MergeRequest& request) {
       if (HasFiles(e, m.path.parent_path(), &problems)) episode_at[k] = {&m, &e};
     }
   }
+  std::vector<int> redo;  // the shards to record again
   for (int s = 0; s < count; ++s) {
     std::vector<int> missing;
     for (int k = s; k < episodes; k += count) {
       if (!episode_at[k].first) missing.push_back(k);
     }
     if (missing.empty()) continue;
+    redo.push_back(s);
     const std::string label = Label(s, count);
     auto it = by_shard.find(s);
     if (it == by_shard.end()) {
@@ -236,6 +238,14 @@ MergeResult MergeShardManifests(const MergeRequest& request) {
   if (!problems.empty()) {
     std::string message = "the run is incomplete: ";
     for (size_t i = 0; i < problems.size(); ++i) message += (i ? "; " : "") + problems[i];
+    if (!redo.empty() && count > 1) {
+      std::string indices;
+      for (int s : redo) indices += (indices.empty() ? "" : ",") + std::to_string(s);
+      message += ". To record them, run their shards again with the run's options and --resume (" +
+                 std::string(redo.size() == 1 ? "--shard " + Label(redo.front(), count)
+                                              : "--shard I/" + std::to_string(count)) +
+                 "; a Slurm array: requeue those tasks, or resubmit --array=" + indices + ")";
+    }
     throw RunError(message);
   }
 

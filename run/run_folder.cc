@@ -9,6 +9,7 @@
 #include <cstring>
 #include <fstream>
 #include <iterator>
+#include <map>
 #include <nlohmann/json.hpp>
 
 #include "base/errors.h"
@@ -104,6 +105,58 @@ bool IsFetchscopeTrajectory(const fs::path& path) {
   std::ifstream in(path, std::ios::binary);
   const nlohmann::json j = nlohmann::json::parse(in, nullptr, false);
   return j.is_object() && j.contains("env_id") && j.contains("seed") && j.contains("episodes");
+}
+
+// True for a video record wrote for episode k: its metadata (MP4 tags, Matroska tags, whose names
+// are upper case, the GIF comment) holds fetchscope_version and the title "... episode K
+// (POLICY)" (or `title`). Read in pieces, so a large video costs no more memory than a small one.
+bool IsFetchscopeVideo(const fs::path& path, int k, const std::string& title = "") {
+  const std::string marks[] = {"fetchscope_version",
+                               title.empty() ? " episode " + std::to_string(k) + " (" : title,
+                               "FETCHSCOPE_VERSION"};
+  bool found[2] = {false, false};
+  std::ifstream in(path, std::ios::binary);
+  constexpr size_t kPiece = 1 << 20;
+  const size_t kOverlap = std::max<size_t>(64, marks[1].size());  // longer than either mark
+  std::string buffer;
+  std::string piece(kPiece, '\0');
+  while (in) {
+    in.read(&piece[0], static_cast<std::streamsize>(piece.size()));
+    const size_t n = static_cast<size_t>(in.gcount());
+    if (n == 0) break;
+    buffer.append(piece, 0, n);
+    for (int i = 0; i < 2; ++i) found[i] = found[i] || buffer.find(marks[i]) != std::string::npos;
+    found[0] = found[0] || buffer.find(marks[2]) != std::string::npos;
+    if (found[0] && found[1]) return true;
+    if (buffer.size() > kOverlap) buffer.erase(0, buffer.size() - kOverlap);
+  }
+  return false;
+}
+
+bool IsVideoName(const std::string& name) {
+  for (const char* ext : {".mp4", ".webm", ".gif"}) {
+    const std::string e = ext;
+    if (name.size() > e.size() && name.compare(name.size() - e.size(), e.size(), e) == 0) {
+      return true;
+    }
+  }
+  return false;
+}
+
+// True when one of `names` is a video of episode k with fetchscope's tags (remembered in
+// `videos`).
+bool EpisodeHasFetchscopeVideo(const fs::path& out, int k, const std::vector<std::string>& names,
+                               std::map<int, bool>* videos) {
+  const auto known = videos->find(k);
+  if (known != videos->end()) return known->second;
+  bool found = false;
+  for (const std::string& name : names) {
+    const std::optional<RunFileName> parsed = ParseRunFileName(name);
+    if (found || !parsed || parsed->episode != k || !IsVideoName(name)) continue;
+    found = IsFetchscopeVideo(out / name, k);
+  }
+  (*videos)[k] = found;
+  return found;
 }
 
 }  // namespace
@@ -226,12 +279,15 @@ RunFolder::RunFolder(const RunFolderRequest& request) : request_(request) {
                          "it, or choose another --out");
       }
       // a sharded run's own episodes without its manifest: an attempt that was killed (a
-      // retried pod), rewritten; unsharded, they could be any run's
+      // retried pod), recorded again; unsharded, they could be any run's
       if (!run_files.empty() && !request.sharded) {
-        throw UsageError(quoted + " holds files of another record run (" + Listed(run_files) +
-                         ") without its manifest: pass --overwrite to replace them, or choose "
-                         "another --out");
+        throw UsageError(quoted + " holds files of a record run (" + Listed(run_files) +
+                         ") without its manifest (killed before writing it): pass --resume to "
+                         "record that run again, --overwrite to replace them, or choose another "
+                         "--out");
       }
+      remove = run_files;
+      remove.insert(remove.end(), hidden.begin(), hidden.end());
       break;
     case ReuseMode::kOverwrite:
       remove = run_files;
@@ -239,14 +295,15 @@ RunFolder::RunFolder(const RunFolderRequest& request) : request_(request) {
       break;
     case ReuseMode::kResume: {
       if (!has_manifest) {
-        if (!run_files.empty() && !request.sharded) {
-          throw UsageError("cannot --resume " + quoted + ": it holds episode files (" +
-                           Listed(run_files) + ") but no " + request.manifest_name +
-                           " (the run was killed before writing it): pass --overwrite instead");
-        }
-        // nothing to resume (a requeued job that never started, say): a fresh run
+        // nothing to resume (a requeued job that never started, say), or only the files of an
+        // attempt killed before its manifest (fetchscope's, checked above): a fresh run
+        CheckSameRunWithoutManifest(out, quoted, run_files);
         notice_ = "--resume: " + quoted + " holds no " + request.manifest_name +
-                  ": nothing to resume, recording the whole run";
+                  (run_files.empty() ? ": nothing to resume, recording the whole run"
+                                     : " (an attempt killed before writing it left " +
+                                           Listed(run_files) + "): recording the whole run");
+        remove = run_files;
+        remove.insert(remove.end(), hidden.begin(), hidden.end());
         break;
       }
       const std::optional<Manifest> m = ReadManifestOrNull(out / request.manifest_name);
@@ -291,7 +348,9 @@ RunFolder::RunFolder(const RunFolderRequest& request) : request_(request) {
       already_complete_ = todo_.empty() && !m->interrupted && m->missing.empty() &&
                           m->failures.empty() &&
                           m->episodes_requested == request.parameters.episodes;
-      if (already_complete_) {  // nothing to record, nothing to change (or clean up)
+      if (already_complete_) {  // nothing to record, nothing to change
+        // but the temporaries of an attempt killed after its manifest (writing its report)
+        for (const std::string& name : hidden) fs::remove(out / name, ec);
         committed_ = true;
         return;
       }
@@ -353,6 +412,7 @@ void RunFolder::RefuseForeignFiles(const fs::path& out, const std::string& quote
   }
   std::vector<std::string> foreign;
   std::set<std::string> left_alone;
+  std::map<int, bool> videos;  // episode -> it has a video with fetchscope's tags (looked up once)
   for (const std::string& name : names) {
     const RunFileName parsed = *ParseRunFileName(name);
     bool ours = listed.count(name) > 0;
@@ -363,9 +423,12 @@ void RunFolder::RefuseForeignFiles(const fs::path& out, const std::string& quote
         continue;
       }
     }
-    // an episode of a run killed before its manifest: beside its fetchscope trajectory
+    // an episode of an attempt killed before its manifest: beside its fetchscope trajectory, or
+    // (killed before the trajectory was written) a video with fetchscope's tags for that episode,
+    // or a file beside one (its sheet, layers, a trajectory cut short)
     if (!ours && parsed.episode >= 0) {
-      ours = IsFetchscopeTrajectory(out / EpisodeTrajectoryFileName(parsed.episode));
+      ours = IsFetchscopeTrajectory(out / EpisodeTrajectoryFileName(parsed.episode)) ||
+             EpisodeHasFetchscopeVideo(out, parsed.episode, names, &videos);
     }
     if (!ours) foreign.push_back(name);
   }
@@ -379,6 +442,42 @@ void RunFolder::RefuseForeignFiles(const fs::path& out, const std::string& quote
   run_files->erase(std::remove_if(run_files->begin(), run_files->end(),
                                   [&](const std::string& n) { return left_alone.count(n) > 0; }),
                    run_files->end());
+}
+
+void RunFolder::CheckSameRunWithoutManifest(const fs::path& out, const std::string& quoted,
+                                            const std::vector<std::string>& run_files) const {
+  const RunParameters& p = request_.parameters;
+  std::set<int> checked;
+  for (const std::string& name : run_files) {
+    const std::optional<RunFileName> parsed = ParseRunFileName(name);
+    if (!parsed || parsed->episode < 0 || !checked.insert(parsed->episode).second) continue;
+    const int k = parsed->episode;
+    // its trajectory, or (killed before that) a video titled as this run titles episode k
+    const fs::path trajectory = out / EpisodeTrajectoryFileName(k);
+    std::ifstream in(trajectory, std::ios::binary);
+    const nlohmann::json j = nlohmann::json::parse(in, nullptr, false);
+    bool same = false;
+    if (j.is_object() && j.contains("env_id") && j.contains("seed") && j.contains("policy")) {
+      same = j["env_id"] == p.env_id && j["seed"] == p.seed && j["policy"] == p.policy;
+    } else {
+      const std::string title = p.env_id + " seed " + std::to_string(p.seed) + " episode " +
+                                std::to_string(k) + " (" + p.policy + ")";
+      for (const std::string& other : run_files) {
+        const std::optional<RunFileName> o = ParseRunFileName(other);
+        if (!same && o && o->episode == k && IsVideoName(other)) {
+          same = IsFetchscopeVideo(out / other, k, title);
+        }
+      }
+    }
+    if (!same) {
+      throw UsageError("cannot --resume " + quoted + ": it holds files of another record run (" +
+                       EpisodeStem(k) + " is not of --env-id " + p.env_id + " --seed " +
+                       std::to_string(p.seed) + " --policy " + p.policy + ") without its " +
+                       request_.manifest_name +
+                       ": pass --overwrite to replace them, or choose "
+                       "another --out");
+    }
+  }
 }
 
 void RunFolder::SetAside(const fs::path& out, const std::vector<std::string>& names) {

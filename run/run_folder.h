@@ -6,8 +6,11 @@
 // hidden temporaries. Anything else in the folder is the user's and is never touched. A file under
 // one of those names counts as fetchscope's only when it carries fetchscope's mark: a record
 // manifest, a file a manifest there lists, a report with fetchscope's generator tag, or an episode
-// file beside a fetchscope trajectory of that episode (a run killed before its manifest). Any other
-// is the user's, and the folder is refused naming it, whatever the mode.
+// file of an attempt killed before its manifest: beside a fetchscope trajectory of that episode,
+// or a video whose tags say fetchscope recorded that episode, or beside such a video (a sheet, a
+// layer, a trajectory cut short). Any other is the user's, and the folder is refused naming it,
+// whatever the mode. A killed attempt's files are recorded again: by --resume (unsharded, only
+// when they are of the same env, seed and policy) and --overwrite, and by a shard's plain rerun.
 //
 // The folder is also refused when it is, holds or lies inside a source the run reads (record
 // --from, a replay file), paths and symlinks resolved, and when nothing can be written in it; both
@@ -95,6 +98,10 @@ class RunFolder {
   void RefuseForeignFiles(const std::filesystem::path& out, const std::string& quoted,
                           std::vector<std::string>* run_files,
                           const std::vector<std::string>& manifests) const;
+  // --resume without this run's manifest: refuses episode files (of an attempt killed before
+  // its manifest) that are of another env, seed or policy
+  void CheckSameRunWithoutManifest(const std::filesystem::path& out, const std::string& quoted,
+                                   const std::vector<std::string>& run_files) const;
   void Cleanup() noexcept;
   void Restore() noexcept;  // puts the files set aside back
   // --overwrite: moves `names` from `out` into aside_

@@ -2,8 +2,10 @@
 
 #include <algorithm>
 #include <cstdlib>
+#include <filesystem>
 
 #include "base/errors.h"
+#include "run/manifest.h"
 #include "run/run_files.h"
 
 namespace fetchscope {
@@ -49,7 +51,8 @@ Shard ParseShard(const std::string& text) {
   return {static_cast<int>(index), static_cast<int>(count), "--shard"};
 }
 
-Shard ResolveShard(const std::string& flag, int shard_count, const EnvLookup& lookup) {
+Shard ResolveShard(const std::string& flag, int shard_count, const EnvLookup& lookup,
+                   int run_shards) {
   const EnvLookup env =
       lookup ? lookup : [](const char* name) -> const char* { return std::getenv(name); };
   if (shard_count < 0)
@@ -97,6 +100,28 @@ Shard ResolveShard(const std::string& flag, int shard_count, const EnvLookup& lo
   // --array=1-16 or --array=0-30:2 number tasks from MIN in steps of STEP: shard = (ID-MIN)/STEP
   const long min = std::max(0L, EnvNumber(env, "SLURM_ARRAY_TASK_MIN"));
   const long step = std::max(1L, EnvNumber(env, "SLURM_ARRAY_TASK_STEP"));
+  bool has_max = false;
+  const long max = EnvNumber(env, "SLURM_ARRAY_TASK_MAX", &has_max);
+  const bool range = !has_max || max == min + (count - 1) * step;
+  if (run_shards > 0 && (!range || count != run_shards)) {
+    // some indices of the run in --out, resubmitted: the task ids are its shard indices
+    if (task >= run_shards) {
+      throw UsageError("SLURM_ARRAY_TASK_ID=" + std::to_string(task) +
+                       " is not a shard of the run in --out, which has " +
+                       std::to_string(run_shards) + " shards (0.." +
+                       std::to_string(run_shards - 1) +
+                       "): resubmit its missing shards by their index (--array=I,J...)");
+    }
+    return {static_cast<int>(task), run_shards, "SLURM_ARRAY_TASK_ID"};
+  }
+  if (!range) {
+    throw UsageError("SLURM_ARRAY_TASK_MAX=" + std::to_string(max) + " with SLURM_ARRAY_TASK_MIN=" +
+                     std::to_string(min) + ", SLURM_ARRAY_TASK_STEP=" + std::to_string(step) +
+                     " and SLURM_ARRAY_TASK_COUNT=" + std::to_string(count) +
+                     ": the array is not a range (--array=2,5,7?), so its tasks cannot be "
+                     "numbered as shards; use --array=0-" +
+                     std::to_string(count - 1) + " or pass --shard I/N");
+  }
   if (task < min || (task - min) % step != 0 || (task - min) / step >= count) {
     throw UsageError("SLURM_ARRAY_TASK_ID=" + std::to_string(task) + " does not fit an array of " +
                      std::to_string(count) + " task(s) from " + std::to_string(min) +
@@ -104,6 +129,26 @@ Shard ResolveShard(const std::string& flag, int shard_count, const EnvLookup& lo
                      std::to_string(count - 1) + " or pass --shard I/N");
   }
   return {static_cast<int>((task - min) / step), static_cast<int>(count), "SLURM_ARRAY_TASK_ID"};
+}
+
+int RunShardCount(const std::string& out) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  int n = 0;
+  for (const auto& entry : fs::directory_iterator(out.empty() ? "." : out, ec)) {
+    const std::string name = entry.path().filename().string();
+    if (!IsShardManifestFileName(name)) continue;
+    int count = 0;
+    try {
+      const Manifest m = ReadManifest(entry.path());
+      if (m.shard && m.parameters.recorded) count = m.shard->count;
+    } catch (const ManifestError&) {
+      continue;  // not a record manifest: the run folder says so
+    }
+    if (count < 2 || (n && count != n)) return 0;
+    n = count;
+  }
+  return n;
 }
 
 std::vector<int> ShardEpisodes(const Shard& shard, int episodes) {

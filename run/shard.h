@@ -31,10 +31,21 @@ Shard ParseShard(const std::string& text);
 /// JOB_COMPLETION_INDEX with `shard_count` (--shard-count N, 0 = not given); else
 /// SLURM_ARRAY_TASK_ID and SLURM_ARRAY_TASK_COUNT (offset by SLURM_ARRAY_TASK_MIN and divided
 /// by SLURM_ARRAY_TASK_STEP when those are set); else the whole run (0/1).
+///
+/// `run_shards` is the number of shards of the run already in --out (RunShardCount; 0: none).
+/// A Slurm array that is not the whole of that run (a resubmission of some indices: --array=1 or
+/// --array=1,3) records shard SLURM_ARRAY_TASK_ID of `run_shards`: its task ids are the shard
+/// indices. Without such a run, an array that is not a range (--array=2,5,7: MAX is not
+/// MIN + (COUNT-1)*STEP) is refused in every task, before anything is recorded.
 /// Throws UsageError, naming the variable and its value, for a malformed or out-of-range value,
 /// for JOB_COMPLETION_INDEX without --shard-count, and for --shard-count without
 /// JOB_COMPLETION_INDEX or disagreeing with --shard.
-Shard ResolveShard(const std::string& flag, int shard_count, const EnvLookup& env = nullptr);
+Shard ResolveShard(const std::string& flag, int shard_count, const EnvLookup& env = nullptr,
+                   int run_shards = 0);
+
+/// The number of shards of the record run whose shard manifests (manifest_shard_*_of_N.json)
+/// are in `out`: N when they all say the same N, else 0 (none, unreadable, or disagreeing).
+int RunShardCount(const std::string& out);
 
 /// The episodes of `shard` among 0 .. episodes-1, ascending.
 std::vector<int> ShardEpisodes(const Shard& shard, int episodes);

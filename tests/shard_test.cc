@@ -9,6 +9,8 @@
 #include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <regex>
+#include <string>
 
 #include "base/errors.h"
 #include "tests/test_util.h"
@@ -26,8 +28,9 @@ using Env = std::map<std::string, std::string>;
 
 // The machine running the tests may itself be a Slurm task or a Kubernetes pod.
 void ClearShardEnvironment() {
-  for (const char* name : {"SLURM_ARRAY_TASK_ID", "SLURM_ARRAY_TASK_COUNT", "SLURM_ARRAY_TASK_MIN",
-                           "SLURM_ARRAY_TASK_STEP", "JOB_COMPLETION_INDEX", "DISPLAY"}) {
+  for (const char* name :
+       {"SLURM_ARRAY_TASK_ID", "SLURM_ARRAY_TASK_COUNT", "SLURM_ARRAY_TASK_MIN",
+        "SLURM_ARRAY_TASK_STEP", "SLURM_ARRAY_TASK_MAX", "JOB_COMPLETION_INDEX", "DISPLAY"}) {
     unsetenv(name);
   }
 }
@@ -156,6 +159,77 @@ INSTANTIATE_TEST_SUITE_P(
         ShardCase{"", 8, {}, 0, 0, "", "--shard-count 8 needs JOB_COMPLETION_INDEX"},
         ShardCase{"", -2, {}, 0, 0, "", "--shard-count -2"}));
 
+// Slurm arrays: a range maps its tasks to shards; an array that is no range (--array=2,5,7) is
+// refused in every task; with a run of N shards already in --out, an array that is not the whole
+// run (resubmitted indices) records shard ID of N.
+TEST(ShardTest, SlurmArraysAgainstTheRunInOut) {
+  auto resolve = [](const Env& env, int run_shards) {
+    return ResolveShard(
+        "", 0,
+        [&](const char* name) -> const char* {
+          auto it = env.find(name);
+          return it == env.end() ? nullptr : it->second.c_str();
+        },
+        run_shards);
+  };
+  auto array = [](const char* id, const char* count, const char* min, const char* max,
+                  const char* step = "1") {
+    return Env{{"SLURM_ARRAY_TASK_ID", id},
+               {"SLURM_ARRAY_TASK_COUNT", count},
+               {"SLURM_ARRAY_TASK_MIN", min},
+               {"SLURM_ARRAY_TASK_MAX", max},
+               {"SLURM_ARRAY_TASK_STEP", step}};
+  };
+  // --array=0-6:2 is a range of 4 tasks; --array=1-4 too
+  EXPECT_EQ(resolve(array("4", "4", "0", "6", "2"), 0).index, 2);
+  EXPECT_EQ(resolve(array("4", "4", "1", "4"), 0).index, 3);
+  // --array=2,5,7: every task refuses, the first included, naming the variables
+  for (const char* id : {"2", "5", "7"}) {
+    try {
+      resolve(array(id, "3", "2", "7"), 0);
+      ADD_FAILURE() << "task " << id << " accepted --array=2,5,7";
+    } catch (const UsageError& e) {
+      EXPECT_NE(std::string(e.what()).find("SLURM_ARRAY_TASK_MAX=7 with SLURM_ARRAY_TASK_MIN=2"),
+                std::string::npos)
+          << e.what();
+      EXPECT_NE(std::string(e.what()).find("not a range"), std::string::npos) << e.what();
+    }
+  }
+  // a run of 4 shards in --out: --array=1 records shard 1/4, --array=1,3 shards 1/4 and 3/4
+  Shard s = resolve(array("1", "1", "1", "1"), 4);
+  EXPECT_EQ(s.index, 1);
+  EXPECT_EQ(s.count, 4);
+  s = resolve(array("3", "2", "1", "3"), 4);
+  EXPECT_EQ(s.index, 3);
+  EXPECT_EQ(s.count, 4);
+  // the whole run resubmitted maps as the first submission did (--array=1-4 again)
+  s = resolve(array("4", "4", "1", "4"), 4);
+  EXPECT_EQ(s.index, 3);
+  EXPECT_EQ(s.count, 4);
+  // an index the run does not have
+  try {
+    resolve(array("4", "1", "4", "4"), 4);
+    ADD_FAILURE() << "accepted task 4 of a 4-shard run";
+  } catch (const UsageError& e) {
+    EXPECT_NE(std::string(e.what()).find("SLURM_ARRAY_TASK_ID=4 is not a shard of the run in "
+                                         "--out, which has 4 shards (0..3)"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
+// The Kubernetes manifest the cluster guide links: one pod per shard, --shard-count = completions,
+// and --resume so that a retried pod keeps what a killed attempt finished.
+TEST(ShardTest, KubernetesManifestPassesItsCompletionsAsShardCount) {
+  const std::string job = ReadFile(testing::SourceDir() / "examples/k8s/record-job.yaml");
+  std::smatch completions, count;
+  ASSERT_TRUE(std::regex_search(job, completions, std::regex("\\n  completions: (\\d+)"))) << job;
+  ASSERT_TRUE(std::regex_search(job, count, std::regex("\"--shard-count\", \"(\\d+)\""))) << job;
+  EXPECT_EQ(completions[1], count[1]);
+  EXPECT_NE(job.find("completionMode: Indexed"), std::string::npos);
+  EXPECT_NE(job.find("\"--resume\""), std::string::npos);
+}
+
 TEST(ShardTest, EpisodesAndManifestNames) {
   EXPECT_EQ(ShardEpisodes({1, 3, ""}, 8), (std::vector<int>{1, 4, 7}));
   EXPECT_EQ(ShardEpisodes({0, 1, ""}, 3), (std::vector<int>{0, 1, 2}));
@@ -218,6 +292,38 @@ TEST_F(ShardRunTest, ShardsTogetherEqualTheUnshardedRunAndMerge) {
   }
   // merging again reads the shard manifests, not the merged one
   EXPECT_EQ(RunFetchscope("merge-manifests --quiet " + shared.string()).exit_code, 0);
+}
+
+// The Slurm environment through the real binary: an irregular array refuses in its first task
+// too, before anything is written; one index resubmitted into a folder holding shards of a 4-shard
+// run records that run's shard (and a different run there is still refused).
+TEST_F(ShardRunTest, SlurmResubmissionAndIrregularArrays) {
+  TempDir tmp;
+  const fs::path out = tmp.path() / "run";
+  auto slurm = [](const char* id, const char* count, const char* min, const char* max) {
+    return std::string("env SLURM_ARRAY_TASK_ID=") + id + " SLURM_ARRAY_TASK_COUNT=" + count +
+           " SLURM_ARRAY_TASK_MIN=" + min + " SLURM_ARRAY_TASK_MAX=" + max +
+           " SLURM_ARRAY_TASK_STEP=1 " + FETCHSCOPE_BIN + " ";
+  };
+  // --array=2,5,7: task 2 (the first) refuses like the others, naming the variables
+  auto r = RunCommand(slurm("2", "3", "2", "7") + kRun + " --out " + out.string());
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("the array is not a range"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(out));
+  // shards 0, 2, 3 of 4 recorded; shard 1 resubmitted alone (--array=1)
+  for (int i : {0, 2, 3}) {
+    ASSERT_EQ(RunFetchscope(kRun + " --shard " + std::to_string(i) + "/4 --out " + out.string())
+                  .exit_code,
+              0);
+  }
+  // another run (seed 12) resubmitted there: refused, naming the difference
+  r = RunCommand(slurm("1", "1", "1", "1") + Record(7, 12) + " --resume --out " + out.string());
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("--seed is 11 there and 12 here"), std::string::npos) << r.output;
+  r = RunCommand(slurm("1", "1", "1", "1") + kRun + " --resume --out " + out.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(fs::exists(out / "manifest_shard_0001_of_0004.json")) << r.output;
+  EXPECT_EQ(RunFetchscope("merge-manifests --quiet " + out.string()).exit_code, 0);
 }
 
 TEST_F(ShardRunTest, MergeAcrossFoldersWritesRelativePaths) {

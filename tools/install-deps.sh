@@ -2,7 +2,8 @@
 # Installs the Debian 12 packages fetchscope needs (only those missing). Run as root or with sudo.
 #   tools/install-deps.sh           build + test dependencies
 #   tools/install-deps.sh --bench   also the benchmark peers (mujoco-record, xvfb)
-#   tools/install-deps.sh --ci      also what tools/ci-extra.sh needs (clang + libFuzzer, valgrind)
+#   tools/install-deps.sh --ci      also what CI needs: tools/ci-extra.sh's clang + libFuzzer and
+#                                   valgrind, and slurm-wlm + munge for tests/slurm_test.cc
 # Then the npm packages of web/ (uPlot, embedded into the binary by the build; playwright-core,
 # which drives chromium in the browser tests), exactly as web/package-lock.json pins them.
 set -euo pipefail
@@ -20,8 +21,9 @@ if ! command -v node >/dev/null || ! command -v npm >/dev/null; then packages+=(
 for flag in "$@"; do
   case "$flag" in
     --bench) packages+=(libmujoco-samples xvfb xauth time) ;;
-    # libclang-rt-14-dev holds libFuzzer and the clang sanitizer runtimes
-    --ci) packages+=(clang clang-format libclang-rt-14-dev valgrind) ;;
+    # libclang-rt-14-dev holds libFuzzer and the clang sanitizer runtimes; slurm-wlm and munge:
+    # the one-node Slurm tests/slurm_test.cc starts under a temp folder (it skips without them)
+    --ci) packages+=(clang clang-format libclang-rt-14-dev valgrind slurm-wlm munge) ;;
     *) echo "install-deps: unknown option '$flag' (accepted: --bench, --ci)" >&2; exit 2 ;;
   esac
 done
