@@ -313,9 +313,15 @@ int RunRecord(const RecordOptions& options, const std::string& command_line,
   std::vector<ManifestEpisode> entries;
   std::map<std::string, double> timings = {{"sim", 0}, {"render", 0}, {"encode", 0}, {"write", 0}};
   std::map<int, std::vector<int>> by_worker;  // the episodes each worker recorded
+  std::map<std::string, double> cpu_stages;   // thread CPU by stage (base/cpu_clock.h)
   for (const auto& [k, entry] : result.results) {
     nlohmann::json e = entry;
     for (auto& [phase, seconds] : timings) seconds += e["timings_s"][phase].get<double>();
+    if (e["timings_s"].contains("cpu_s")) {
+      for (const auto& [stage, seconds] : e["timings_s"]["cpu_s"].items()) {
+        cpu_stages[stage] += seconds.get<double>();
+      }
+    }
     by_worker[e.at("worker").get<int>()].push_back(k);
     // what differs with --jobs stays out of the episode entries (they are identical)
     e.erase("worker");
@@ -419,6 +425,7 @@ int RunRecord(const RecordOptions& options, const std::string& command_line,
                         {"encode", timings["encode"]},
                         {"write", timings["write"]}};
   manifest.frames = progress.frames();
+  AddCpuAccount(cpu_stages, manifest.frames, &manifest.timings_s);
   manifest.interrupted = sig != 0;
   manifest.incomplete_episodes = incomplete;
   if (sig != 0) manifest.signal = sig == SIGINT ? "SIGINT" : "SIGTERM";

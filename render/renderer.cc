@@ -380,11 +380,14 @@ void Renderer::Submit(const mjData* data, const FrameInfo& info, uint8_t* rgb, u
 }
 
 void Renderer::FinishFrame(const PendingFrame& frame, const FrameInfo& info) const {
+  CpuLap lap;
   if (frame.copy) {
     std::memcpy(frame.copy, frame.rgb, static_cast<size_t>(frame_.width) * frame_.height * 3);
+    lap.Into(&cpu_.copy);
     DrawText2d(info, frame.copy, frame.copy_scale);
   }
   DrawText2d(info, frame.rgb);
+  lap.Into(&cpu_.hud);
 }
 
 uint8_t* Renderer::Collect() {
@@ -394,6 +397,7 @@ uint8_t* Renderer::Collect() {
   if (frame.slot < 0) return frame.rgb;
   gl_.MakeCurrent();
   const auto start = Clock::now();
+  CpuLap lap;
   PboGl& g = *pbo_gl_;
   const size_t stride = g.row_stride;
   const int h = frame_.height;
@@ -406,11 +410,14 @@ uint8_t* Renderer::Collect() {
                    "; use --readback sync");
   }
   const auto copy_start = Clock::now();
+  lap.Into(&cpu_.gl);
   // the flip is the copy out of the buffer: rows come bottom-up
   const size_t row = static_cast<size_t>(frame_.width) * 3;
   for (int r = 0; r < h; ++r) std::memcpy(frame.rgb + r * row, mapped + (h - 1 - r) * stride, row);
+  lap.Into(&cpu_.copy);
   g.UnmapBuffer(kGlPixelPackBuffer);
   g.BindBuffer(kGlPixelPackBuffer, 0);
+  lap.Into(&cpu_.gl);
   FinishFrame(frame, frame.info);  // the HUD and tile labels, as Render draws them
   if (profile_) {
     profile_->readback_ms += std::chrono::duration<double, std::milli>(copy_start - start).count();
@@ -443,6 +450,7 @@ void DropMocapGeoms(const mjModel* model, mjvScene* scene) {
 }  // namespace
 
 void Renderer::Draw(const mjData* data, const FrameInfo& info, bool overlays) {
+  CpuLap lap;
   gl_.MakeCurrent();
   mjvScene* scene = scene_->get();
   mjrContext* con = context_->get();
@@ -484,8 +492,10 @@ void Renderer::Draw(const mjData* data, const FrameInfo& info, bool overlays) {
     }
     const auto submit_start = Clock::now();
     scene_ms += std::chrono::duration<double, std::milli>(submit_start - scene_start).count();
+    lap.Into(&cpu_.scene);
     mjr_render(tiles_[i], scene, con);
     submit_ms += MsSince(submit_start);
+    lap.Into(&cpu_.gl);
   }
   const auto hud_start = Clock::now();
   if (profile_) {
@@ -494,6 +504,7 @@ void Renderer::Draw(const mjData* data, const FrameInfo& info, bool overlays) {
     const auto raster_start = Clock::now();
     submit_ms += std::chrono::duration<double, std::milli>(raster_start - hud_start).count();
     gl_finish_();
+    lap.Into(&cpu_.gl);
     profile_->raster_ms += MsSince(raster_start);
     profile_->scene_ms += scene_ms;
     profile_->submit_ms += submit_ms;
@@ -504,12 +515,15 @@ void Renderer::Draw(const mjData* data, const FrameInfo& info, bool overlays) {
 void Renderer::ReadRgb(uint8_t* rgb) {
   const mjrRect frame{0, 0, frame_.width, frame_.height};
   const auto start = Clock::now();
+  CpuLap lap;
   // MuJoCo resolves the multisampled buffer (a blit) and reads GL_RGB rows bottom-up. On
   // llvmpipe this is ~0.5 ms of a 15-40 ms frame (README, "Where a frame's time goes"); on
   // hardware GL Submit/Collect read through pixel buffers instead, overlapping the next frame.
   mjr_readPixels(rgb_bottom_up_.data(), nullptr, frame, context_->get());
   const auto flip_start = Clock::now();
+  lap.Into(&cpu_.gl);
   FlipRows(rgb_bottom_up_.data(), static_cast<size_t>(frame_.width) * 3, rgb);
+  lap.Into(&cpu_.copy);
   if (profile_) {
     profile_->readback_ms += std::chrono::duration<double, std::milli>(flip_start - start).count();
     profile_->flip_ms += MsSince(flip_start);
@@ -526,7 +540,9 @@ void Renderer::FlipRows(const uint8_t* src, size_t row_bytes, uint8_t* dst) cons
 void Renderer::Render(const mjData* data, const FrameInfo& info, uint8_t* rgb) {
   Draw(data, info, /*overlays=*/true);
   ReadRgb(rgb);
+  CpuLap lap;
   DrawText2d(info, rgb);
+  lap.Into(&cpu_.hud);
 }
 
 void Renderer::DrawText2d(const FrameInfo& info, uint8_t* rgb, ShownScale scale) const {

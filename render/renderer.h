@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "base/cpu_clock.h"
 #include "render/camera.h"
 #include "render/gl_context.h"
 #include "render/mjr_handles.h"
@@ -149,6 +150,10 @@ class Renderer {
   /// The objects of the last segmentation layer rendered, by palette index (those with pixels).
   const std::vector<SegmentObject>& segmentation_legend() const { return legend_; }
 
+  /// The calling thread's CPU time in the renderer since it was made, by stage (scene, gl, hud
+  /// and copy of base/cpu_clock.h; the other stages stay 0): Submit, Collect and Render.
+  const CpuStages& cpu() const { return cpu_; }
+
   /// Starts a new episode's trail.
   void ResetTrail() { trail_.Clear(); }
 
@@ -211,6 +216,7 @@ class Renderer {
   int msaa_samples_ = 0;
   std::string msaa_reason_;
   std::optional<Profile> profile_;  // set when FETCHSCOPE_PROFILE is
+  mutable CpuStages cpu_;           // thread CPU by stage, always kept
   void (*gl_finish_)() = nullptr;   // glFinish, for the profile
   Trail trail_;
   // Made in the constructor body, after the size checks. Lifetime order: the GL context (gl_)
