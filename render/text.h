@@ -88,6 +88,11 @@ class Font {
   std::string Fit(const std::string& utf8, int pixel_size, int max_width,
                   const std::string& ellipsis = "...") const;
 
+  /// Glyph bitmaps FreeType has rendered so far, by every font of the process. Each font keeps
+  /// the glyphs it rendered (per pixel size), so drawing the same characters again renders none:
+  /// a frame's HUD costs blits, not rasterisation (tests count this).
+  static long GlyphsRasterised();
+
   /// The file the font was loaded from.
   const std::filesystem::path& file() const { return file_; }
 
