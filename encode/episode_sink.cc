@@ -192,7 +192,9 @@ void EpisodeEncoder::Body() {
 
 void EpisodeEncoder::AddTile(const Frame& f) {
   CpuLap lap;
-  tiles_.push_back({f.rgb, options_.video.width, options_.video.height, f.label});
+  // scaled now: the sheet keeps 240-pixel tiles, not whole frames (byte for byte the same sheet)
+  tiles_.push_back(ScaleSheetTile(f.rgb.data(), options_.video.width, options_.video.height,
+                                  f.label, kSheetTileWidth, &sheet_scratch_));
   lap.Into(&cpu_.sheet);
 }
 
@@ -209,7 +211,7 @@ void EpisodeEncoder::Finalize() {
   CpuLap lap;
   const SheetImage sheet = MakeContactSheet(title, tiles_);
   WritePng((fs::path(o.out) / (name_ + "_sheet.png")).string(), sheet.width, sheet.height, 3, 8,
-           sheet.rgb.data());
+           sheet.rgb.data(), /*fast=*/true);
   lap.Into(&cpu_.sheet);
   // the episode's trajectory file, through the one trajectory writer
   Trajectory trajectory;

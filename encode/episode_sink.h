@@ -128,7 +128,8 @@ class EpisodeEncoder {
   std::set<int> on_sheet_;
   std::vector<VideoWriter> writers_;        // one per options.formats entry, in that order
   std::vector<VideoWriter> layer_writers_;  // per options.layers entry, one per format
-  std::vector<SheetTile> tiles_;
+  std::vector<SheetTile> tiles_;            // scaled at capture (ScaleSheetTile)
+  SheetScratch sheet_scratch_;              // ScaleSheetTile's working memory
   EpisodeRecord episode_;
   nlohmann::json extra_;
   nlohmann::json legend_;                 // the segmentation layer's
