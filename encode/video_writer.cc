@@ -276,6 +276,8 @@ bool VideoWriter::Impl::TryOpenEncoder(const std::string& name, std::string* fai
     codec_options.Set("preset", options.preset);
     codec_options.Set("crf", std::to_string(options.crf));
     codec_options.Set("threads", options.threads == 0 ? "auto" : std::to_string(options.threads));
+    const std::string params = X264ParamsFor(options.preset);
+    if (!params.empty()) codec_options.Set("x264-params", params);
   }
   if (int rc = avcodec_open2(context.get(), codec, codec_options.address()); rc < 0) {
     *failure = DescribeAvError(rc);
