@@ -41,7 +41,7 @@ int PresetIndex(const std::string& preset) {
 }
 
 std::string X264ParamsFor(const std::string& preset) {
-  return preset == "veryfast" ? "me=dia:subme=1:rc-lookahead=5" : "";
+  return preset == "veryfast" ? "me=dia:subme=1" : "";
 }
 
 const char* NvencPresetFor(int index) { return kNvencPresets[static_cast<size_t>(index)]; }
