@@ -75,8 +75,10 @@ nlohmann::json StageAccount(const std::string& self, const AssetSource& assets,
                             "encode", "sheet", "trajectory", "encode_other"}) {
     std::printf("  %-14s %6.3f ms\n", stage, ms.value(stage, 0.0));
   }
-  std::printf("  %-14s %6.3f ms   (every stage but gl: what a GPU node's cores pay)\n",
-              "outside GL", ms.value("outside_gl", 0.0));
+  std::printf(
+      "  %-14s %6.3f ms   (every stage but gl: a GPU node's cores pay this and the GL "
+      "driver's own CPU)\n",
+      "outside GL", ms.value("outside_gl", 0.0));
   std::printf("  %-14s %6.3f ms   (the whole process, start-up included)\n", "process",
               ms.value("process", 0.0));
   return {{"episodes", episodes},       {"frames", frames},    {"backend", backend},
