@@ -370,13 +370,26 @@ void Renderer::Submit(const mjData* data, const FrameInfo& info, uint8_t* rgb, u
   if (!async_) {
     ReadRgb(rgb);
     FinishFrame({rgb, -1, {}, copy, copy_scale}, info);
-    pending_.push_back({rgb, -1, {}});
+    PendingFrame& p = PushPending();
+    p.rgb = rgb;
+    p.slot = -1;
     return;
   }
   const int slot = next_slot_;
   next_slot_ = (next_slot_ + 1) % kReadbackDepth;
   StartAsyncRead(slot);
-  pending_.push_back({rgb, slot, info, copy, copy_scale});
+  PendingFrame& p = PushPending();
+  p.rgb = rgb;
+  p.slot = slot;
+  p.info = info;  // copied into the slot's own strings and vectors: their memory is reused
+  p.copy = copy;
+  p.copy_scale = copy_scale;
+}
+
+Renderer::PendingFrame& Renderer::PushPending() {
+  PendingFrame& p = pending_[(pending_head_ + pending_count_) % kReadbackDepth];
+  ++pending_count_;
+  return p;
 }
 
 void Renderer::FinishFrame(const PendingFrame& frame, const FrameInfo& info) const {
@@ -391,9 +404,11 @@ void Renderer::FinishFrame(const PendingFrame& frame, const FrameInfo& info) con
 }
 
 uint8_t* Renderer::Collect() {
-  if (pending_.empty()) return nullptr;
-  const PendingFrame frame = pending_.front();
-  pending_.pop_front();
+  if (pending_count_ == 0) return nullptr;
+  // the slot stays as it is until a later Submit, after this Collect has returned
+  const PendingFrame& frame = pending_[pending_head_];
+  pending_head_ = (pending_head_ + 1) % kReadbackDepth;
+  --pending_count_;
   if (frame.slot < 0) return frame.rgb;
   gl_.MakeCurrent();
   const auto start = Clock::now();
@@ -426,7 +441,7 @@ uint8_t* Renderer::Collect() {
   return frame.rgb;
 }
 
-void Renderer::DiscardPending() { pending_.clear(); }
+void Renderer::DiscardPending() { pending_count_ = 0; }
 
 namespace {
 
@@ -560,7 +575,8 @@ void Renderer::DrawText2d(const FrameInfo& info, uint8_t* rgb, ShownScale scale)
       const PixelRect t = TopDown(tiles_[i], frame_.height);
       if (cx >= t.x && cx < t.x + t.width && cy >= t.y && cy < t.y + t.height) hud_tile = i;
     }
-    const HudText hud = FormatHud(info, o);
+    HudText& hud = hud_;  // formatted into the same strings every frame: no allocation
+    FormatHud(info, o, &hud);
     const PixelRect tile = TopDown(tiles_[hud_tile], frame_.height);
     hud_box = PlaceHud(hud, tile, pos, scale);
     DrawHud(rgb, frame_.width, frame_.height, tile, hud, pos, options_.hud_opacity, scale);

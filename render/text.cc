@@ -59,7 +59,7 @@ std::string FontconfigMatch() {
 }
 
 // Next code point of `s` from `*at` (advanced past it); U+FFFD for a malformed sequence.
-char32_t NextCodePoint(const std::string& s, size_t* at) {
+char32_t NextCodePoint(std::string_view s, size_t* at) {
   const auto byte = [&](size_t i) { return static_cast<unsigned char>(s[i]); };
   const unsigned char lead = byte(*at);
   int extra;
@@ -93,12 +93,12 @@ char32_t NextCodePoint(const std::string& s, size_t* at) {
 
 // Calls line(begin, end) for each line of `text` (split at '\n'), as byte offsets: no copies.
 template <typename Line>
-void ForEachLine(const std::string& text, Line&& line) {
+void ForEachLine(std::string_view text, Line&& line) {
   size_t start = 0;
   while (true) {
     const size_t end = text.find('\n', start);
-    line(start, end == std::string::npos ? text.size() : end);
-    if (end == std::string::npos) break;
+    line(start, end == std::string_view::npos ? text.size() : end);
+    if (end == std::string_view::npos) break;
     start = end + 1;
   }
 }
@@ -258,7 +258,7 @@ struct Font::Impl {
   }
 
   // Advance width of the bytes [begin, end) of `text` (one line), pixels.
-  int LineWidth(const std::string& text, size_t begin, size_t end) {
+  int LineWidth(std::string_view text, size_t begin, size_t end) {
     FT_Pos pen = 0;
     for (size_t at = begin; at < end;) {
       const Glyph& g = Get(NextCodePoint(text, &at));
@@ -266,9 +266,9 @@ struct Font::Impl {
     }
     return static_cast<int>((pen + 32) >> 6);
   }
-  int LineWidth(const std::string& line) { return LineWidth(line, 0, line.size()); }
+  int LineWidth(std::string_view line) { return LineWidth(line, 0, line.size()); }
 
-  TextMetrics Measure(const std::string& text) {
+  TextMetrics Measure(std::string_view text) {
     TextMetrics m;
     LineMetrics(&m);
     if (text.empty()) return m;
@@ -302,20 +302,20 @@ const Font& Font::Default() {
   return *font;
 }
 
-TextMetrics Font::Measure(const std::string& utf8, int pixel_size) const {
+TextMetrics Font::Measure(std::string_view utf8, int pixel_size) const {
   CheckPixelSize(pixel_size);
   std::lock_guard<std::mutex> lock(mutex_);
   impl_->SetSize(pixel_size);
   return impl_->Measure(utf8);
 }
 
-TextMetrics Font::Draw(uint8_t* rgb, int width, int height, int x, int y, const std::string& utf8,
+TextMetrics Font::Draw(uint8_t* rgb, int width, int height, int x, int y, std::string_view utf8,
                        const TextStyle& style) const {
   Canvas canvas(rgb, width, height);
   return Draw(&canvas, x, y, utf8, style);
 }
 
-TextMetrics Font::Draw(Canvas* canvas, int x, int y, const std::string& utf8,
+TextMetrics Font::Draw(Canvas* canvas, int x, int y, std::string_view utf8,
                        const TextStyle& style) const {
   CheckPixelSize(style.pixel_size);
   if (style.padding < 0) {
@@ -357,6 +357,13 @@ TextMetrics Font::Draw(Canvas* canvas, int x, int y, const std::string& utf8,
     canvas->Blend(px, py, style.color, coverage / 255.0);
   });
   return m;
+}
+
+bool Font::Fits(std::string_view utf8, int pixel_size, int max_width) const {
+  CheckPixelSize(pixel_size);
+  std::lock_guard<std::mutex> lock(mutex_);
+  impl_->SetSize(pixel_size);
+  return impl_->LineWidth(utf8) <= max_width;
 }
 
 std::string Font::Fit(const std::string& utf8, int pixel_size, int max_width,
