@@ -69,7 +69,7 @@ bool GifKeepsFrame(int index, int fps, int gif_fps);
 inline constexpr const char* kDefaultVideoPreset = "veryfast";
 
 /// The x264 options libx264 gets on top of `preset`: for veryfast (the default) a cheaper motion
-/// search, "me=dia:subme=1", which cuts x264's CPU per 480x480 Fetch frame by about a quarter for
+/// search, "me=dia:subme=1", which cuts x264's CPU per 480x480 Fetch frame by about 30% for
 /// about 8% more bytes and 0.05 dB less PSNR (BENCHMARKS.md, "CPU per recorded frame"); "" for
 /// the other presets (x264's own).
 std::string X264ParamsFor(const std::string& preset);
