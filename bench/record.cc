@@ -36,6 +36,57 @@ namespace fetchscope::bench {
 using Clock = std::chrono::steady_clock;
 namespace fs = std::filesystem;
 
+namespace {
+
+// The CPU account of a recorded frame at record's defaults (FetchPush-v4, random, 480x480, HUD,
+// mp4 + sheet + JSON, --jobs 1) from the manifest's timings_s.cpu_ms_per_frame: thread CPU
+// clocks, so steady on a busy machine. llvmpipe rasterises on the render thread here
+// (LP_NUM_THREADS=0), so that its gl stage holds all of GL and "outside_gl" is what a node with
+// a GPU pays on its cores.
+nlohmann::json StageAccount(const std::string& self, const AssetSource& assets,
+                            const std::string& backend, const fs::path& dir) {
+  const int episodes = 8, frames = episodes * 51;
+  const char* before = std::getenv("LP_NUM_THREADS");
+  const std::string kept = before ? before : "";
+  setenv("LP_NUM_THREADS", "0", 1);
+  const RecordRun run =
+      RunRecordChild(self,
+                     Concat({"--env-id", "FetchPush-v4", "--policy", "random", "--episodes",
+                             std::to_string(episodes), "--backend", backend, "--jobs", "1"},
+                            AssetsArg(assets)),
+                     dir);
+  if (before) {
+    setenv("LP_NUM_THREADS", kept.c_str(), 1);
+  } else {
+    unsetenv("LP_NUM_THREADS");
+  }
+  if (run.child.exit_code != 0 || !run.manifest ||
+      !run.manifest->timings_s.contains("cpu_ms_per_frame")) {
+    const std::string why = run.child.exit_code != 0
+                                ? "record failed (exit " + std::to_string(run.child.exit_code) + ")"
+                                : "the manifest has no timings_s.cpu_ms_per_frame";
+    std::printf("record CPU per frame: skipped: %s\n", why.c_str());
+    return {{"skipped", why}};
+  }
+  const nlohmann::json& ms = run.manifest->timings_s["cpu_ms_per_frame"];
+  std::printf("record CPU per frame (FetchPush-v4 random 480x480, --jobs 1, %s, thread CPU):\n",
+              backend.c_str());
+  for (const char* stage : {"sim", "scene", "gl", "hud", "copy", "render_other", "convert",
+                            "encode", "sheet", "trajectory", "encode_other"}) {
+    std::printf("  %-14s %6.3f ms\n", stage, ms.value(stage, 0.0));
+  }
+  std::printf(
+      "  %-14s %6.3f ms   (every stage but gl: a GPU node's cores pay this and the GL "
+      "driver's own CPU)\n",
+      "outside GL", ms.value("outside_gl", 0.0));
+  std::printf("  %-14s %6.3f ms   (the whole process, start-up included)\n", "process",
+              ms.value("process", 0.0));
+  return {{"episodes", episodes},       {"frames", frames},    {"backend", backend},
+          {"wall_s", run.child.wall_s}, {"lp_num_threads", 0}, {"cpu_ms_per_frame", ms}};
+}
+
+}  // namespace
+
 nlohmann::json BenchRecord(const AssetSource& assets, const std::string& backends, double budget_s,
                            bool peers) {
   (void)budget_s;
@@ -48,6 +99,9 @@ nlohmann::json BenchRecord(const AssetSource& assets, const std::string& backend
       Concat({"--env-id", "FetchPush-v4", "--policy", "scripted", "--episodes",
               std::to_string(episodes), "--width", "640", "--height", "480"},
              AssetsArg(assets));
+  const std::vector<std::string> backend_list = Split(backends);
+  result["stages"] =
+      StageAccount(self, assets, backend_list.empty() ? "auto" : backend_list.front(), dir);
   nlohmann::json rows = nlohmann::json::array();
   std::string first_backend;
   std::printf("%-30s %-10s %s\n", "record (whole process)", "size", "ms/frame   peak RSS");

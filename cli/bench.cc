@@ -75,8 +75,10 @@ Command AddBench(CLI::App& app) {
          "--what", o->what,
          "sim, render, encode, record, all (those four); node: what sizes a job on this "
          "machine (render frames/s of one context, sync and async readback; record "
-         "frames/s at --jobs 1, cores/2 and cores as processes and as threads; the encoder; "
-         "and the --jobs and --worker-mode of the fastest record run, recommended); "
+         "frames/s at --jobs 1, cores/4, cores/2 and cores as processes and as threads, and "
+         "msaa 0 at the fastest of those --jobs; the encoder; and the --jobs and "
+         "--worker-mode of the fastest record run, recommended); record also gives each "
+         "stage's CPU time per frame (the manifest's timings_s.cpu_ms_per_frame); "
          "or soak: one long record run (--soak-frames, minutes) with its memory sampled "
          "every second. node and soak are not part of all")
       ->capture_default_str()

@@ -330,9 +330,15 @@ int RunRecord(const RecordOptions& options, const std::string& command_line,
   std::vector<ManifestEpisode> entries;
   std::map<std::string, double> timings = {{"sim", 0}, {"render", 0}, {"encode", 0}, {"write", 0}};
   std::map<int, std::vector<int>> by_worker;  // the episodes each worker recorded
+  std::map<std::string, double> cpu_stages;   // thread CPU by stage (base/cpu_clock.h)
   for (const auto& [k, entry] : result.results) {
     nlohmann::json e = entry;
     for (auto& [phase, seconds] : timings) seconds += e["timings_s"][phase].get<double>();
+    if (e["timings_s"].contains("cpu_s")) {
+      for (const auto& [stage, seconds] : e["timings_s"]["cpu_s"].items()) {
+        cpu_stages[stage] += seconds.get<double>();
+      }
+    }
     by_worker[e.at("worker").get<int>()].push_back(k);
     // what differs with --jobs stays out of the episode entries (they are identical)
     e.erase("worker");
@@ -413,22 +419,24 @@ int RunRecord(const RecordOptions& options, const std::string& command_line,
                       {"gl_renderer", first_worker.value("gl_renderer", "")},
                       {"gl_version", first_worker.value("gl_version", "")}};
   manifest.layers = SplitCommaList(LayersLabel(plan.layers));
-  manifest.video = {{"codec", codec_used},
-                    {"codecs", codecs},
-                    {"codec_reason", codec_reason},
-                    {"crf", o.crf},
-                    {"preset", o.preset.empty() ? kDefaultVideoPreset : o.preset},
-                    {"fps", o.fps},
-                    {"width", plan.video.width},
-                    {"height", plan.video.height},
-                    {"encoded_width", (plan.video.width + 1) & ~1},
-                    {"encoded_height", (plan.video.height + 1) & ~1},
-                    {"encoder_threads", plan.video.threads},
-                    {"encoders_per_worker", plan.encoders},
-                    {"container", plan.formats.front()},
-                    {"formats", plan.formats},
-                    {"gif", {{"fps", std::min(o.gif_fps, o.fps)}, {"width", o.gif_width}}},
-                    {"pix_fmt", "yuv420p"}};
+  manifest.video = {
+      {"codec", codec_used},
+      {"codecs", codecs},
+      {"codec_reason", codec_reason},
+      {"crf", o.crf},
+      {"preset", o.preset.empty() ? kDefaultVideoPreset : o.preset},
+      {"fps", o.fps},
+      {"width", plan.video.width},
+      {"height", plan.video.height},
+      {"encoded_width", (plan.video.width + 1) & ~1},
+      {"encoded_height", (plan.video.height + 1) & ~1},
+      {"encoder_threads", plan.video.threads},
+      {"x264_params", X264ParamsFor(o.preset.empty() ? kDefaultVideoPreset : o.preset)},
+      {"encoders_per_worker", plan.encoders},
+      {"container", plan.formats.front()},
+      {"formats", plan.formats},
+      {"gif", {{"fps", std::min(o.gif_fps, o.fps)}, {"width", o.gif_width}}},
+      {"pix_fmt", "yuv420p"}};
   manifest.versions = VersionsJson();
   manifest.timings_s = {{"wall", wall},
                         {"sim", timings["sim"]},
@@ -436,6 +444,7 @@ int RunRecord(const RecordOptions& options, const std::string& command_line,
                         {"encode", timings["encode"]},
                         {"write", timings["write"]}};
   manifest.frames = progress.frames();
+  AddCpuAccount(cpu_stages, manifest.frames, &manifest.timings_s);
   manifest.interrupted = sig != 0;
   manifest.incomplete_episodes = incomplete;
   if (sig != 0) manifest.signal = sig == SIGINT ? "SIGINT" : "SIGTERM";

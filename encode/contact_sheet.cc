@@ -16,11 +16,7 @@ constexpr int kMinTileWidth = 16;
 constexpr int kMaxTileWidth = 4096;
 constexpr int kLabelLines = 2;
 
-// Source pixels that cover one destination pixel, with their box-filter weights.
-struct Span {
-  int first = 0;
-  std::vector<double> weights;  // weights[k] is for source index first + k; they sum to 1
-};
+using Span = SheetSpan;
 
 // Box-filter spans mapping `source` samples onto `destination` samples: each
 // destination pixel averages the source interval it covers, partial pixels
@@ -44,14 +40,24 @@ std::vector<Span> BoxSpans(int source, int destination) {
   return spans;
 }
 
-// `tile` box-filtered to out_width x out_height, RGB24.
-std::vector<uint8_t> Scaled(const SheetTile& tile, int out_width, int out_height) {
-  const std::vector<Span> columns = BoxSpans(tile.width, out_width);
-  const std::vector<Span> rows = BoxSpans(tile.height, out_height);
+// `rgb` (width x height) box-filtered to out_width x out_height, RGB24; `scratch` holds the
+// horizontal pass (reused between calls, so that no frame-sized buffer is made per tile).
+std::vector<uint8_t> Scaled(const uint8_t* rgb, int width, int height, int out_width,
+                            int out_height, SheetScratch* scratch) {
+  SheetScratch& s = *scratch;
+  if (s.from_width != width || s.from_height != height || s.to_width != out_width ||
+      s.to_height != out_height) {
+    s.columns = BoxSpans(width, out_width);
+    s.rows = BoxSpans(height, out_height);
+    s.from_width = width, s.from_height = height, s.to_width = out_width, s.to_height = out_height;
+  }
+  const std::vector<Span>& columns = s.columns;
+  const std::vector<Span>& rows = s.rows;
   // Horizontal pass over every source row, then vertical pass.
-  std::vector<double> narrow(static_cast<std::size_t>(tile.height) * out_width * 3);
-  for (int y = 0; y < tile.height; ++y) {
-    const uint8_t* in = tile.rgb.data() + static_cast<std::size_t>(y) * tile.width * 3;
+  std::vector<double>& narrow = s.narrow;
+  narrow.resize(static_cast<std::size_t>(height) * out_width * 3);
+  for (int y = 0; y < height; ++y) {
+    const uint8_t* in = rgb + static_cast<std::size_t>(y) * width * 3;
     double* out = narrow.data() + static_cast<std::size_t>(y) * out_width * 3;
     for (int x = 0; x < out_width; ++x) {
       const Span& span = columns[x];
@@ -95,12 +101,38 @@ std::string FitLabel(const Font& font, const std::string& label, int pixel_size,
   return fitted;
 }
 
-int ScaledHeight(const SheetTile& tile, int tile_width) {
-  const long rounded = std::lround(static_cast<double>(tile.height) * tile_width / tile.width);
+int ScaledHeight(int width, int height, int tile_width) {
+  const long rounded = std::lround(static_cast<double>(height) * tile_width / width);
   return static_cast<int>(std::max(1L, rounded));
+}
+int ScaledHeight(const SheetTile& tile, int tile_width) {
+  return ScaledHeight(tile.width, tile.height, tile_width);
+}
+
+void CheckTileWidth(int tile_width) {
+  if (tile_width < kMinTileWidth || tile_width > kMaxTileWidth) {
+    throw UsageError("contact sheet tile width " + std::to_string(tile_width) +
+                     " is out of range: accepted " + std::to_string(kMinTileWidth) + ".." +
+                     std::to_string(kMaxTileWidth));
+  }
 }
 
 }  // namespace
+
+SheetTile ScaleSheetTile(const uint8_t* rgb, int width, int height, std::string label,
+                         int tile_width, SheetScratch* scratch) {
+  CheckTileWidth(tile_width);
+  if (width <= 0 || height <= 0) {
+    throw RunError("contact sheet tile (" + label + ") is " + std::to_string(width) + "x" +
+                   std::to_string(height) + ": expected a positive size");
+  }
+  SheetTile tile;
+  tile.width = tile_width;
+  tile.height = ScaledHeight(width, height, tile_width);
+  tile.rgb = Scaled(rgb, width, height, tile.width, tile.height, scratch);
+  tile.label = std::move(label);
+  return tile;
+}
 
 SheetLayout ContactSheetLayout(int tile_width) {
   const Font& font = Font::Default();
@@ -118,11 +150,7 @@ SheetLayout ContactSheetLayout(int tile_width) {
 
 SheetImage MakeContactSheet(const std::string& title, const std::vector<SheetTile>& tiles,
                             int tile_width, int columns) {
-  if (tile_width < kMinTileWidth || tile_width > kMaxTileWidth) {
-    throw UsageError("contact sheet tile width " + std::to_string(tile_width) +
-                     " is out of range: accepted " + std::to_string(kMinTileWidth) + ".." +
-                     std::to_string(kMaxTileWidth));
-  }
+  CheckTileWidth(tile_width);
   if (columns < 0) {
     throw UsageError("contact sheet columns " + std::to_string(columns) +
                      " is negative: give 0 (automatic) or more");
@@ -166,13 +194,22 @@ SheetImage MakeContactSheet(const std::string& title, const std::vector<SheetTil
               kSheetText);
 
   const int label_room = tile_width - 2 * kSheetLabelPadding;
+  SheetScratch scratch;
   for (int i = 0; i < n; ++i) {
     const int x0 = kSheetMargin + (i % columns) * (tile_width + kSheetMargin);
     const int y0 = layout.title_bar_height + kSheetMargin +
                    (i / columns) * (kSheetMargin + cell_height + layout.label_bar_height);
-    const int scaled_height = ScaledHeight(tiles[i], tile_width);
-    canvas.Paste(Scaled(tiles[i], tile_width, scaled_height).data(), tile_width, scaled_height, x0,
-                 y0);
+    const SheetTile& tile = tiles[i];
+    const int scaled_height = ScaledHeight(tile, tile_width);
+    if (tile.width == tile_width && tile.height == scaled_height) {
+      // already at its size (ScaleSheetTile): the box filter would give each pixel back as it is
+      canvas.Paste(tile.rgb.data(), tile_width, scaled_height, x0, y0);
+    } else {
+      canvas.Paste(
+          Scaled(tile.rgb.data(), tile.width, tile.height, tile_width, scaled_height, &scratch)
+              .data(),
+          tile_width, scaled_height, x0, y0);
+    }
     const int bar_y = y0 + cell_height;
     canvas.FillRect(x0, bar_y, tile_width, layout.label_bar_height, kSheetLabelBar);
     canvas.Text(x0 + kSheetLabelPadding, bar_y + kSheetLabelPadding,

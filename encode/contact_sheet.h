@@ -22,7 +22,8 @@
 
 namespace fetchscope {
 
-inline constexpr int kSheetMargin = 8;                 ///< gap around and between cells, pixels
+inline constexpr int kSheetTileWidth = 240;  ///< MakeContactSheet's tile width unless told
+inline constexpr int kSheetMargin = 8;       ///< gap around and between cells, pixels
 inline constexpr Rgb kSheetBackground = {24, 24, 28};  ///< behind everything
 inline constexpr Rgb kSheetLabelBar = {44, 44, 50};    ///< label band fill
 inline constexpr Rgb kSheetText = {235, 235, 235};     ///< title and label text
@@ -67,7 +68,29 @@ struct SheetImage {
 /// tile_width outside 16..4096 or negative columns, RunError for a tile whose
 /// buffer does not match its size (naming the tile).
 SheetImage MakeContactSheet(const std::string& title, const std::vector<SheetTile>& tiles,
-                            int tile_width = 240, int columns = 0);
+                            int tile_width = kSheetTileWidth, int columns = 0);
+
+/// Source pixels that cover one destination pixel, with their box-filter weights.
+struct SheetSpan {
+  int first = 0;                ///< the first source index
+  std::vector<double> weights;  ///< weights[k] is for source index first + k; they sum to 1
+};
+
+/// ScaleSheetTile's working memory, reused between calls: the filter's spans for the last sizes
+/// it scaled (from x to), and the intermediate rows of its horizontal pass.
+struct SheetScratch {
+  int from_width = 0, from_height = 0, to_width = 0, to_height = 0;
+  std::vector<SheetSpan> columns, rows;
+  std::vector<double> narrow;
+};
+
+/// The frame `rgb` (RGB24, `width` x `height`, row 0 = top) scaled to `tile_width` wide as
+/// MakeContactSheet scales a tile (box filter, aspect kept), labelled `label`: a sheet made of
+/// such tiles at the same tile_width is byte for byte the sheet of the full frames, so a recorder
+/// keeps the small tile, not the frame. `scratch` is the filter's working buffer, reused between
+/// calls. Throws UsageError for tile_width outside 16..4096, RunError for a size not positive.
+SheetTile ScaleSheetTile(const uint8_t* rgb, int width, int height, std::string label,
+                         int tile_width, SheetScratch* scratch);
 
 /// A frame's caption on an episode's sheet: "t=0 reset" at the reset, else "t=STEP r=REWARD",
 /// then "d=DISTANCE" and "SUCCESS" when it is one. Numbers through PictureNumber

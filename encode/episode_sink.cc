@@ -109,10 +109,12 @@ EpisodeEncoder::~EpisodeEncoder() {
   }
 }
 
-void EpisodeEncoder::Close(EpisodeRecord episode, double sim_s, double render_s) {
+void EpisodeEncoder::Close(EpisodeRecord episode, double sim_s, double render_s,
+                           CpuStages render_cpu) {
   episode_ = std::move(episode);
   sim_s_ = sim_s;
   render_s_ = render_s;
+  render_cpu_ = render_cpu;
   Enqueue(nullptr, Command::kClose);
 }
 
@@ -189,7 +191,11 @@ void EpisodeEncoder::Body() {
 }
 
 void EpisodeEncoder::AddTile(const Frame& f) {
-  tiles_.push_back({f.rgb, options_.video.width, options_.video.height, f.label});
+  CpuLap lap;
+  // scaled now: the sheet keeps 240-pixel tiles, not whole frames (byte for byte the same sheet)
+  tiles_.push_back(ScaleSheetTile(f.rgb.data(), options_.video.width, options_.video.height,
+                                  f.label, kSheetTileWidth, &sheet_scratch_));
+  lap.Into(&cpu_.sheet);
 }
 
 void EpisodeEncoder::Finalize() {
@@ -202,9 +208,11 @@ void EpisodeEncoder::Finalize() {
   char title[256];
   std::snprintf(title, sizeof(title), "%s  seed %s  policy %s  episode %d%s", o.env_id.c_str(),
                 o.seed_text.c_str(), o.policy.c_str(), k_, complete ? "" : "  (interrupted)");
+  CpuLap lap;
   const SheetImage sheet = MakeContactSheet(title, tiles_);
   WritePng((fs::path(o.out) / (name_ + "_sheet.png")).string(), sheet.width, sheet.height, 3, 8,
-           sheet.rgb.data());
+           sheet.rgb.data(), /*fast=*/true);
+  lap.Into(&cpu_.sheet);
   // the episode's trajectory file, through the one trajectory writer
   Trajectory trajectory;
   trajectory.env_id = o.env_id;
@@ -213,8 +221,22 @@ void EpisodeEncoder::Finalize() {
   trajectory.assets = o.assets;
   trajectory.episodes = {episode_};
   WriteFileAtomically((fs::path(o.out) / (name_ + ".json")).string(), TrajectoryText(trajectory));
+  lap.Into(&cpu_.trajectory);
   const nlohmann::json layers = FinishLayers();
   const double write_s = Since(t0);
+  // this thread's stages: the writers' conversion and encoding, the rest of its time "other"
+  for (const auto* list : {&writers_, &layer_writers_}) {
+    for (const VideoWriter& w : *list) {
+      cpu_.convert += w.convert_cpu_s();
+      cpu_.encode += w.encode_cpu_s();
+    }
+  }
+  cpu_.encode_other =
+      ThreadCpuSeconds() - (cpu_.convert + cpu_.encode + cpu_.sheet + cpu_.trajectory);
+  CpuStages cpu = render_cpu_;
+  cpu += cpu_;
+  nlohmann::json cpu_json = nlohmann::json::object();
+  for (const auto& [stage, seconds] : cpu.Items()) cpu_json[stage] = seconds;
   const bool success = episode_.steps.back().is_success;
   nlohmann::json videos = nlohmann::json::object();  // format -> file and frames in it
   for (size_t i = 0; i < writers_.size(); ++i) {
@@ -222,22 +244,25 @@ void EpisodeEncoder::Finalize() {
                             {"frames", writers_[i].frames_encoded()}};
   }
   const VideoWriter& first = writers_.front();
-  nlohmann::json entry = {
-      {"index", k_},
-      {"video", fs::path(first.path()).filename().string()},
-      {"videos", videos},
-      {"sheet", name_ + "_sheet.png"},
-      {"trajectory", name_ + ".json"},
-      {"frames", first.frames_written()},
-      {"steps", steps},
-      {"complete", complete},
-      {"return", JsonDouble(episode_.episode_return)},
-      {"is_success", success},
-      {"codec", first.codec_name()},
-      {"encoded_width", first.encoded_width()},
-      {"encoded_height", first.encoded_height()},
-      {"timings_s",
-       {{"sim", sim_s_}, {"render", render_s_}, {"encode", encode_s_}, {"write", write_s}}}};
+  nlohmann::json entry = {{"index", k_},
+                          {"video", fs::path(first.path()).filename().string()},
+                          {"videos", videos},
+                          {"sheet", name_ + "_sheet.png"},
+                          {"trajectory", name_ + ".json"},
+                          {"frames", first.frames_written()},
+                          {"steps", steps},
+                          {"complete", complete},
+                          {"return", JsonDouble(episode_.episode_return)},
+                          {"is_success", success},
+                          {"codec", first.codec_name()},
+                          {"encoded_width", first.encoded_width()},
+                          {"encoded_height", first.encoded_height()},
+                          {"timings_s",
+                           {{"sim", sim_s_},
+                            {"render", render_s_},
+                            {"encode", encode_s_},
+                            {"write", write_s},
+                            {"cpu_s", cpu_json}}}};
   if (!layers.empty()) entry["layers"] = layers;
   if (extra_.is_object()) entry.update(extra_);
   done_(k_, std::move(entry));

@@ -20,6 +20,7 @@
 #include <utility>
 #include <vector>
 
+#include "base/cpu_clock.h"
 #include "encode/contact_sheet.h"
 #include "encode/frame_pool.h"
 #include "encode/video_writer.h"
@@ -95,8 +96,9 @@ class EpisodeEncoder {
   /// Hands a rendered frame over (render thread); the encoder returns it to the pool.
   void Push(Frame* f) { Enqueue(f, Command::kFrame); }
   /// No more frames: finish the files with `episode` as the trajectory; sim_s and render_s
-  /// are the render thread's seconds, for the manifest.
-  void Close(EpisodeRecord episode, double sim_s, double render_s);
+  /// are the render thread's seconds, for the manifest; `render_cpu` its CPU time by stage
+  /// (base/cpu_clock.h), to which this thread adds its own (timings_s.cpu_s).
+  void Close(EpisodeRecord episode, double sim_s, double render_s, CpuStages render_cpu = {});
   /// Members added to the manifest entry (e.g. "hindsight"); call before Close.
   void SetExtra(nlohmann::json extra) { extra_ = std::move(extra); }
   /// The layers' extras: the segmentation legend JSON (written beside the videos) and the depth
@@ -126,12 +128,15 @@ class EpisodeEncoder {
   std::set<int> on_sheet_;
   std::vector<VideoWriter> writers_;        // one per options.formats entry, in that order
   std::vector<VideoWriter> layer_writers_;  // per options.layers entry, one per format
-  std::vector<SheetTile> tiles_;
+  std::vector<SheetTile> tiles_;            // scaled at capture (ScaleSheetTile)
+  SheetScratch sheet_scratch_;              // ScaleSheetTile's working memory
   EpisodeRecord episode_;
   nlohmann::json extra_;
   nlohmann::json legend_;                 // the segmentation layer's
   std::vector<DepthScale> depth_scales_;  // the depth layer's, one per camera view
   double sim_s_ = 0, render_s_ = 0, encode_s_ = 0;
+  CpuStages render_cpu_;  // the render thread's (from Close)
+  CpuStages cpu_;         // this thread's (sheet tiles, then Finalize)
   std::exception_ptr error_;
   std::atomic<bool> finished_{false};
   std::mutex mutex_;

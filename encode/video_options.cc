@@ -40,6 +40,10 @@ int PresetIndex(const std::string& preset) {
   return -1;
 }
 
+std::string X264ParamsFor(const std::string& preset) {
+  return preset == "veryfast" ? "me=dia:subme=1" : "";
+}
+
 const char* NvencPresetFor(int index) { return kNvencPresets[static_cast<size_t>(index)]; }
 
 void ValidateVideoOptions(const VideoOptions& options) {

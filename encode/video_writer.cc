@@ -14,6 +14,7 @@
 #include <utility>
 #include <vector>
 
+#include "base/cpu_clock.h"
 #include "base/errors.h"
 #include "base/kill_point.h"
 #include "base/suggest.h"
@@ -107,6 +108,7 @@ struct VideoWriter::Impl {
   std::vector<uint8_t> padded;  // swscale's input: the frame (odd row/column repeated) + slack
   int frames_written = 0;
   int frames_encoded = 0;
+  double convert_cpu_s = 0, encode_cpu_s = 0;  // thread CPU (convert_cpu_s())
   bool finished = false;
   bool gif = false;
   int gif_fps = 0;           // options.gif_fps, at most options.fps
@@ -275,6 +277,8 @@ bool VideoWriter::Impl::TryOpenEncoder(const std::string& name, std::string* fai
     codec_options.Set("preset", options.preset);
     codec_options.Set("crf", std::to_string(options.crf));
     codec_options.Set("threads", options.threads == 0 ? "auto" : std::to_string(options.threads));
+    const std::string params = X264ParamsFor(options.preset);
+    if (!params.empty()) codec_options.Set("x264-params", params);
   }
   if (int rc = avcodec_open2(context.get(), codec, codec_options.address()); rc < 0) {
     *failure = DescribeAvError(rc);
@@ -530,21 +534,31 @@ void VideoWriter::AddFrame(const uint8_t* rgb) {
     throw RunError("video " + Quoted(impl_->final_path) +
                    " is already finished: cannot add frames");
   }
+  CpuLap lap;
   if (impl_->gif) {
     if (impl_->GifKeeps(impl_->frames_written)) {
       impl_->PushGifFrame(rgb);
       impl_->DrainGifFilter();
     }
     ++impl_->frames_written;
+    lap.Into(&impl_->encode_cpu_s);
     return;
   }
   impl_->ConvertFrame(rgb);
+  lap.Into(&impl_->convert_cpu_s);
   impl_->frame->pts = impl_->frames_written;
   impl_->SendFrame(impl_->frame.get());
   ++impl_->frames_written;
+  lap.Into(&impl_->encode_cpu_s);
 }
 
-void VideoWriter::Finish() { impl_->Finish(); }
+void VideoWriter::Finish() {
+  CpuLap lap;
+  impl_->Finish();
+  lap.Into(&impl_->encode_cpu_s);
+}
+double VideoWriter::convert_cpu_s() const { return impl_->convert_cpu_s; }
+double VideoWriter::encode_cpu_s() const { return impl_->encode_cpu_s; }
 int VideoWriter::frames_written() const { return impl_->frames_written; }
 int VideoWriter::frames_encoded() const { return impl_->frames_encoded; }
 const std::string& VideoWriter::codec_name() const { return impl_->codec_name; }

@@ -68,6 +68,12 @@ bool GifKeepsFrame(int index, int fps, int gif_fps);
 /// from dominating a record run.
 inline constexpr const char* kDefaultVideoPreset = "veryfast";
 
+/// The x264 options libx264 gets on top of `preset`: for veryfast (the default) a cheaper motion
+/// search, "me=dia:subme=1", which cuts x264's CPU per 480x480 Fetch frame by about 30% for
+/// about 8% more bytes and 0.05 dB less PSNR (BENCHMARKS.md, "CPU per recorded frame"); "" for
+/// the other presets (x264's own).
+std::string X264ParamsFor(const std::string& preset);
+
 /// Checks codec, crf, fps, preset and size without opening anything (UsageError on a bad one),
 /// so a command can reject bad options before it creates any output.
 void ValidateVideoOptions(const VideoOptions& options);
@@ -140,6 +146,11 @@ class VideoWriter {
   int encoded_height() const;
   /// The final path given to the constructor.
   const std::string& path() const;
+  /// CPU seconds of the threads that called AddFrame and Finish in RGB to YUV conversion
+  /// (swscale and its input copy) and in the encoder and muxer (the GIF's filter graph counts as
+  /// encoding). A multi-threaded encoder's own threads are not in it (record runs one thread).
+  double convert_cpu_s() const;
+  double encode_cpu_s() const;  ///< as convert_cpu_s
 
  private:
   friend VideoCodecDecision DecideVideoCodec(const VideoOptions& options);

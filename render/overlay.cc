@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "base/errors.h"
@@ -84,7 +85,7 @@ void AddConnector(mjvScene* scene, int type, double width, const std::array<doub
 
 // Frame text (HUD, tile labels) is DejaVu Sans through FreeType (render/text.h) at an em of
 // `pixels`, drawn through the canvas.
-TextMetrics FrameText(const std::string& text, int pixels) {
+TextMetrics FrameText(std::string_view text, int pixels) {
   return Font::Default().Measure(text, pixels);
 }
 
@@ -103,7 +104,7 @@ void DrawBox(Canvas* canvas, const PixelRect& r, double opacity) {
 // Frame text over a box: with a box lighter than kHudOutlineBelowOpacity (0 = none) the text
 // gets a black outline, so that white text reads on the white table; over the darker box
 // (the default 0.6) it is drawn as it always was.
-void BoxedText(Canvas* canvas, int x, int y, const std::string& text, int pixels, Rgb color,
+void BoxedText(Canvas* canvas, int x, int y, std::string_view text, int pixels, Rgb color,
                double opacity) {
   TextStyle style;
   style.pixel_size = pixels;
@@ -253,43 +254,66 @@ void AddOverlayGeoms(const OverlaySet& overlays, const FrameInfo& info,
 
 HudText FormatHud(const FrameInfo& info, const OverlaySet& overlays) {
   HudText hud;
-  hud.title = info.title;
-  auto line = [&](const std::string& label, const std::string& value) {
-    hud.labels += label + "\n";
-    hud.values += value + "\n";
+  FormatHud(info, overlays, &hud);
+  return hud;
+}
+
+void FormatHud(const FrameInfo& info, const OverlaySet& overlays, HudText* out) {
+  HudText& hud = *out;
+  hud.title.assign(info.title);  // assign, clear and append keep the strings' memory
+  hud.labels.clear();
+  hud.values.clear();
+  auto line = [&](std::string_view label, std::string_view value) {
+    hud.labels.append(label);
+    hud.labels.push_back('\n');
+    hud.values.append(value);
+    hud.values.push_back('\n');
   };
+  char text[96];  // a value formatted in place (std::to_string and friends may allocate)
   // a step Gymnasium's TimeLimit would not give (--steps beyond it) says so
-  line("step", info.past_time_limit > 0 ? std::to_string(info.step) + " past limit " +
-                                              std::to_string(info.past_time_limit)
-                                        : std::to_string(info.step));
+  if (info.past_time_limit > 0) {
+    std::snprintf(text, sizeof(text), "%d past limit %d", info.step, info.past_time_limit);
+  } else {
+    std::snprintf(text, sizeof(text), "%d", info.step);
+  }
+  line("step", text);
   // PictureNumber: a sparse reward of -0.0 shows as 0.0000, an action of -0.001 as +0.00
   line("reward", std::isnan(info.reward) ? "-" : PictureNumber("%.4f", info.reward));
   line("distance", PictureNumber("%.4f m", info.distance));
   line("success", info.success ? "yes" : "no");
+  hud.labels.append("action\n");
   if (info.has_action) {
-    std::string action;
-    for (double a : info.action) action += (action.empty() ? "" : " ") + PictureNumber("%+.2f", a);
-    line("action", action);
+    for (size_t i = 0; i < info.action.size(); ++i) {
+      if (i > 0) hud.values.push_back(' ');
+      hud.values.append(PictureNumber("%+.2f", info.action[i]));
+    }
+    hud.values.push_back('\n');
   } else {
-    line("action", "-");
+    hud.values.append("-\n");
   }
-  if (overlays.action) line("arrow", Format("x%.0f of 0.05 m/unit", kActionArrowScale));
+  if (overlays.action) {
+    std::snprintf(text, sizeof(text), "x%.0f of 0.05 m/unit", kActionArrowScale);
+    line("arrow", text);
+  }
   if (overlays.hindsight) {
     // on every frame, so that the box keeps its height ("-": no transition ends here)
-    line("HER", info.relabelled_successes < 0
-                    ? std::string("-")
-                    : std::to_string(info.relabelled_successes) + "/" +
-                          std::to_string(info.relabelled.size()) + " successes");
+    if (info.relabelled_successes < 0) {
+      line("HER", "-");
+    } else {
+      std::snprintf(text, sizeof(text), "%d/%zu successes", info.relabelled_successes,
+                    info.relabelled.size());
+      line("HER", text);
+    }
   }
   if (overlays.ghost && info.ghost) {  // the ghost marker's legend: how far the replay is off
     const auto& g = *info.ghost;
     const double dx = g[0] - info.achieved[0], dy = g[1] - info.achieved[1],
                  dz = g[2] - info.achieved[2];
-    line("ghost", Format("%.5f m off", std::sqrt(dx * dx + dy * dy + dz * dz)));
+    std::snprintf(text, sizeof(text), "%.5f m off", std::sqrt(dx * dx + dy * dy + dz * dz));
+    line("ghost", text);
   }
   hud.labels.pop_back();  // no trailing newline
   hud.values.pop_back();
-  return hud;
 }
 
 }  // namespace fetchscope
@@ -363,15 +387,17 @@ int HudTextPixels(int tile_width, int tile_height, ShownScale scale) {
 
 namespace {
 
-std::vector<std::string> Lines(const std::string& text) {
-  std::vector<std::string> out;
-  size_t start = 0;
-  while (true) {
-    const size_t end = text.find('\n', start);
-    out.push_back(text.substr(start, end == std::string::npos ? std::string::npos : end - start));
-    if (end == std::string::npos) return out;
-    start = end + 1;
-  }
+// The line of `text` that starts at *at, *at moved past it (and its '\n'); no copy is made.
+// *at == npos once the last line is taken.
+std::string_view NextLine(std::string_view text, size_t* at) {
+  const size_t start = *at;
+  const size_t end = text.find('\n', start);
+  *at = end == std::string_view::npos ? std::string_view::npos : end + 1;
+  return text.substr(start, end == std::string_view::npos ? std::string_view::npos : end - start);
+}
+
+int LineCount(std::string_view text) {
+  return 1 + static_cast<int>(std::count(text.begin(), text.end(), '\n'));
 }
 
 struct HudGeometry {
@@ -396,7 +422,7 @@ std::optional<HudGeometry> LayoutHud(const HudText& hud, const PixelRect& tile,
   g.gap = g.pixels;
   g.label_w = FrameText(hud.labels, g.pixels).width;
   g.value_w = FrameText(kHudWidestValue, g.pixels).width;
-  const int rows = static_cast<int>(Lines(hud.labels).size()) + (hud.title.empty() ? 0 : 1);
+  const int rows = LineCount(hud.labels) + (hud.title.empty() ? 0 : 1);
   g.box.width = g.pad + g.label_w + g.gap + g.value_w + g.pad;
   g.box.height = g.pad + rows * g.pitch + g.pad;
   const int margin = g.pad;
@@ -425,18 +451,24 @@ bool DrawHud(uint8_t* rgb, int width, int height, const PixelRect& tile, const H
   const Font& font = Font::Default();
   const int x = g->box.x + g->pad, value_x = x + g->label_w + g->gap;
   int y = g->box.y + g->pad;
+  // text that fits is drawn as it is; only a text that must be cut is copied (Font::Fit)
+  std::string cut;
+  auto fitted = [&](std::string_view text, int width) -> std::string_view {
+    if (font.Fits(text, g->pixels, width)) return text;
+    cut = font.Fit(std::string(text), g->pixels, width);
+    return cut;
+  };
   if (!hud.title.empty()) {
     const int title_w = g->box.width - 2 * g->pad;
-    BoxedText(&canvas, x, y, font.Fit(hud.title, g->pixels, title_w), g->pixels, kHudValueColor,
-              opacity);
+    BoxedText(&canvas, x, y, fitted(hud.title, title_w), g->pixels, kHudValueColor, opacity);
     y += g->pitch;
   }
-  const std::vector<std::string> labels = Lines(hud.labels), values = Lines(hud.values);
-  for (size_t i = 0; i < labels.size(); ++i, y += g->pitch) {
-    BoxedText(&canvas, x, y, labels[i], g->pixels, kHudLabelColor, opacity);
+  size_t label_at = 0, value_at = 0;
+  for (; label_at != std::string_view::npos; y += g->pitch) {
+    BoxedText(&canvas, x, y, NextLine(hud.labels, &label_at), g->pixels, kHudLabelColor, opacity);
     // each value cut to its column: the box never grows with the frame's text
-    if (i < values.size()) {
-      BoxedText(&canvas, value_x, y, font.Fit(values[i], g->pixels, g->value_w), g->pixels,
+    if (value_at != std::string_view::npos) {
+      BoxedText(&canvas, value_x, y, fitted(NextLine(hud.values, &value_at), g->value_w), g->pixels,
                 kHudValueColor, opacity);
     }
   }

@@ -154,6 +154,9 @@ struct HudText {
 /// Formats the HUD for `info`. The rows depend on `overlays` only (never on the frame): with
 /// `hindsight` the HER row is there on every frame ("-" where the frame has no transition).
 HudText FormatHud(const FrameInfo& info, const OverlaySet& overlays);
+/// FormatHud into `hud`, whose strings keep their memory from frame to frame (the renderer
+/// formats every frame's HUD this way without allocating).
+void FormatHud(const FrameInfo& info, const OverlaySet& overlays, HudText* hud);
 
 /// A rectangle of an RGB image, row 0 at the top.
 struct PixelRect {

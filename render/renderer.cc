@@ -370,30 +370,49 @@ void Renderer::Submit(const mjData* data, const FrameInfo& info, uint8_t* rgb, u
   if (!async_) {
     ReadRgb(rgb);
     FinishFrame({rgb, -1, {}, copy, copy_scale}, info);
-    pending_.push_back({rgb, -1, {}});
+    PendingFrame& p = PushPending();
+    p.rgb = rgb;
+    p.slot = -1;
     return;
   }
   const int slot = next_slot_;
   next_slot_ = (next_slot_ + 1) % kReadbackDepth;
   StartAsyncRead(slot);
-  pending_.push_back({rgb, slot, info, copy, copy_scale});
+  PendingFrame& p = PushPending();
+  p.rgb = rgb;
+  p.slot = slot;
+  p.info = info;  // copied into the slot's own strings and vectors: their memory is reused
+  p.copy = copy;
+  p.copy_scale = copy_scale;
+}
+
+Renderer::PendingFrame& Renderer::PushPending() {
+  PendingFrame& p = pending_[(pending_head_ + pending_count_) % kReadbackDepth];
+  ++pending_count_;
+  return p;
 }
 
 void Renderer::FinishFrame(const PendingFrame& frame, const FrameInfo& info) const {
+  CpuLap lap;
   if (frame.copy) {
     std::memcpy(frame.copy, frame.rgb, static_cast<size_t>(frame_.width) * frame_.height * 3);
+    lap.Into(&cpu_.copy);
     DrawText2d(info, frame.copy, frame.copy_scale);
   }
   DrawText2d(info, frame.rgb);
+  lap.Into(&cpu_.hud);
 }
 
 uint8_t* Renderer::Collect() {
-  if (pending_.empty()) return nullptr;
-  const PendingFrame frame = pending_.front();
-  pending_.pop_front();
+  if (pending_count_ == 0) return nullptr;
+  // the slot stays as it is until a later Submit, after this Collect has returned
+  const PendingFrame& frame = pending_[pending_head_];
+  pending_head_ = (pending_head_ + 1) % kReadbackDepth;
+  --pending_count_;
   if (frame.slot < 0) return frame.rgb;
   gl_.MakeCurrent();
   const auto start = Clock::now();
+  CpuLap lap;
   PboGl& g = *pbo_gl_;
   const size_t stride = g.row_stride;
   const int h = frame_.height;
@@ -406,11 +425,14 @@ uint8_t* Renderer::Collect() {
                    "; use --readback sync");
   }
   const auto copy_start = Clock::now();
+  lap.Into(&cpu_.gl);
   // the flip is the copy out of the buffer: rows come bottom-up
   const size_t row = static_cast<size_t>(frame_.width) * 3;
   for (int r = 0; r < h; ++r) std::memcpy(frame.rgb + r * row, mapped + (h - 1 - r) * stride, row);
+  lap.Into(&cpu_.copy);
   g.UnmapBuffer(kGlPixelPackBuffer);
   g.BindBuffer(kGlPixelPackBuffer, 0);
+  lap.Into(&cpu_.gl);
   FinishFrame(frame, frame.info);  // the HUD and tile labels, as Render draws them
   if (profile_) {
     profile_->readback_ms += std::chrono::duration<double, std::milli>(copy_start - start).count();
@@ -419,7 +441,7 @@ uint8_t* Renderer::Collect() {
   return frame.rgb;
 }
 
-void Renderer::DiscardPending() { pending_.clear(); }
+void Renderer::DiscardPending() { pending_count_ = 0; }
 
 namespace {
 
@@ -443,6 +465,7 @@ void DropMocapGeoms(const mjModel* model, mjvScene* scene) {
 }  // namespace
 
 void Renderer::Draw(const mjData* data, const FrameInfo& info, bool overlays) {
+  CpuLap lap;
   gl_.MakeCurrent();
   mjvScene* scene = scene_->get();
   mjrContext* con = context_->get();
@@ -484,8 +507,10 @@ void Renderer::Draw(const mjData* data, const FrameInfo& info, bool overlays) {
     }
     const auto submit_start = Clock::now();
     scene_ms += std::chrono::duration<double, std::milli>(submit_start - scene_start).count();
+    lap.Into(&cpu_.scene);
     mjr_render(tiles_[i], scene, con);
     submit_ms += MsSince(submit_start);
+    lap.Into(&cpu_.gl);
   }
   const auto hud_start = Clock::now();
   if (profile_) {
@@ -494,6 +519,7 @@ void Renderer::Draw(const mjData* data, const FrameInfo& info, bool overlays) {
     const auto raster_start = Clock::now();
     submit_ms += std::chrono::duration<double, std::milli>(raster_start - hud_start).count();
     gl_finish_();
+    lap.Into(&cpu_.gl);
     profile_->raster_ms += MsSince(raster_start);
     profile_->scene_ms += scene_ms;
     profile_->submit_ms += submit_ms;
@@ -504,13 +530,16 @@ void Renderer::Draw(const mjData* data, const FrameInfo& info, bool overlays) {
 void Renderer::ReadRgb(uint8_t* rgb) {
   const mjrRect frame{0, 0, frame_.width, frame_.height};
   const auto start = Clock::now();
+  CpuLap lap;
   // MuJoCo resolves the multisampled buffer (a blit) and reads GL_RGB rows bottom-up. On
   // llvmpipe this is ~0.5 ms of a 15-40 ms frame (docs/guide/recording.md, "Where a frame's time
   // goes"); on hardware GL Submit/Collect read through pixel buffers instead, overlapping the next
   // frame.
   mjr_readPixels(rgb_bottom_up_.data(), nullptr, frame, context_->get());
   const auto flip_start = Clock::now();
+  lap.Into(&cpu_.gl);
   FlipRows(rgb_bottom_up_.data(), static_cast<size_t>(frame_.width) * 3, rgb);
+  lap.Into(&cpu_.copy);
   if (profile_) {
     profile_->readback_ms += std::chrono::duration<double, std::milli>(flip_start - start).count();
     profile_->flip_ms += MsSince(flip_start);
@@ -527,7 +556,9 @@ void Renderer::FlipRows(const uint8_t* src, size_t row_bytes, uint8_t* dst) cons
 void Renderer::Render(const mjData* data, const FrameInfo& info, uint8_t* rgb) {
   Draw(data, info, /*overlays=*/true);
   ReadRgb(rgb);
+  CpuLap lap;
   DrawText2d(info, rgb);
+  lap.Into(&cpu_.hud);
 }
 
 void Renderer::DrawText2d(const FrameInfo& info, uint8_t* rgb, ShownScale scale) const {
@@ -545,7 +576,8 @@ void Renderer::DrawText2d(const FrameInfo& info, uint8_t* rgb, ShownScale scale)
       const PixelRect t = TopDown(tiles_[i], frame_.height);
       if (cx >= t.x && cx < t.x + t.width && cy >= t.y && cy < t.y + t.height) hud_tile = i;
     }
-    const HudText hud = FormatHud(info, o);
+    HudText& hud = hud_;  // formatted into the same strings every frame: no allocation
+    FormatHud(info, o, &hud);
     const PixelRect tile = TopDown(tiles_[hud_tile], frame_.height);
     hud_box = PlaceHud(hud, tile, pos, scale);
     DrawHud(rgb, frame_.width, frame_.height, tile, hud, pos, options_.hud_opacity, scale);

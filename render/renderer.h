@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "base/cpu_clock.h"
 #include "render/camera.h"
 #include "render/gl_context.h"
 #include "render/mjr_handles.h"
@@ -135,7 +136,7 @@ class Renderer {
   uint8_t* Collect();
   /// Drops every pending frame without copying it (after a failure).
   void DiscardPending();
-  int pending() const { return static_cast<int>(pending_.size()); }
+  int pending() const { return pending_count_; }
   int pipeline_depth() const { return async_ ? kReadbackDepth : 1; }
   /// Whether frames come back through pixel buffer objects, and why.
   bool async_readback() const { return async_; }
@@ -148,6 +149,10 @@ class Renderer {
 
   /// The objects of the last segmentation layer rendered, by palette index (those with pixels).
   const std::vector<SegmentObject>& segmentation_legend() const { return legend_; }
+
+  /// The calling thread's CPU time in the renderer since it was made, by stage (scene, gl, hud
+  /// and copy of base/cpu_clock.h; the other stages stay 0): Submit, Collect and Render.
+  const CpuStages& cpu() const { return cpu_; }
 
   /// Starts a new episode's trail.
   void ResetTrail() { trail_.Clear(); }
@@ -211,6 +216,8 @@ class Renderer {
   int msaa_samples_ = 0;
   std::string msaa_reason_;
   std::optional<Profile> profile_;  // set when FETCHSCOPE_PROFILE is
+  mutable CpuStages cpu_;           // thread CPU by stage, always kept
+  mutable HudText hud_;             // the HUD's text, reused frame to frame (DrawText2d)
   void (*gl_finish_)() = nullptr;   // glFinish, for the profile
   Trail trail_;
   // Made in the constructor body, after the size checks. Lifetime order: the GL context (gl_)
@@ -233,7 +240,10 @@ class Renderer {
     uint8_t* copy = nullptr;  // Submit's copy with text sized for copy_scale, or none
     ShownScale copy_scale = {};
   };
-  std::deque<PendingFrame> pending_;
+  // the frames in flight, oldest first (pending_head_): a fixed ring, so that no frame allocates
+  std::array<PendingFrame, kReadbackDepth> pending_{};
+  int pending_head_ = 0, pending_count_ = 0;
+  PendingFrame& PushPending();  // the next slot of the ring, counted as pending
   std::vector<float> depth_bottom_up_;
   std::vector<SegmentObject> legend_;
   // Turns the segid colours of a segmentation readback into palette colours; fills legend_.

@@ -5,8 +5,10 @@
 #include FT_FREETYPE_H
 
 #include <algorithm>
+#include <atomic>
 #include <cstdlib>
 #include <fstream>
+#include <unordered_map>
 #include <vector>
 
 #include "base/errors.h"
@@ -57,7 +59,7 @@ std::string FontconfigMatch() {
 }
 
 // Next code point of `s` from `*at` (advanced past it); U+FFFD for a malformed sequence.
-char32_t NextCodePoint(const std::string& s, size_t* at) {
+char32_t NextCodePoint(std::string_view s, size_t* at) {
   const auto byte = [&](size_t i) { return static_cast<unsigned char>(s[i]); };
   const unsigned char lead = byte(*at);
   int extra;
@@ -89,17 +91,24 @@ char32_t NextCodePoint(const std::string& s, size_t* at) {
   return cp;
 }
 
-std::vector<std::string> SplitLines(const std::string& text) {
-  std::vector<std::string> lines;
+// Calls line(begin, end) for each line of `text` (split at '\n'), as byte offsets: no copies.
+template <typename Line>
+void ForEachLine(std::string_view text, Line&& line) {
   size_t start = 0;
   while (true) {
     const size_t end = text.find('\n', start);
-    lines.push_back(text.substr(start, end == std::string::npos ? std::string::npos : end - start));
-    if (end == std::string::npos) break;
+    line(start, end == std::string_view::npos ? text.size() : end);
+    if (end == std::string_view::npos) break;
     start = end + 1;
   }
-  return lines;
 }
+
+// Glyph bitmaps made by FreeType, process-wide (GlyphsRasterised()).
+std::atomic<long> glyphs_rasterised{0};
+
+// Glyphs cached per font beyond which the cache starts again (text of every script at every
+// size would otherwise grow it without bound; frame text uses a few dozen).
+constexpr size_t kMaxCachedGlyphs = 4096;
 
 void CheckPixelSize(int pixel_size) {
   if (pixel_size < kMinPixelSize || pixel_size > kMaxPixelSize) {
@@ -174,6 +183,20 @@ struct Font::Impl {
   FT_Face face = nullptr;
   int size = 0;  // pixel size last set on `face`
 
+  // A glyph as FreeType gives it at one pixel size: its advance, and its rendered bitmap (8-bit
+  // coverage, `width` x `rows`, packed). Drawn from here, text is rasterised once per glyph and
+  // size, and the pixels are exactly those of a fresh FT_LOAD_RENDER.
+  struct Glyph {
+    bool measured = false;      // FreeType loaded it (unrendered): `advance` is valid
+    FT_Pos advance = 0;         // 26.6 pixels, of the unrendered load (Measure)
+    bool rendered = false;      // FreeType rendered it: the fields below are valid
+    FT_Pos render_advance = 0;  // 26.6 pixels, of the rendered load (Draw)
+    bool gray = false;          // an 8-bit coverage bitmap (others draw nothing)
+    int left = 0, top = 0, width = 0, rows = 0;
+    std::vector<unsigned char> bitmap;
+  };
+  std::unordered_map<uint64_t, Glyph> glyphs;  // by pixel size << 32 | code point
+
   ~Impl() {
     if (face) FT_Done_Face(face);
     if (library) FT_Done_FreeType(library);
@@ -202,22 +225,57 @@ struct Font::Impl {
     return FT_Load_Glyph(face, index, flags) == 0;
   }
 
-  // Advance width of one line, pixels.
-  int LineWidth(const std::string& line) {
+  // The glyph of `cp` at the current size, loaded and rendered on first use.
+  const Glyph& Get(char32_t cp) {
+    const uint64_t key = static_cast<uint64_t>(size) << 32 | cp;
+    if (auto it = glyphs.find(key); it != glyphs.end()) return it->second;
+    if (glyphs.size() >= kMaxCachedGlyphs) glyphs.clear();
+    Glyph g;
+    if (Load(cp, false)) {
+      g.measured = true;
+      g.advance = face->glyph->advance.x;
+    }
+    if (Load(cp, true)) {
+      glyphs_rasterised.fetch_add(1, std::memory_order_relaxed);
+      const FT_GlyphSlot slot = face->glyph;
+      const FT_Bitmap& bitmap = slot->bitmap;
+      g.rendered = true;
+      g.render_advance = slot->advance.x;
+      g.left = slot->bitmap_left;
+      g.top = slot->bitmap_top;
+      g.gray = bitmap.pixel_mode == FT_PIXEL_MODE_GRAY;
+      if (g.gray) {
+        g.width = static_cast<int>(bitmap.width);
+        g.rows = static_cast<int>(bitmap.rows);
+        g.bitmap.resize(static_cast<size_t>(g.width) * g.rows);
+        for (int row = 0; row < g.rows; ++row) {
+          const unsigned char* src = bitmap.buffer + static_cast<long>(row) * bitmap.pitch;
+          std::copy(src, src + g.width, g.bitmap.begin() + static_cast<long>(row) * g.width);
+        }
+      }
+    }
+    return glyphs.emplace(key, std::move(g)).first->second;
+  }
+
+  // Advance width of the bytes [begin, end) of `text` (one line), pixels.
+  int LineWidth(std::string_view text, size_t begin, size_t end) {
     FT_Pos pen = 0;
-    for (size_t at = 0; at < line.size();) {
-      if (Load(NextCodePoint(line, &at), false)) pen += face->glyph->advance.x;
+    for (size_t at = begin; at < end;) {
+      const Glyph& g = Get(NextCodePoint(text, &at));
+      if (g.measured) pen += g.advance;
     }
     return static_cast<int>((pen + 32) >> 6);
   }
+  int LineWidth(std::string_view line) { return LineWidth(line, 0, line.size()); }
 
-  TextMetrics Measure(const std::string& text) {
+  TextMetrics Measure(std::string_view text) {
     TextMetrics m;
     LineMetrics(&m);
     if (text.empty()) return m;
-    const std::vector<std::string> lines = SplitLines(text);
-    m.lines = static_cast<int>(lines.size());
-    for (const std::string& line : lines) m.width = std::max(m.width, LineWidth(line));
+    ForEachLine(text, [&](size_t begin, size_t end) {
+      ++m.lines;
+      m.width = std::max(m.width, LineWidth(text, begin, end));
+    });
     m.height = (m.lines - 1) * m.line_height + m.ascent + m.descent;
     return m;
   }
@@ -234,6 +292,8 @@ Font::Font(const fs::path& file) : impl_(std::make_unique<Impl>()), file_(file) 
 
 Font::~Font() = default;
 
+long Font::GlyphsRasterised() { return glyphs_rasterised.load(std::memory_order_relaxed); }
+
 const Font& Font::Default() {
   static std::mutex mutex;
   static std::unique_ptr<Font> font;
@@ -242,20 +302,20 @@ const Font& Font::Default() {
   return *font;
 }
 
-TextMetrics Font::Measure(const std::string& utf8, int pixel_size) const {
+TextMetrics Font::Measure(std::string_view utf8, int pixel_size) const {
   CheckPixelSize(pixel_size);
   std::lock_guard<std::mutex> lock(mutex_);
   impl_->SetSize(pixel_size);
   return impl_->Measure(utf8);
 }
 
-TextMetrics Font::Draw(uint8_t* rgb, int width, int height, int x, int y, const std::string& utf8,
+TextMetrics Font::Draw(uint8_t* rgb, int width, int height, int x, int y, std::string_view utf8,
                        const TextStyle& style) const {
   Canvas canvas(rgb, width, height);
   return Draw(&canvas, x, y, utf8, style);
 }
 
-TextMetrics Font::Draw(Canvas* canvas, int x, int y, const std::string& utf8,
+TextMetrics Font::Draw(Canvas* canvas, int x, int y, std::string_view utf8,
                        const TextStyle& style) const {
   CheckPixelSize(style.pixel_size);
   if (style.padding < 0) {
@@ -270,32 +330,26 @@ TextMetrics Font::Draw(Canvas* canvas, int x, int y, const std::string& utf8,
                      m.height + 2 * style.padding, *style.background);
   }
   if (utf8.empty()) return m;
-  FT_Face face = impl_->face;
   // Calls blend(px, py, coverage 0..255) for every pixel of every glyph, in drawing order.
   auto for_each_glyph_pixel = [&](auto&& blend) {
     int baseline = y + m.ascent;
-    for (const std::string& line : SplitLines(utf8)) {
+    ForEachLine(utf8, [&](size_t begin, size_t end) {
       FT_Pos pen = static_cast<FT_Pos>(x) * 64;
-      for (size_t at = 0; at < line.size();) {
-        if (!impl_->Load(NextCodePoint(line, &at), true)) continue;
-        const FT_GlyphSlot g = face->glyph;
-        const FT_Bitmap& bitmap = g->bitmap;
-        const int left = static_cast<int>((pen + 32) >> 6) + g->bitmap_left;
-        const int top = baseline - g->bitmap_top;
-        if (bitmap.pixel_mode == FT_PIXEL_MODE_GRAY) {
-          for (int row = 0; row < static_cast<int>(bitmap.rows); ++row) {
-            const int py = top + row;
-            if (py < 0 || py >= canvas->height()) continue;
-            const unsigned char* src = bitmap.buffer + static_cast<long>(row) * bitmap.pitch;
-            for (int col = 0; col < static_cast<int>(bitmap.width); ++col) {
-              blend(left + col, py, src[col]);
-            }
-          }
+      for (size_t at = begin; at < end;) {
+        const Impl::Glyph& g = impl_->Get(NextCodePoint(utf8, &at));
+        if (!g.rendered) continue;
+        const int left = static_cast<int>((pen + 32) >> 6) + g.left;
+        const int top = baseline - g.top;
+        for (int row = 0; row < g.rows; ++row) {
+          const int py = top + row;
+          if (py < 0 || py >= canvas->height()) continue;
+          const unsigned char* src = g.bitmap.data() + static_cast<long>(row) * g.width;
+          for (int col = 0; col < g.width; ++col) blend(left + col, py, src[col]);
         }
-        pen += g->advance.x;
+        pen += g.render_advance;
       }
       baseline += m.line_height;
-    }
+    });
   };
   if (style.outline) DrawOutline(canvas, x, y, m, style, for_each_glyph_pixel);
   for_each_glyph_pixel([&](int px, int py, unsigned char coverage) {
@@ -303,6 +357,13 @@ TextMetrics Font::Draw(Canvas* canvas, int x, int y, const std::string& utf8,
     canvas->Blend(px, py, style.color, coverage / 255.0);
   });
   return m;
+}
+
+bool Font::Fits(std::string_view utf8, int pixel_size, int max_width) const {
+  CheckPixelSize(pixel_size);
+  std::lock_guard<std::mutex> lock(mutex_);
+  impl_->SetSize(pixel_size);
+  return impl_->LineWidth(utf8) <= max_width;
 }
 
 std::string Font::Fit(const std::string& utf8, int pixel_size, int max_width,

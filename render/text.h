@@ -20,6 +20,7 @@
 #include <mutex>
 #include <optional>
 #include <string>
+#include <string_view>
 
 namespace fetchscope {
 
@@ -70,23 +71,30 @@ class Font {
   static const Font& Default();
 
   /// Size of `utf8` at `pixel_size`. Throws UsageError for a pixel size outside 4..512.
-  TextMetrics Measure(const std::string& utf8, int pixel_size) const;
+  TextMetrics Measure(std::string_view utf8, int pixel_size) const;
 
   /// Draws `utf8` into the RGB24 image `rgb` (`width` x `height`, row 0 = top) with the top-left
   /// corner of its text box at (x, y). With style.background, first fills the text box grown by
   /// style.padding on every side. Returns the metrics of the text.
-  TextMetrics Draw(uint8_t* rgb, int width, int height, int x, int y, const std::string& utf8,
+  TextMetrics Draw(uint8_t* rgb, int width, int height, int x, int y, std::string_view utf8,
                    const TextStyle& style) const;
 
   /// Draw() onto `canvas` (render/canvas.h): the glyphs are blended by their coverage through
   /// the canvas's one blend.
-  TextMetrics Draw(Canvas* canvas, int x, int y, const std::string& utf8,
+  TextMetrics Draw(Canvas* canvas, int x, int y, std::string_view utf8,
                    const TextStyle& style) const;
 
   /// `utf8` cut at a character boundary so it is at most `max_width` pixels wide at `pixel_size`,
   /// marking a cut with `ellipsis`; empty if not even the ellipsis fits. Single line.
   std::string Fit(const std::string& utf8, int pixel_size, int max_width,
                   const std::string& ellipsis = "...") const;
+  /// Whether Fit would give `utf8` back uncut (it is at most `max_width` pixels wide).
+  bool Fits(std::string_view utf8, int pixel_size, int max_width) const;
+
+  /// Glyph bitmaps FreeType has rendered so far, by every font of the process. Each font keeps
+  /// the glyphs it rendered (per pixel size), so drawing the same characters again renders none:
+  /// a frame's HUD costs blits, not rasterisation (tests count this).
+  static long GlyphsRasterised();
 
   /// The file the font was loaded from.
   const std::filesystem::path& file() const { return file_; }

@@ -9,6 +9,7 @@
 #include <cstdlib>
 
 #include "base/cores.h"
+#include "base/cpu_clock.h"
 #include "base/suggest.h"
 #include "render/layers.h"
 
@@ -100,6 +101,10 @@ void RecordRunner::Run(int k, WorkerChannel& channel) {
   EpisodeLegend legend;
   std::vector<DepthScale> depth_scales;
   double sim_s = 0, render_s = 0;
+  // the same on the thread's CPU clock: sim, and the render thread's whole time per frame, of
+  // which the renderer's own stages (scene, gl, hud, copy) are told apart by the renderer
+  double sim_cpu = 0, render_cpu = 0;
+  const CpuStages renderer_before = renderer_->cpu();
   // frames submitted to the renderer and not yet back, oldest first: with asynchronous
   // readback the GPU draws frame t+1 while frame t comes back
   std::deque<Frame*> in_flight;
@@ -110,9 +115,11 @@ void RecordRunner::Run(int k, WorkerChannel& channel) {
     channel.Progress(1);
   };
   auto sim_start = Clock::now();
+  CpuLap lap;
   auto on_step = [&](const StepRecord& record, const StepResult*) {
     const auto render_start = Clock::now();
     sim_s += std::chrono::duration<double>(render_start - sim_start).count();
+    lap.Into(&sim_cpu);
     Frame* f = pool_->Acquire();
     FetchEnv& env = render_env_ ? *render_env_ : sequence_.env();
     FrameInfo info = MakeFrameInfo(env, record);
@@ -143,14 +150,17 @@ void RecordRunner::Run(int k, WorkerChannel& channel) {
     while (renderer_->pending() >= renderer_->pipeline_depth()) collect_oldest();
     sim_start = Clock::now();
     render_s += std::chrono::duration<double>(sim_start - render_start).count();
+    lap.Into(&render_cpu);
     return !channel.StopRequested();
   };
   EpisodeRecord episode;
   try {
     episode = PlayEpisode(k, on_step, channel);
     const auto drain_start = Clock::now();
+    lap.Into(&sim_cpu);  // the last step's
     while (!in_flight.empty()) collect_oldest();
     render_s += Since(drain_start);
+    lap.Into(&render_cpu);
   } catch (...) {
     renderer_->DiscardPending();
     for (Frame* f : in_flight) pool_->Release(f);
@@ -158,7 +168,15 @@ void RecordRunner::Run(int k, WorkerChannel& channel) {
   }
   encoder->SetExtra({{"hindsight", HindsightCounts(episode)}});
   encoder->SetLayerInfo(legend.Json(k), std::move(depth_scales));
-  encoder->Close(std::move(episode), sim_s, render_s);
+  const CpuStages& after = renderer_->cpu();
+  CpuStages cpu;
+  cpu.sim = sim_cpu;
+  cpu.scene = after.scene - renderer_before.scene;
+  cpu.gl = after.gl - renderer_before.gl;
+  cpu.hud = after.hud - renderer_before.hud;
+  cpu.copy = after.copy - renderer_before.copy;
+  cpu.render_other = std::max(0.0, render_cpu - (cpu.scene + cpu.gl + cpu.hud + cpu.copy));
+  encoder->Close(std::move(episode), sim_s, render_s, cpu);
   encoders_.push_back(std::move(encoder));
 }
 
@@ -244,6 +262,24 @@ ScheduleResult RecordEpisodes(const RecordPlan& plan, const ScheduleOptions& sch
 
 void LimitLlvmpipeThreads(int jobs) {
   if (jobs > 1) setenv("LP_NUM_THREADS", "0", /*overwrite=*/0);
+}
+
+void AddCpuAccount(const std::map<std::string, double>& stages, long frames,
+                   nlohmann::json* timings) {
+  nlohmann::json seconds = nlohmann::json::object();
+  double outside = 0;
+  for (const auto& [stage, s] : stages) {
+    seconds[stage] = s;
+    if (stage != "gl") outside += s;
+  }
+  seconds["outside_gl"] = outside;
+  seconds["process"] = ProcessCpuSeconds();
+  nlohmann::json per_frame = nlohmann::json::object();
+  for (const auto& [stage, s] : seconds.items()) {
+    per_frame[stage] = frames > 0 ? 1000 * s.get<double>() / static_cast<double>(frames) : 0.0;
+  }
+  (*timings)["cpu_s"] = std::move(seconds);
+  (*timings)["cpu_ms_per_frame"] = std::move(per_frame);
 }
 
 int EncodersPerWorker(int jobs) {

@@ -8,6 +8,7 @@
 
 #include <cstdint>
 #include <deque>
+#include <map>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -120,5 +121,13 @@ void LimitLlvmpipeThreads(int jobs);
 /// An encoder only holds frames while it is behind the render thread, so memory grows with
 /// encoders only where the encoders, not the renderer, are the bottleneck.
 int EncodersPerWorker(int jobs);
+
+/// Adds the run's CPU account to the manifest's `timings` (timings_s): "cpu_s", the thread CPU
+/// seconds of each stage summed over episodes (`stages`, the entries' timings_s.cpu_s added up),
+/// with "outside_gl" (every stage but gl) and "process" (the whole process and its waited-for
+/// children: start-up, and threads no stage sees such as llvmpipe's rasterisers); and
+/// "cpu_ms_per_frame", the same per recorded frame (`frames`).
+void AddCpuAccount(const std::map<std::string, double>& stages, long frames,
+                   nlohmann::json* timings);
 
 }  // namespace fetchscope

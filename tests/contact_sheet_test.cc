@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "base/errors.h"
@@ -274,6 +275,37 @@ TEST(MakeContactSheetTest, NoTilesGivesATitleOnlySheet) {
   const SheetImage sheet = MakeContactSheet("nothing", {}, 64);
   EXPECT_EQ(sheet.width, kSheetMargin + 64 + kSheetMargin);
   EXPECT_EQ(sheet.height, ContactSheetLayout(64).title_bar_height + kSheetMargin);
+}
+
+// Tiles scaled when their frame arrives (what record keeps) make the very sheet the full frames
+// make: same size, same bytes, whatever the frame size (down, up, odd aspect).
+TEST(ScaleSheetTileTest, PreScaledTilesGiveTheSameSheet) {
+  SheetScratch scratch;  // one for every size, as an episode's encoder reuses it
+  for (const auto& [w, h] : std::vector<std::pair<int, int>>{{480, 480}, {641, 357}, {100, 77}}) {
+    std::vector<SheetTile> frames, scaled;
+    for (int i = 0; i < 5; ++i) {
+      SheetTile frame;
+      frame.width = w;
+      frame.height = h;
+      frame.label = "t=" + std::to_string(i) + "\nd=0.1";
+      frame.rgb.resize(static_cast<size_t>(w) * h * 3);
+      for (size_t k = 0; k < frame.rgb.size(); ++k) {
+        frame.rgb[k] = static_cast<uint8_t>((k * 7 + k / 3 * 13 + i * 29) % 256);
+      }
+      scaled.push_back(
+          ScaleSheetTile(frame.rgb.data(), w, h, frame.label, kSheetTileWidth, &scratch));
+      EXPECT_EQ(scaled.back().width, kSheetTileWidth);
+      frames.push_back(std::move(frame));
+    }
+    const SheetImage a = MakeContactSheet("title", frames);
+    const SheetImage b = MakeContactSheet("title", scaled);
+    ASSERT_EQ(a.width, b.width) << w << "x" << h;
+    ASSERT_EQ(a.height, b.height) << w << "x" << h;
+    EXPECT_TRUE(a.rgb == b.rgb) << w << "x" << h;
+  }
+  EXPECT_THROW(ScaleSheetTile(nullptr, 0, 10, "", kSheetTileWidth, &scratch), RunError);
+  std::vector<uint8_t> pixel(3);
+  EXPECT_THROW(ScaleSheetTile(pixel.data(), 1, 1, "", 8, &scratch), UsageError);
 }
 
 }  // namespace
