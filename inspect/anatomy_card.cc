@@ -350,9 +350,7 @@ Panel RenderPanel(const std::string& env_id, const AnatomyCardOptions& o, GlCont
   auto policy = MakePolicy("zero", spec, context);
   const EpisodeRecord episode = RunEpisode(fetch, *policy, 0, context.seed, 0);
   const StepRecord& reset = episode.steps.back();
-  auto content_for = [&](const Vec3& view_up) {
-    return PanelContentFor(fetch, reset, view_up, o.observation_slice);
-  };
+  auto content_for = [&](const Vec3& view_up) { return PanelContentFor(fetch, reset, view_up); };
   const int w = o.width, h = o.height;
   const CardStyle st = StyleFor(w, h);
 

@@ -306,6 +306,7 @@ Observation FetchEnv::Observe() const {
   const double gripper_state[2] = {d->qpos[r_finger_qpos_], d->qpos[l_finger_qpos_]};
   const double gripper_vel[2] = {d->qvel[r_finger_dof_] * dt, d->qvel[l_finger_dof_] * dt};
 
+  // the order src/observation_layout.h declares (its test checks it against this)
   auto& o = obs.observation;
   o.insert(o.end(), grip, grip + 3);
   if (spec_.has_object) {

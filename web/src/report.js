@@ -164,7 +164,7 @@
   const v = data.viewer || {};
   viewer = FSViewer.create(page, {
     id: 'viewer', fps: data.fps, threshold: data.threshold, linkable: true,
-    has_object: v.has_object, gripper_command: v.gripper_command, reach: v.reach,
+    has_object: v.has_object, gripper_command: v.gripper_command, layout: v.layout || {},
     episodes: viewable.map((e) => ({index: e.index, label: e.label, title: headline(e), className: e.success ? 'ok' : 'fail',
       tracks: () => [{name: `episode ${e.label}`, video: e.video, format: e.video_format, frames: e.frames,
                       signals: e.viewer ? FSViewer.episodeSignals(`fetchscope-episode-${e.index}`) : null}]})),
