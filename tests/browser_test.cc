@@ -492,6 +492,10 @@ TEST_F(BrowserTest, ViewerFollowsDeepLinksKeysAndClicks) {
   ASSERT_TRUE(result["plots"].is_object()) << result.dump();
   EXPECT_EQ(result["cursor_lines"], result["plots"].size());
   EXPECT_EQ(result["thumbs"], 2 * manifest["episodes"].size());
+  // the titles name the observation indices the report's data gives (src/observation_layout.h)
+  const std::string titles = result["plot_titles"].dump();
+  EXPECT_NE(titles.find("Finger width (obs[9] + obs[10])"), std::string::npos) << titles;
+  EXPECT_NE(titles.find("Object height (obs[5]) and"), std::string::npos) << titles;
   // the lag, in the data episode 3's plots hold: at |a| = 1 (commanded 0.05 m) the grip moves
   // about 0.03 m a step once moving, less than commanded
   int saturated = 0;

@@ -122,6 +122,7 @@ try {
     result.plots = await page.evaluate(() => Object.fromEntries(Object.entries(window.fetchscopeViewer.charts).map(([id, chart]) =>
       [id, Object.fromEntries(chart.series.slice(1).map((s, j) => [s.label, chart.data[j + 1]]))])));
     result.cursor_lines = await page.$$eval('#viewer .viewer-cursor', (lines) => lines.length);
+    result.plot_titles = await page.$$eval('#viewer .viewer-plots h4', (hs) => hs.map((h) => h.textContent));
     // the table's filter (the report's; compare's page has none)
     if (await page.$('#episode-filter')) {
       const rows = () => page.$$eval('#episode-table tbody tr', (trs) => trs.filter((tr) => tr.offsetParent !== null)
