@@ -22,6 +22,7 @@
 #include "render/projection.h"
 #include "src/env_spec.h"
 #include "src/episode.h"
+#include "src/observation_layout.h"
 #include "src/policy.h"
 
 namespace fetchscope {
@@ -247,7 +248,7 @@ std::string DetailCamera(const Vec3& at, double distance, const Vec3& across) {
 std::vector<PlacedLabel> Captions(const EnvSpec& spec, const std::string& seed,
                                   const CardContent& content, const CardStyle& st, int h) {
   const std::string title = spec.id + " after reset(seed=" + seed + ")\nobservation[" +
-                            std::to_string(spec.has_object ? 25 : 10) + "], action[4]\n" +
+                            std::to_string(ObservationSize(spec.has_object)) + "], action[4]\n" +
                             content.action_note;
   RectF footer = TextBox(content.footer, st, st.gap, 0);
   footer = {footer.x0, h - st.gap - footer.y1, footer.x1, h - st.gap - 0.0};
