@@ -8,18 +8,9 @@
 
 #include "cli/common.h"
 #include "src/fetch_env.h"
+#include "src/observation_labels.h"
 
 namespace fetchscope::cli {
-
-/// One observation index as describe labels it.
-struct ObservationLabel {
-  const char* name;     ///< e.g. "grip_pos.x": slice name, '.', component
-  const char* meaning;  ///< one line
-  const char* unit;     ///< "m", "m/step", "rad", ...
-};
-
-/// The label of every observation index, in order (10 for Reach, 25 for the object tasks).
-std::vector<ObservationLabel> ObservationLabels(bool has_object);
 
 /// The indices of slice `slice` (e.g. "grip_pos", "object_rel_pos", "gripper_state") in Python
 /// slice notation, "obs[0:3]", or "obs[3]" for one index; "" when the task has no such slice.

@@ -5,6 +5,9 @@
 #include <cstdio>
 #include <filesystem>
 #include <regex>
+#include <tuple>
+
+#include "src/observation_labels.h"
 
 namespace fetchscope {
 namespace {
@@ -208,7 +211,19 @@ Observation ResetForStart(FetchEnv& env, const EpisodeStart& start) {
 
 namespace {
 
-// compares one row; keeps the first value beyond the tolerance and the largest difference
+// the label and unit of value i of `name` ("observation", "achieved_goal", "desired_goal")
+std::pair<std::string, std::string> Component(const char* name, size_t n, size_t i) {
+  if (std::string(name) == "observation") {
+    if (const ObservationLabel* l = FindObservationLabel(n == 25, static_cast<int>(i))) {
+      return {l->name, l->unit};
+    }
+    return {"observation[" + std::to_string(i) + "]", ""};
+  }
+  return {std::string(name) + "." + "xyz"[i % 3], "m"};
+}
+
+// compares one row; keeps the first value beyond the tolerance and the largest difference,
+// each with its place
 void CompareValues(const char* name, const std::vector<double>& recorded, const double* replayed,
                    size_t n, int t, EpisodeDivergence& d) {
   if (recorded.size() != n) {
@@ -218,10 +233,17 @@ void CompareValues(const char* name, const std::vector<double>& recorded, const 
   for (size_t i = 0; i < n; ++i) {
     const double diff = replayed[i] - recorded[i];
     const double size = std::isnan(diff) ? HUGE_VAL : std::fabs(diff);
-    d.max_difference = std::max(d.max_difference, size);
+    if (size > d.max_difference) {
+      d.max_difference = size;
+      d.max_step = t;
+      d.max_where = std::string(name) + "[" + std::to_string(i) + "]";
+      std::tie(d.max_component, d.max_unit) = Component(name, n, i);
+      d.max_signed = diff;
+    }
     if (d.first_step < 0 && size > d.tolerance) {
       d.first_step = t;
       d.where = std::string(name) + "[" + std::to_string(i) + "]";
+      std::tie(d.component, d.unit) = Component(name, n, i);
       d.difference = diff;
     }
   }
@@ -250,6 +272,16 @@ void MeasureDivergence(FetchEnv& env, TrajectorySource* source) {
     }
     source->divergence[k] = d;
   }
+}
+
+std::string FormatDifference(double difference, const std::string& unit) {
+  const bool metres = unit == "m" || unit == "m/step";
+  const double value = metres ? difference * 1000 : difference;
+  char buf[48];
+  std::snprintf(buf, sizeof(buf), std::fabs(value) >= 100 ? "%.0f" : "%.3g", value);
+  std::string out = buf;
+  if (unit.empty()) return out;
+  return out + " " + (metres ? "mm" + unit.substr(1) : unit);
 }
 
 std::optional<std::array<double, 3>> RecordedAchieved(const TrajectorySource& source, int k,

@@ -59,9 +59,20 @@ struct EpisodeDivergence {
   double tolerance = 0;       ///< --tolerance
   int first_step = -1;        ///< first row t (0 = the reset) off by more than it; -1: none
   std::string where;          ///< its first value off, e.g. "observation[3]"
+  std::string component;      ///< that value as describe labels it, e.g. "object_pos.x"
+  std::string unit;           ///< its unit: "m", "m/step", "rad", "rad/step"
   double difference = 0;      ///< replayed - recorded there
   double max_difference = 0;  ///< largest |replayed - recorded| over every row
+  int max_step = -1;          ///< the row of the largest difference; -1: none differs
+  std::string max_where;      ///< its value, e.g. "observation[11]"
+  std::string max_component;  ///< e.g. "object_rot.z"
+  std::string max_unit;       ///< e.g. "rad"
+  double max_signed = 0;      ///< replayed - recorded there
 };
+
+/// A difference in its unit for people: metres as millimetres ("-0.0139 mm", "0.2 mm/step"),
+/// radians as they are ("0.0642 rad"); 3 significant digits.
+std::string FormatDifference(double difference, const std::string& unit);
 
 /// Recorded episodes to replay (record --from): one trajectory file, or every episode_NNN.json
 /// of a run folder, which must all be one run (one env id and seed); or a Minari dataset
