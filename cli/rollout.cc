@@ -35,6 +35,7 @@ struct RolloutOptions {
   std::string minari_root;  // --minari-root
   bool overwrite =
       false;  // replace an existing Minari dataset, or a --json-out file of another env or seed
+  DatasetAuthor author;  // --minari-author, --minari-author-email
 };
 
 // The played episodes as a Minari dataset, added as they arrive (in index order: the scheduler
@@ -118,6 +119,7 @@ int RunRollout(const RolloutOptions& o) {
   const std::string path = JsonOutPath(o.json_out, "rollout");
   CheckJsonOutReplaces(path, {{"env_id", spec.id}, {"seed", seed}}, o.overwrite);
   { FetchEnv check(spec, assets); }  // bad assets fail here, before any worker starts
+  const int count = static_cast<int>(indices.size());
   MinariWriteOptions minari;
   if (!o.minari.empty()) {
     minari.dataset_id = o.minari;
@@ -125,9 +127,10 @@ int RunRollout(const RolloutOptions& o) {
     minari.overwrite = o.overwrite;
     minari.spec = &spec;
     minari.algorithm_name = o.policy;
-    minari.code_permalink = "fetchscope " FETCHSCOPE_VERSION " rollout --env-id " + spec.id +
-                            " --policy " + o.policy + " --seed " + std::to_string(seed) +
-                            " --steps " + std::to_string(o.steps);
+    minari.code_permalink = DatasetPermalink("rollout", spec.id, o.policy, seed, count, o.steps);
+    minari.max_episode_steps = o.steps;  // gym.make(id, max_episode_steps=--steps)
+    if (!o.author.name.empty()) minari.author = o.author.name;
+    minari.author_email = o.author.email;
     minari.description = spec.id + " episodes played by fetchscope's " + o.policy + " policy";
     CheckMinariDestination(minari);  // an existing id fails now, not after the run
   }
@@ -136,7 +139,6 @@ int RunRollout(const RolloutOptions& o) {
   ScheduleOptions schedule;
   schedule.episodes = indices;
   if (sink) schedule.on_done = [&](int k, const nlohmann::json& e) { sink->Done(k, e); };
-  const int count = static_cast<int>(indices.size());
   schedule.jobs = ResolveJobs(o.jobs, count);
   schedule.mode = mode;
   const ScheduleResult result = RunEpisodes(schedule, [&](int) {
@@ -206,6 +208,7 @@ Command AddRollout(CLI::App& app) {
   sub->add_flag("--overwrite", o->overwrite,
                 "Replace an existing Minari dataset of that id, and let --json-out replace a "
                 "result file of another env, seed or task");
+  AddDatasetAuthorOptions(sub, &o->author);
   AddJobsOptions(sub, &o->jobs, &o->worker_mode);
   return {sub, [o, sub] {
             o->episodes_given = sub->count("--episodes") > 0;
