@@ -80,8 +80,13 @@ std::string Largest(const EpisodeDivergence& d) {
 }  // namespace
 
 std::string DescribeDivergence(int k, const EpisodeDivergence& d) {
-  std::string line = "episode " + std::to_string(k) + ": reset from " +
-                     (d.reset == "seed" ? std::string("its seed") : "its first observation") + "; ";
+  std::string line =
+      "episode " + std::to_string(k) + ": reset " +
+      (d.reset == "seed"                  ? std::string("from its seed")
+       : d.reset == "continued generator" ? "by continuing the generator of episode " +
+                                                std::to_string(d.continued_from) + "'s seed"
+                                          : "from its first observation") +
+      "; ";
   if (d.first_step < 0) {
     return line + "replays within " + Num(d.tolerance) + " (" + Largest(d) + ")";
   }
