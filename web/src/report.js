@@ -123,9 +123,15 @@
   }
   if (data.has_replay) {  // record --from DATASET: the reset used, and the first divergence
     columns.push({label: 'reset', value: (e) => (e.replay ? e.replay.reset : null), render: (e) => (e.replay ? e.replay.reset : '—')});
+    // a difference in its unit, metres as mm (as the console says it)
+    const amount = (v, unit) => (v === null || v === undefined ? 'not finite'
+      : unit === 'm' || unit === 'm/step' ? `${(v * 1000).toPrecision(3)} mm${unit.slice(1)}`
+        : `${v.toPrecision(3)}${unit ? ' ' + unit : ''}`);
+    const largest = (r) => (r.max_step === undefined ? 'largest 0'
+      : `largest ${amount(r.max_difference, r.max_unit)} in ${r.max_component || r.max_where} at step ${r.max_step}`);
     columns.push({label: 'divergence', value: (e) => (e.replay ? (e.replay.first_step ?? -1) : null),
-                  render: (e) => (!e.replay ? '—' : e.replay.first_step === null ? `none (within ${e.replay.tolerance})`
-                    : `step ${e.replay.first_step}, ${e.replay.where} off by ${e.replay.difference.toPrecision(3)}`), numeric: true});
+                  render: (e) => (!e.replay ? '—' : e.replay.first_step === null ? `none (within ${e.replay.tolerance}); ${largest(e.replay)}`
+                    : `step ${e.replay.first_step}, ${e.replay.component || e.replay.where} off by ${amount(e.replay.difference, e.replay.unit)}; ${largest(e.replay)}`), numeric: true});
   }
   columns.push({label: 'first / last frame', value: () => null,
                 render: (e) => (e.thumbs && e.sheet ? el('span', {class: 'thumbs'}, thumb(e, 'first'), thumb(e, 'last')) : '')});
