@@ -565,5 +565,41 @@ TEST(RecordFromDataset, SparseSeededAndRoundedEulerAnglesReplayExactly) {
   EXPECT_LT(m["episodes"][0]["divergence"]["max_difference"].get<double>(), 1e-15);
 }
 
+// A dataset the genuine env made (env_spec Gymnasium-Robotics', code_permalink not ours):
+// without --assets, record --from replays it on the genuine assets where --assets auto finds
+// them, and says so; otherwise it says once that the bundled models drift, and by how much.
+TEST(RecordFromDataset, GenuineDatasetsReplayOnTheGenuineAssetsWhereFound) {
+  const std::string py = PythonWithH5py();
+  if (py.empty()) GTEST_SKIP() << "python3-h5py is not installed";
+  const fs::path genuine = testing::GenuineAssetsDir();
+  if (genuine.empty()) GTEST_SKIP() << "no genuine assets in ../shared";
+  unsetenv("DISPLAY");
+  TempDir tmp;
+  const fs::path root = tmp.path() / "datasets", file = tmp.path() / "g.json";
+  auto r =
+      RunFetchscope("rollout --env-id FetchPush-v4 --episodes 1 --steps 50 --seed 0 --assets " +
+                    genuine.string() + " --json-out " + file.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  r = RunCommand(py + " " + Script() + " " + root.string() + " gen/push-v0 buffers " +
+                 file.string() + " 2>&1");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const std::string record = "record --from gen/push-v0 --minari-root " + root.string() +
+                             " --width 40 --height 40 --no-report --out ";
+  r = RunCommand("FETCHSCOPE_ASSETS=" + genuine.string() + " " FETCHSCOPE_BIN " " + record +
+                 (tmp.path() / "run").string() + " 2>&1");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("replaying on its assets at " + genuine.string()), std::string::npos)
+      << r.output;
+  ExpectNoDivergence(Manifest(tmp.path() / "run"), {"seed"});
+  r = RunCommand("env -u FETCHSCOPE_ASSETS " FETCHSCOPE_BIN " " + record +
+                 (tmp.path() / "run2").string() + " 2>&1");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  // (a machine with gymnasium_robotics installed replays on its assets instead)
+  if (r.output.find("(--assets auto: ") == std::string::npos) {
+    EXPECT_NE(r.output.find("replaying on the bundled models"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("positions up to about 0.02 mm off"), std::string::npos) << r.output;
+  }
+}
+
 }  // namespace
 }  // namespace fetchscope
