@@ -165,6 +165,10 @@
   // --- the episode viewer: one episode's video and per-step signals on one step cursor
   page.append(el('h2', {}, 'Episode viewer'));
   const viewable = recorded.filter((e) => e.video || e.viewer);
+  // a link to an episode the viewer does not have (#episode=99 of a 10-episode run) says so
+  const missing = el('p', {class: 'notes viewer-missing'});
+  missing.hidden = true;
+  page.append(missing);
   const headline = (e) => `episode ${e.label} — ${e.success ? 'success' : 'failure'}, return ${num(e.return, 2)}, ` +
       `final distance ${num(e.final_distance, 3)} m` + (e.complete ? '' : ', interrupted');
   const v = data.viewer || {};
@@ -183,7 +187,15 @@
   window.fetchscopeViewer = viewer;
   const openFromHash = (scroll) => {
     const link = FSViewer.parseHash(location.hash);
-    if (!link || !viewer.open(link.episode, link.t)) return false;
+    missing.hidden = true;
+    if (!link) return false;
+    if (!viewer.open(link.episode, link.t)) {
+      const range = viewable.length ? `episodes ${viewable[0].label}–${viewable[viewable.length - 1].label}` : 'no episodes';
+      missing.textContent = `#episode=${link.episode}: this run's viewer has no episode ${link.episode} (${range}, ` +
+          `${viewable.length} in all)` + (viewable.length ? `; showing episode ${viewable[0].label}` : '');
+      missing.hidden = false;
+      return false;
+    }
     // after the page's first layout, which it would otherwise force while the page is built
     if (scroll) requestAnimationFrame(() => viewer.element.scrollIntoView({block: 'start'}));
     return true;
