@@ -208,6 +208,14 @@ void AddDivergence(const TrajectorySource& source, std::vector<ManifestEpisode>*
       j["unit"] = d.unit;
       j["difference"] = number(d.difference);
     }
+    // the viewer's "replayed vs recorded" plot: position errors per row, in mm
+    const auto millimetres = [&](const std::vector<double>& metres) {
+      nlohmann::json out = nlohmann::json::array();
+      for (double m : metres) out.push_back(number(m * 1000));
+      return out;
+    };
+    j["position_error_mm"] = {{"gripper", millimetres(d.gripper_error)}};
+    if (!d.object_error.empty()) j["position_error_mm"]["object"] = millimetres(d.object_error);
     if (d.max_step >= 0) {  // the largest difference, with its place
       j["max_step"] = d.max_step;
       j["max_where"] = d.max_where;

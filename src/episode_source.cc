@@ -253,9 +253,23 @@ void CompareValues(const char* name, const std::vector<double>& recorded, const 
   }
 }
 
+// |replayed - recorded| of observation[at:at+3], a position, in metres
+double PositionError(const std::vector<double>& recorded, const std::vector<double>& replayed,
+                     size_t at) {
+  double sum = 0;
+  for (size_t i = at; i < at + 3 && i < recorded.size() && i < replayed.size(); ++i) {
+    sum += (replayed[i] - recorded[i]) * (replayed[i] - recorded[i]);
+  }
+  return std::sqrt(sum);
+}
+
 void CompareRow(const StepRecord& recorded, const Observation& obs, int t, EpisodeDivergence& d) {
   CompareValues("observation", recorded.obs.observation, obs.observation.data(),
                 obs.observation.size(), t, d);
+  d.gripper_error.push_back(PositionError(recorded.obs.observation, obs.observation, 0));
+  if (obs.observation.size() == 25) {  // observation[3:6]: object_pos
+    d.object_error.push_back(PositionError(recorded.obs.observation, obs.observation, 3));
+  }
   const auto& a = recorded.obs.achieved_goal;
   const auto& g = recorded.obs.desired_goal;
   CompareValues("achieved_goal", {a.begin(), a.end()}, obs.achieved_goal.data(), 3, t, d);

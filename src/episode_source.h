@@ -78,6 +78,9 @@ struct EpisodeDivergence {
   std::string max_component;  ///< e.g. "object_rot.z"
   std::string max_unit;       ///< e.g. "rad"
   double max_signed = 0;      ///< replayed - recorded there
+  /// per row t: how far the replayed gripper (grip_pos) and object (object_pos; empty for
+  /// Reach) are from the recorded ones, in metres (the viewer's "replayed vs recorded" plot)
+  std::vector<double> gripper_error, object_error;
 };
 
 /// A difference in its unit for people: metres as millimetres ("-0.0139 mm", "0.2 mm/step"),

@@ -679,5 +679,26 @@ TEST_F(BrowserTest, ComparePageLoadsPlaysPlotsAndSorts) {
   ExpectSorts(result["table"]);
 }
 
+// record --from DATASET: the viewer plots how far the replay is from the dataset (gripper and
+// object position error per step, mm) on the same cursor; an exact replay plots zeros.
+TEST_F(BrowserTest, ViewerPlotsTheReplayAgainstTheDataset) {
+  TempDir tmp;
+  const fs::path root = tmp.path() / "datasets", run = tmp.path() / "run";
+  auto r = RunFetchscope(
+      "rollout --env-id FetchPush-v4 --episodes 2 --steps 12 --seed 3 "
+      "--minari-root " +
+      root.string() + " --minari br/push-v0");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  r = RunFetchscope("record --from br/push-v0 --minari-root " + root.string() +
+                    " --width 96 --height 96 --quiet --out " + run.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const json result = CheckViewer(run / "index.html", "1:4", 6, tmp.path() / "grabs");
+  ASSERT_TRUE(result["plots"].contains("replay")) << result["plots"].dump();
+  const json& replay = result["plots"]["replay"];
+  ASSERT_TRUE(replay.contains("gripper error") && replay.contains("object error")) << replay;
+  EXPECT_EQ(replay["gripper error"].size(), 13u) << replay;
+  for (const json& v : replay["object error"]) EXPECT_EQ(v, 0.0) << replay;
+}
+
 }  // namespace
 }  // namespace fetchscope

@@ -172,12 +172,15 @@
   const headline = (e) => `episode ${e.label} — ${e.success ? 'success' : 'failure'}, return ${num(e.return, 2)}, ` +
       `final distance ${num(e.final_distance, 3)} m` + (e.complete ? '' : ', interrupted');
   const v = data.viewer || {};
+  // record --from DATASET: the replay's position errors against the dataset, for their plot
+  const withReplay = (s, replay) => (s && replay && replay.position_error_mm
+    ? Object.assign({}, s, {replay_error: replay.position_error_mm}) : s);
   viewer = FSViewer.create(page, {
     id: 'viewer', fps: data.fps, threshold: data.threshold, linkable: true,
     has_object: v.has_object, gripper_command: v.gripper_command, reach: v.reach,
     episodes: viewable.map((e) => ({index: e.index, label: e.label, title: headline(e), className: e.success ? 'ok' : 'fail',
       tracks: () => [{name: `episode ${e.label}`, video: e.video, format: e.video_format, frames: e.frames,
-                      signals: e.viewer ? FSViewer.episodeSignals(`fetchscope-episode-${e.index}`) : null}]})),
+                      signals: e.viewer ? withReplay(FSViewer.episodeSignals(`fetchscope-episode-${e.index}`), e.replay) : null}]})),
     // the episodes ↑/↓ visit: the table's rows in their order, those the filter shows
     visible: () => [...table.tBodies[0].rows]
         .filter((row) => row.dataset.outcome !== 'missing' && (table.dataset.filter === 'all' || row.dataset.outcome === table.dataset.filter))
