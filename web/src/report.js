@@ -130,8 +130,11 @@
     const largest = (r) => (r.max_step === undefined ? 'largest 0'
       : `largest ${amount(r.max_difference, r.max_unit)} in ${r.max_component || r.max_where} at step ${r.max_step}`);
     columns.push({label: 'divergence', value: (e) => (e.replay ? (e.replay.first_step ?? -1) : null),
-                  render: (e) => (!e.replay ? '—' : e.replay.first_step === null ? `none (within ${e.replay.tolerance}); ${largest(e.replay)}`
-                    : `step ${e.replay.first_step}, ${e.replay.component || e.replay.where} off by ${amount(e.replay.difference, e.replay.unit)}; ${largest(e.replay)}`), numeric: true});
+                  // two lines that wrap in a narrow column: the table fits 1,280 px
+                  render: (e) => (!e.replay ? '—' : el('span', {class: 'divergence'},
+                    e.replay.first_step === null ? `none (within ${e.replay.tolerance})`
+                      : `step ${e.replay.first_step}, ${e.replay.component || e.replay.where} off by ${amount(e.replay.difference, e.replay.unit)}`,
+                    el('br'), largest(e.replay))), numeric: true});
   }
   columns.push({label: 'first / last frame', value: () => null,
                 render: (e) => (e.thumbs && e.sheet ? el('span', {class: 'thumbs'}, thumb(e, 'first'), thumb(e, 'last')) : '')});

@@ -127,6 +127,11 @@ try {
     result.plots = await page.evaluate(() => Object.fromEntries(Object.entries(window.fetchscopeViewer.charts).map(([id, chart]) =>
       [id, Object.fromEntries(chart.series.slice(1).map((s, j) => [s.label, chart.data[j + 1]]))])));
     result.cursor_lines = await page.$$eval('#viewer .viewer-cursor', (lines) => lines.length);
+    // the episode table's width against its box at this 1,280 px viewport (the report's)
+    result.table = await page.evaluate(() => {
+      const t = document.querySelector('#episode-table');
+      return t ? {width: t.scrollWidth, box: t.parentElement.clientWidth} : null;
+    });
     // the cursor's colour and every plotted series' stroke, as rgb() strings
     result.cursor_color = await page.$eval('#viewer .viewer-cursor', (line) => getComputedStyle(line).borderLeftColor);
     result.series_colors = await page.evaluate(() => {
