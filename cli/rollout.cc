@@ -51,6 +51,7 @@ class MinariSink {
   }
 
   void Done(int k, const nlohmann::json& episode) {
+    if (stopped_) return;  // SIGINT/SIGTERM: the run ends as interrupted, the dataset unwritten
     pending_.emplace(k, episode);
     while (next_ < indices_.size()) {
       const auto it = pending_.find(indices_[next_]);
@@ -59,9 +60,15 @@ class MinariSink {
           TrajectoryJson(*spec_, assets_, seed_, o_.policy, nlohmann::json::array({it->second})),
           "rollout");
       // episode 0 was reset with the run's seed; the others continued its generator
-      writer_.Add(ToMinariEpisode(one.episodes.front(),
-                                  it->first == 0 ? std::optional<uint64_t>(seed_) : std::nullopt,
-                                  width_));
+      try {
+        writer_.Add(ToMinariEpisode(one.episodes.front(),
+                                    it->first == 0 ? std::optional<uint64_t>(seed_) : std::nullopt,
+                                    width_));
+      } catch (const MinariInterrupted&) {  // the scheduler reports the signal when it returns
+        stopped_ = true;
+        pending_.clear();
+        return;
+      }
       pending_.erase(it);
       ++next_;
     }
@@ -80,6 +87,7 @@ class MinariSink {
   std::vector<int> indices_;
   size_t next_ = 0;  // indices_[next_] is the next episode to add
   std::map<int, nlohmann::json> pending_;
+  bool stopped_ = false;  // a stop signal arrived while adding: add nothing more
 };
 
 // Plays episodes and reports each as its trajectory JSON entry.
@@ -153,7 +161,13 @@ int RunRollout(const RolloutOptions& o) {
                  result.signal == SIGINT ? "SIGINT" : "SIGTERM");
     return 128 + result.signal;
   }
-  const std::string dataset = sink ? sink->Commit() : "";
+  std::string dataset;
+  try {
+    if (sink) dataset = sink->Commit();
+  } catch (const MinariInterrupted& e) {  // a signal after the last episode: still nothing
+    std::fprintf(stderr, "rollout: %s; nothing written\n", e.what());
+    return 128 + e.signal;
+  }
   nlohmann::json episodes = nlohmann::json::array();
   int successes = 0;
   for (const auto& [k, episode] : result.results) {

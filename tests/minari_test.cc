@@ -858,5 +858,26 @@ TEST(MinariCommands, RecordChecksTheDatasetUpFrontAndOverwriteReplacesIt) {
   EXPECT_FALSE(fs::exists(tmp.path() / "run4" / "episode_000.json"));
 }
 
+// rollout --minari stopped by SIGINT or SIGTERM while it adds episodes: 128 + the signal, the
+// usual line, and no dataset, temporary folder or namespace folder left (any --jobs).
+TEST(MinariCommands, RolloutInterruptedLeavesNoDataset) {
+  TempDir tmp;
+  const fs::path root = tmp.path() / "datasets";
+  int i = 0;
+  for (const int sig : {SIGINT, SIGTERM}) {
+    SCOPED_TRACE(sig);
+    const fs::path log = tmp.path() / ("rollout" + std::to_string(i) + ".log");
+    const pid_t pid = SpawnFetchscope("rollout --env-id FetchPush-v4 --episodes 2000 --jobs " +
+                                          std::to_string(++i) + " --minari-root " + root.string() +
+                                          " --minari ri/push-v0",
+                                      log);
+    std::this_thread::sleep_for(std::chrono::milliseconds(1200));
+    kill(pid, sig);
+    EXPECT_EQ(WaitExit(pid), 128 + sig) << ReadFile(log);
+    EXPECT_NE(ReadFile(log).find("nothing written"), std::string::npos) << ReadFile(log);
+    EXPECT_FALSE(fs::exists(root / "ri")) << "a dataset or its folder was left";
+  }
+}
+
 }  // namespace
 }  // namespace fetchscope
