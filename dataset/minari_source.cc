@@ -90,6 +90,9 @@ MinariSource LoadMinariSource(const MinariSourceRequest& r) {
               " episode(s), " + std::to_string(steps) + " steps, seeds " + SeedsFound(d.episodes) +
               ", minari_version " + m.minari_version;
   s.found = out.found;
+  out.env_from_spec = m.env_id.has_value();
+  out.genuine_env = m.entry_point.rfind("gymnasium_robotics.", 0) == 0 &&
+                    m.code_permalink.rfind("fetchscope ", 0) != 0;
   return out;
 }
 

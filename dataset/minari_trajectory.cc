@@ -101,6 +101,12 @@ std::filesystem::path WriteMinariDataset(const Trajectory& trajectory, MinariWri
   std::sort(
       episodes.begin(), episodes.end(),
       [](const TrajectoryEpisode* a, const TrajectoryEpisode* b) { return a->index < b->index; });
+  if (options.max_episode_steps <= 0) {  // the TimeLimit they ran under: the longest episode
+    for (const TrajectoryEpisode* e : episodes) {
+      options.max_episode_steps =
+          std::max(options.max_episode_steps, static_cast<int>(e->steps.size()) - 1);
+    }
+  }
   MinariWriter writer(options);
   const int width = options.spec->has_object ? 25 : 10;
   for (const TrajectoryEpisode* e : episodes) {

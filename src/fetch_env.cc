@@ -189,7 +189,10 @@ Observation FetchEnv::ResetTo(const std::array<double, 3>& goal,
     // kinematics alone (no solver, so the warm start stays as mj_resetData left it): does the
     // settled quaternion give these angles? A reset never rotates the object, so it usually does
     mj_kinematics(m, d);
-    if (Mat2Euler(d->site_xmat + 9 * object_site_) != object->euler) {
+    const std::array<double, 3> settled = Mat2Euler(d->site_xmat + 9 * object_site_);
+    bool same = true;
+    for (int k = 0; k < 3; ++k) same = same && std::fabs(settled[k] - object->euler[k]) <= 1e-12;
+    if (!same) {
       const std::array<double, 4> quat = Euler2Quat(object->euler);
       std::copy(quat.begin(), quat.end(), q + 3);
     }

@@ -1,5 +1,7 @@
 #include "src/observation_layout.h"
 
+#include <cmath>
+#include <cstdio>
 #include <iterator>
 #include <utility>
 
@@ -72,6 +74,13 @@ int ObservationSize(bool has_object) {
   return static_cast<int>(ObservationLabels(has_object).size());
 }
 
+std::optional<bool> LayoutHasObject(size_t size) {
+  for (const bool has_object : {false, true}) {
+    if (size == static_cast<size_t>(ObservationSize(has_object))) return has_object;
+  }
+  return std::nullopt;
+}
+
 std::vector<ObservationSlice> ObservationSlices(bool has_object) {
   std::vector<ObservationSlice> out;
   const Labels& labels = ObservationLabels(has_object);
@@ -128,6 +137,22 @@ std::string ObservationIndexText(bool has_object, size_t index) {
   const Labels& labels = ObservationLabels(has_object);
   if (index >= labels.size()) return at;
   return at + " (" + labels[index].name + ", " + labels[index].unit + ")";
+}
+
+std::string GoalIndexName(std::string_view goal, size_t index) {
+  return std::string(goal) + "." + "xyz"[index % 3];
+}
+
+DisplayValue InDisplayUnit(double value, std::string_view unit) {
+  if (unit == "m" || unit == "m/step") return {value * 1000, "mm" + std::string(unit.substr(1))};
+  return {value, std::string(unit)};
+}
+
+std::string FormatInDisplayUnit(double value, std::string_view unit) {
+  const DisplayValue shown = InDisplayUnit(value, unit);
+  char buf[48];
+  std::snprintf(buf, sizeof(buf), std::fabs(shown.value) >= 100 ? "%.0f" : "%.3g", shown.value);
+  return shown.unit.empty() ? buf : buf + (" " + shown.unit);
 }
 
 std::vector<LayoutLabel> ActionLabels(bool block_gripper) {

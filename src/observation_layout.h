@@ -13,7 +13,8 @@
 //
 // For messages about one flat index (e.g. where two trajectories diverge), use
 // ObservationIndexText: ObservationIndexText(true, 11) is "observation[11] (object_rot.x, rad)";
-// ObservationIndexName and ObservationIndexUnit give its parts.
+// ObservationIndexName and ObservationIndexUnit give its parts. A value in its unit is written for
+// people with FormatInDisplayUnit: metres as millimetres ("-0.0139 mm"), radians as they are.
 #pragma once
 
 #include <cstddef>
@@ -42,6 +43,10 @@ struct ObservationSlice {
 
 /// The observation's length: 10 (Reach) or 25 (the object tasks).
 int ObservationSize(bool has_object);
+
+/// The layout an observation of `size` values has: false (Reach's 10), true (the object tasks'
+/// 25), nullopt for any other length.
+std::optional<bool> LayoutHasObject(size_t size);
 
 /// The label of every observation index, in order (ObservationSize entries).
 const std::vector<LayoutLabel>& ObservationLabels(bool has_object);
@@ -79,6 +84,23 @@ std::string ObservationIndexUnit(bool has_object, size_t index);
 /// One flat observation index for a message: "observation[11] (object_rot.x, rad)", or
 /// "observation[30]" when it is past the end of the layout.
 std::string ObservationIndexText(bool has_object, size_t index);
+
+/// Value `index` of the goals (achieved_goal, desired_goal: a position, x y z, in m):
+/// GoalIndexName("desired_goal", 1) is "desired_goal.y".
+std::string GoalIndexName(std::string_view goal, size_t index);
+inline constexpr const char* kGoalUnit = "m";
+
+/// A value of `unit` in the unit people read it in: metres as millimetres ("m" -> "mm",
+/// "m/step" -> "mm/step"), every other unit ("rad", "rad/step", "") as it is.
+struct DisplayValue {
+  double value = 0;
+  std::string unit;
+};
+DisplayValue InDisplayUnit(double value, std::string_view unit);
+
+/// InDisplayUnit written with 3 significant digits (no decimals from 100 up) and its unit:
+/// "-0.0139 mm", "0.2 mm/step", "0.0642 rad"; the number alone when `unit` is "".
+std::string FormatInDisplayUnit(double value, std::string_view unit);
 
 /// The action's four components (dx, dy, dz, gripper), with what each does in a task that
 /// blocks the gripper (`block_gripper`: Reach, Push, Slide) or not (PickAndPlace).

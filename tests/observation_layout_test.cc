@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <optional>
 #include <set>
 #include <string>
 #include <vector>
@@ -113,6 +114,28 @@ TEST(ObservationLayout, NamesAFlatIndexForMessages) {
   EXPECT_EQ(ObservationIndexText(true, 25), "observation[25]");
   EXPECT_EQ(ObservationIndexName(false, 10), "");
   EXPECT_EQ(ObservationIndexUnit(true, 99), "");
+}
+
+// what a replay's divergence messages (record --from DATASET) take from the layout
+TEST(ObservationLayout, LengthsGoalsAndDisplayUnits) {
+  EXPECT_EQ(LayoutHasObject(10), std::optional<bool>(false));
+  EXPECT_EQ(LayoutHasObject(25), std::optional<bool>(true));
+  EXPECT_EQ(LayoutHasObject(0), std::nullopt);
+  EXPECT_EQ(LayoutHasObject(12), std::nullopt);
+  EXPECT_EQ(GoalIndexName("desired_goal", 1), "desired_goal.y");
+  EXPECT_EQ(GoalIndexName("achieved_goal", 2), "achieved_goal.z");
+  EXPECT_STREQ(kGoalUnit, "m");
+  // metres as millimetres, other units as they are
+  EXPECT_DOUBLE_EQ(InDisplayUnit(0.25, "m").value, 250);
+  EXPECT_EQ(InDisplayUnit(0.25, "m").unit, "mm");
+  EXPECT_EQ(InDisplayUnit(0.002, "m/step").unit, "mm/step");
+  EXPECT_DOUBLE_EQ(InDisplayUnit(0.5, "rad").value, 0.5);
+  EXPECT_EQ(InDisplayUnit(0.5, "rad/step").unit, "rad/step");
+  EXPECT_EQ(FormatInDisplayUnit(-0.0000139, "m"), "-0.0139 mm");
+  EXPECT_EQ(FormatInDisplayUnit(0.0002, "m/step"), "0.2 mm/step");
+  EXPECT_EQ(FormatInDisplayUnit(0.0642, "rad"), "0.0642 rad");
+  EXPECT_EQ(FormatInDisplayUnit(0.1234, "m"), "123 mm");
+  EXPECT_EQ(FormatInDisplayUnit(1.5, ""), "1.5");
 }
 
 TEST(ObservationLayout, ActionComponents) {

@@ -67,6 +67,14 @@ const FSViewer = (() => {
           {label: named(tr, 'object–goal distance'), stroke: '#c51b7d', dash: trackDash[i], values: s.object_goal_distance}]),
         readout: readouts((s, t) => `height ${fmt(at(s.object_height, t), 4)} m, to goal ${fmt(at(s.object_goal_distance, t), 4)} m`)});
     }
+    if (tracks.some((tr) => tr.signals && tr.signals.replay_error)) {  // record --from DATASET
+      specs.push({id: 'replay', title: 'Replayed vs recorded: how far the replay is from the dataset (the ghost)', unit: 'mm',
+        series: each((tr, s, i) => (s.replay_error ? [
+          {label: named(tr, 'gripper error'), stroke: '#111', dash: trackDash[i], values: s.replay_error.gripper},
+          ...(s.replay_error.object ? [{label: named(tr, 'object error'), stroke: '#35978f', dash: trackDash[i], values: s.replay_error.object}] : [])] : [])),
+        readout: readouts((s, t) => (s.replay_error ? `gripper ${fmt(at(s.replay_error.gripper, t), 3)} mm` +
+          (s.replay_error.object ? `, object ${fmt(at(s.replay_error.object, t), 3)} mm` : '') : '—'))});
+    }
     if (tracks.some((tr) => tr.signals && tr.signals.her)) {
       specs.push({id: 'her', title: 'HER relabelled rewards (future, k = 4) of the transition into step t', unit: '',
         series: each((tr, s, i) => (s.her ? s.her.rewards.map((r, j) =>
