@@ -15,6 +15,7 @@
 #include "run/episode_scheduler.h"
 #include "src/episode.h"
 #include "src/fetch_env.h"
+#include "src/observation_layout.h"
 #include "src/trajectory.h"
 
 namespace fetchscope::cli {
@@ -46,7 +47,7 @@ class MinariSink {
   MinariSink(const RolloutOptions& o, const MinariWriteOptions& options, const AssetSource& assets,
              uint64_t seed, std::vector<int> indices)
       : o_(o), assets_(assets), seed_(seed), writer_(options), indices_(std::move(indices)) {
-    width_ = options.spec->has_object ? 25 : 10;
+    width_ = ObservationSize(options.spec->has_object);
     spec_ = options.spec;
   }
 

@@ -7,6 +7,7 @@
 #include "base/errors.h"
 #include "base/suggest.h"
 #include "dataset/hdf5_handles.h"
+#include "src/observation_layout.h"
 
 namespace fetchscope {
 namespace {
@@ -86,7 +87,7 @@ int CheckObservationSpace(const std::string& label, const json& space) {
   }
   const int width =
       subspaces.contains("observation") ? BoxWidth(subspaces["observation"], "float64") : 0;
-  if (width != 10 && width != 25) Fail(label, expected);
+  if (width <= 0 || !LayoutHasObject(static_cast<size_t>(width))) Fail(label, expected);
   return width;
 }
 
@@ -364,7 +365,7 @@ MinariMetadata ParseMinariMetadata(const std::string& text, const std::string& l
       m.reward_type = kwargs["reward_type"].get<std::string>();
     }
   }
-  const int env_width = env ? (env->has_object ? 25 : 10) : 0;
+  const int env_width = env ? ObservationSize(env->has_object) : 0;
   if (j.contains("observation_space")) {
     m.obs_dim =
         CheckObservationSpace(label, SpaceJson(label, j["observation_space"], "observation_space"));

@@ -14,6 +14,7 @@
 
 #include "base/errors.h"
 #include "base/stop_signal.h"
+#include "src/observation_layout.h"
 
 namespace fetchscope {
 namespace {
@@ -226,7 +227,7 @@ MinariWriter::MinariWriter(const MinariWriteOptions& options)
     throw RunError("cannot create folder '" + data.string() + "': " + ec.message());
   }
   temp_exists_ = true;
-  obs_dim_ = options_.spec->has_object ? 25 : 10;
+  obs_dim_ = ObservationSize(options_.spec->has_object);
   // the root group tracks and indexes creation order, as h5py's File(track_order=True)
   H5PropList fcpl = NoTimesList(H5P_FILE_CREATE);
   const unsigned order = H5P_CRT_ORDER_TRACKED | H5P_CRT_ORDER_INDEXED;
