@@ -77,7 +77,6 @@ int RunAnatomy(AnatomyOptions o) {
     card.height = o.view.height;
     card.msaa_samples = msaa_samples;
     card.msaa = o.view.msaa;
-    card.observation_slice = ObservationSlice;
     auto gl = CreateViewContext(o.view, ResolveGpuChoice(o.view));
     WriteAnatomyCard(o.out, card, *gl);
   }

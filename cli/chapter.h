@@ -11,20 +11,6 @@
 
 namespace fetchscope::cli {
 
-/// One observation index as describe labels it.
-struct ObservationLabel {
-  const char* name;     ///< e.g. "grip_pos.x": slice name, '.', component
-  const char* meaning;  ///< one line
-  const char* unit;     ///< "m", "m/step", "rad", ...
-};
-
-/// The label of every observation index, in order (10 for Reach, 25 for the object tasks).
-std::vector<ObservationLabel> ObservationLabels(bool has_object);
-
-/// The indices of slice `slice` (e.g. "grip_pos", "object_rel_pos", "gripper_state") in Python
-/// slice notation, "obs[0:3]", or "obs[3]" for one index; "" when the task has no such slice.
-std::string ObservationSlice(bool has_object, const std::string& slice);
-
 /// D1: the chapter's layout (action_space and observation_space's three Boxes with one bound per
 /// element) plus our labels, formulas, timing, assets and the D4 answers.
 nlohmann::json DescribeJson(const FetchEnv& env);

@@ -24,6 +24,7 @@ Command AddRandomEpisodes(CLI::App& parent);
 Command AddAnatomy(CLI::App& parent);
 Command AddRollout(CLI::App& parent);
 Command AddExport(CLI::App& parent);
+Command AddDatasets(CLI::App& parent);
 Command AddRender(CLI::App& parent);
 Command AddListCameras(CLI::App& parent);
 Command AddRecord(CLI::App& parent);
@@ -38,8 +39,9 @@ Command AddHelp(CLI::App& parent);
 
 /// Every subcommand, in the order `fetchscope --help` lists them.
 inline constexpr AddCommandFn kCommands[] = {
-    AddListEnvs,       AddDescribe, AddRewardCheck, AddRandomEpisodes, AddAnatomy, AddRollout,
-    AddExport,         AddRender,   AddListCameras, AddRecord,         AddBench,   AddProbeActions,
-    AddMergeManifests, AddGolden,   AddListGpus,    AddReport,         AddCompare, AddHelp};
+    AddListEnvs,     AddDescribe,       AddRewardCheck, AddRandomEpisodes, AddAnatomy, AddRollout,
+    AddExport,       AddDatasets,       AddRender,      AddListCameras,    AddRecord,  AddBench,
+    AddProbeActions, AddMergeManifests, AddGolden,      AddListGpus,       AddReport,  AddCompare,
+    AddHelp};
 
 }  // namespace fetchscope::cli

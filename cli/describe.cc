@@ -1,7 +1,6 @@
 // fetchscope describe: Gymnasium-style spaces plus what every index means.
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
 
 #include "base/json_util.h"
 #include "cli/chapter.h"
@@ -10,6 +9,7 @@
 #include "cli/resolve.h"
 #include "src/episode.h"
 #include "src/fetch_env.h"
+#include "src/observation_layout.h"
 
 namespace fetchscope::cli {
 namespace {
@@ -38,11 +38,9 @@ constexpr int kGripSteps = 5;  // steps of a[3] = +-1 from reset that the grippe
 // a[3] = `a3` (a[0..2] = 0) from reset with seed 0, on a fresh copy of `env`.
 double FingerWidthChange(const FetchEnv& like, double a3) {
   FetchEnv env(like.spec(), like.assets());
-  const bool has_object = like.spec().has_object;
-  const std::string right = ObservationSlice(has_object, "gripper_state");  // "obs[i:j]"
-  const int first = std::atoi(right.c_str() + 4);
+  const FingerIndices fingers = FingerPositionIndices(like.spec().has_object);
   auto width = [&](const Observation& o) {
-    return o.observation[first] + o.observation[first + 1];
+    return o.observation[fingers.right] + o.observation[fingers.left];
   };
   const double before = width(env.Reset(0));
   Observation after;
@@ -69,109 +67,21 @@ std::vector<std::string> GripperVersusChapter(const FetchEnv& env) {
           ": finger width " + SignedMetres(open) + " m after " + steps + " steps of a[3]=+1"};
 }
 
-std::vector<ObservationLabel> ObservationLabels(bool has_object) {
-  using Label = ObservationLabel;
-  const std::vector<Label> grip = {
-      {"grip_pos.x", "gripper (site robot0:grip) position x, world frame", "m"},
-      {"grip_pos.y", "gripper position y, world frame", "m"},
-      {"grip_pos.z", "gripper position z, world frame (0.02 m below gripper_link's origin)", "m"}};
-  const std::vector<Label> fingers = {
-      {"gripper_state.right", "right finger slide joint position (0 closed .. 0.05 open)", "m"},
-      {"gripper_state.left", "left finger slide joint position (0 closed .. 0.05 open)", "m"}};
-  const std::vector<Label> grip_vel = {
-      {"grip_velp.x", "gripper linear velocity x times dt: displacement per env step", "m/step"},
-      {"grip_velp.y", "gripper linear velocity y times dt", "m/step"},
-      {"grip_velp.z", "gripper linear velocity z times dt", "m/step"}};
-  const std::vector<Label> finger_vel = {
-      {"gripper_vel.right", "right finger joint velocity times dt (not a linear velocity)",
-       "m/step"},
-      {"gripper_vel.left", "left finger joint velocity times dt", "m/step"}};
-  std::vector<Label> out = grip;
-  if (!has_object) {
-    out.insert(out.end(), fingers.begin(), fingers.end());
-    out.insert(out.end(), grip_vel.begin(), grip_vel.end());
-    out.insert(out.end(), finger_vel.begin(), finger_vel.end());
-    return out;
-  }
-  const std::vector<Label> object = {
-      {"object_pos.x", "object (site object0) position x, world frame", "m"},
-      {"object_pos.y", "object position y", "m"},
-      {"object_pos.z", "object position z", "m"},
-      {"object_rel_pos.x", "object minus gripper position x", "m"},
-      {"object_rel_pos.y", "object minus gripper position y", "m"},
-      {"object_rel_pos.z", "object minus gripper position z", "m"}};
-  const std::vector<Label> rot = {
-      {"object_rot.x", "object Euler angle x (rotations.mat2euler of the site matrix)", "rad"},
-      {"object_rot.y", "object Euler angle y", "rad"},
-      {"object_rot.z", "object Euler angle z", "rad"},
-      {"object_velp.x", "object linear velocity minus gripper linear velocity x, times dt",
-       "m/step"},
-      {"object_velp.y", "object minus gripper linear velocity y, times dt", "m/step"},
-      {"object_velp.z", "object minus gripper linear velocity z, times dt", "m/step"},
-      {"object_velr.x", "object angular velocity x (world axes, absolute) times dt", "rad/step"},
-      {"object_velr.y", "object angular velocity y times dt", "rad/step"},
-      {"object_velr.z", "object angular velocity z times dt", "rad/step"}};
-  out.insert(out.end(), object.begin(), object.end());
-  out.insert(out.end(), fingers.begin(), fingers.end());
-  out.insert(out.end(), rot.begin(), rot.end());
-  out.insert(out.end(), grip_vel.begin(), grip_vel.end());
-  out.insert(out.end(), finger_vel.begin(), finger_vel.end());
-  return out;
-}
-
-std::string ObservationSlice(bool has_object, const std::string& slice) {
-  const std::vector<ObservationLabel> labels = ObservationLabels(has_object);
-  int first = -1, last = -1;
-  for (int i = 0; i < static_cast<int>(labels.size()); ++i) {
-    const std::string name = labels[i].name;
-    if (name.compare(0, slice.size() + 1, slice + ".") == 0) {
-      if (first < 0) first = i;
-      last = i;
-    }
-  }
-  if (first < 0) return "";
-  if (first == last) return "obs[" + std::to_string(first) + "]";
-  return "obs[" + std::to_string(first) + ":" + std::to_string(last + 1) + "]";
-}
-
 nlohmann::json DescribeJson(const FetchEnv& env) {
   const EnvSpec& s = env.spec();
   const mjModel* m = env.model();
   nlohmann::json obs_labels = nlohmann::json::array();
   int i = 0;
-  for (const ObservationLabel& l : ObservationLabels(s.has_object)) {
+  for (const LayoutLabel& l : ObservationLabels(s.has_object)) {
     obs_labels.push_back(
         {{"index", i++}, {"name", l.name}, {"meaning", l.meaning}, {"unit", l.unit}});
   }
-  const std::string gripper_meaning =
-      s.block_gripper
-          ? "ignored: this task blocks the gripper (no finger actuators; the command is zeroed and "
-            "both finger joints are forced to 0 after every step)"
-          : "finger position servo target = current finger position + action[3] (not scaled by "
-            "0.05; servo target clamped to [0, 0.2], joint range [0, 0.05]): action[3] > 0 OPENS "
-            "the fingers, < 0 closes them; |action[3]| above about 0.05 already drives a finger to "
-            "its limit";
-  nlohmann::json actions = nlohmann::json::array(
-      {{{"index", 0},
-        {"name", "dx"},
-        {"meaning",
-         "displace the mocap target of the gripper by 0.05 m * action[0] along world x per step "
-         "(position, not velocity; re-anchored on the gripper each step, so the gripper itself "
-         "lags: probe-actions measures about 0.02-0.03 m per step at |a| = 1)"},
-        {"unit", "0.05 m"}},
-       {{"index", 1},
-        {"name", "dy"},
-        {"meaning", "displace the gripper target by 0.05 m * action[1] along world y per step"},
-        {"unit", "0.05 m"}},
-       {{"index", 2},
-        {"name", "dz"},
-        {"meaning", "displace the gripper target by 0.05 m * action[2] along world z per step"},
-        {"unit", "0.05 m"}},
-       {{"index", 3},
-        {"name", "gripper"},
-        {"meaning", gripper_meaning},
-        {"unit", "m (finger target offset)"}}});
-  const int obs_size = s.has_object ? 25 : 10;
+  nlohmann::json actions = nlohmann::json::array();
+  i = 0;
+  for (const LayoutLabel& l : ActionLabels(s.block_gripper)) {
+    actions.push_back({{"index", i++}, {"name", l.name}, {"meaning", l.meaning}, {"unit", l.unit}});
+  }
+  const int obs_size = ObservationSize(s.has_object);
   nlohmann::json j;
   j["env_id"] = s.id;
   j["task"] = TaskName(s.task);

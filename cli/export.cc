@@ -1,5 +1,7 @@
 // fetchscope export: a run folder's episode_NNN.json files, or a trajectory JSON (rollout
 // --json-out), written as a Minari dataset (dataset/minari_writer.h).
+#include <signal.h>
+
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
@@ -8,7 +10,9 @@
 #include <regex>
 
 #include "base/errors.h"
+#include "base/stop_signal.h"
 #include "cli/command.h"
+#include "cli/common.h"
 #include "dataset/minari_trajectory.h"
 #include "dataset/minari_writer.h"
 #include "src/env_spec.h"
@@ -24,6 +28,8 @@ struct ExportOptions {
   std::string minari;       // the dataset id
   std::string minari_root;  // --minari-root
   bool overwrite = false;
+  bool include_incomplete = false;  // --include-incomplete
+  DatasetAuthor author;
 };
 
 // The trajectory of a file, or of every episode_NNN.json of a run folder (one env id and seed)
@@ -67,18 +73,56 @@ Trajectory ReadInput(const std::string& input) {
   return all;
 }
 
+// Refuses episodes an interrupted run cut off (unless --include-incomplete), naming them; with
+// it, says that their last step is marked truncated as DataCollector marks an episode it stops.
+void CheckComplete(const Trajectory& t, const ExportOptions& o) {
+  std::string cut;
+  int count = 0;
+  std::error_code ec;
+  const bool folder = fs::is_directory(o.input, ec);  // name each episode's file
+  for (const TrajectoryEpisode& e : t.episodes) {
+    if (e.complete) continue;
+    cut += (count++ ? ", " : "") + std::to_string(e.index) + " (" +
+           std::to_string(e.steps.size() - 1) + " steps" +
+           (!folder || e.file.empty() ? "" : ", " + fs::path(e.file).filename().string()) + ")";
+  }
+  if (count == 0) return;
+  const std::string which = (count == 1 ? "episode " : "episodes ") + cut;
+  if (!o.include_incomplete) {
+    throw UsageError("export: " + o.input + ": " + which + (count == 1 ? " is" : " are") +
+                     " incomplete (the run was interrupted): `fetchscope record --resume` "
+                     "finishes a run folder; --include-incomplete exports it as it is");
+  }
+  std::fprintf(stderr,
+               "export: %s incomplete (cut off by an interrupt, not by the TimeLimit): included "
+               "(--include-incomplete), the last step marked truncated, as Minari's "
+               "DataCollector marks an episode it stops\n",
+               which.c_str());
+}
+
 int RunExport(const ExportOptions& o) {
+  InstallStopSignals();  // SIGINT/SIGTERM: stop, leave nothing, keep an old dataset
   const Trajectory t = ReadInput(o.input);
   const EnvSpec& spec = FindEnvSpec(t.env_id);
+  CheckComplete(t, o);
   MinariWriteOptions w;
   w.dataset_id = o.minari;
   w.root = MinariRoot(o.minari_root);
   w.overwrite = o.overwrite;
   w.algorithm_name = t.policy.empty() ? "unknown" : t.policy;
+  if (!o.author.name.empty()) w.author = o.author.name;
+  w.author_email = o.author.email;
   w.code_permalink = "fetchscope " FETCHSCOPE_VERSION " export " + o.input;
   w.description = spec.id + " episodes recorded by fetchscope (policy " + w.algorithm_name +
                   ", seed " + std::to_string(t.seed) + ")";
-  const fs::path path = WriteMinariDataset(t, w);
+  fs::path path;
+  try {
+    path = WriteMinariDataset(t, w);
+  } catch (const MinariInterrupted& e) {
+    std::fprintf(stderr, "export: %s; nothing written%s\n", e.what(),
+                 o.overwrite ? ", the existing dataset is unchanged" : "");
+    return 128 + e.signal;
+  }
   size_t steps = 0;
   for (const TrajectoryEpisode& e : t.episodes) steps += e.steps.size() - 1;
   std::printf("%s: %zu episode(s), %zu steps\nwrote Minari dataset %s at %s\n", spec.id.c_str(),
@@ -101,6 +145,10 @@ Command AddExport(CLI::App& app) {
   sub->add_option("--minari-root", o->minari_root,
                   "Datasets root (default $MINARI_DATASETS_PATH, else ~/.minari/datasets)");
   sub->add_flag("--overwrite", o->overwrite, "Replace an existing dataset of that id");
+  sub->add_flag("--include-incomplete", o->include_incomplete,
+                "Also export episodes an interrupted run cut off (their last step marked "
+                "truncated); without it they are refused");
+  AddDatasetAuthorOptions(sub, &o->author);
   return {sub, [o] { return RunExport(*o); }};
 }
 

@@ -84,6 +84,7 @@ struct RecordOptions {
   std::string layers = "rgb";   // --layers: rgb plus depth, segmentation
   std::string minari;           // --minari: also write the run as this Minari dataset
   std::string minari_root;      // --minari-root
+  DatasetAuthor author;         // --minari-author, --minari-author-email
   double tolerance = 1e-6;      // --tolerance: record --from DATASET
 };
 
@@ -218,10 +219,14 @@ int RunRecord(const RecordOptions& options, const std::string& command_line,
     minari.root = MinariRoot(o.minari_root);
     minari.spec = plan.spec;
     minari.algorithm_name = o.policy;
-    minari.code_permalink = "fetchscope " FETCHSCOPE_VERSION " " + command_line;
+    minari.overwrite = o.overwrite;      // replaced after the run, atomically
+    minari.max_episode_steps = o.steps;  // gym.make(id, max_episode_steps=--steps)
+    if (!o.author.name.empty()) minari.author = o.author.name;
+    minari.author_email = o.author.email;
     minari.description = plan.spec->id + " episodes recorded by fetchscope (policy " + o.policy +
                          ", seed " + o.env.seed + ")";
-    CheckMinariDestination(minari);  // an existing id fails now, not after the run
+    // an existing id or an unwritable datasets folder fails now, not after the run
+    CheckMinariDestination(minari);
   }
   plan.video.fps = o.fps;
   plan.video.codec = o.codec;
@@ -475,7 +480,20 @@ int RunRecord(const RecordOptions& options, const std::string& command_line,
     t.seed = run.seed;
     t.policy = run.policy;
     for (const auto& [k, episode] : run.episodes) t.episodes.push_back(episode);
-    const fs::path path = WriteMinariDataset(t, minari);
+    minari.code_permalink =
+        DatasetPermalink("record", t.env_id, o.policy, plan.seed, o.episodes, o.steps);
+    fs::path path;
+    const std::string advice = "; the run is kept in " + o.out + ": `fetchscope export " + o.out +
+                               " --minari " + o.minari + (o.overwrite ? " --overwrite" : "") +
+                               "` writes the dataset from it";
+    try {
+      path = WriteMinariDataset(t, minari);
+    } catch (const MinariInterrupted& e) {
+      std::fprintf(stderr, "record --minari: %s%s\n", e.what(), advice.c_str());
+      return 128 + e.signal;
+    } catch (const std::exception& e) {
+      throw RunError("record --minari: " + std::string(e.what()) + advice);
+    }
     std::printf("wrote Minari dataset %s at %s\n", o.minari.c_str(), path.c_str());
   }
   return 0;
@@ -546,16 +564,19 @@ Command AddRecord(CLI::App& app) {
   sub->add_flag("-q,--quiet", o->quiet, "No progress or summary on stderr");
   sub->add_option("--minari", o->minari,
                   "Also write the recorded episodes as a Minari dataset of this id (docs/guide/"
-                  "datasets.md); an existing one is refused (export --overwrite replaces it)");
+                  "datasets.md); an existing one is refused, --overwrite replaces it after the "
+                  "run");
   sub->add_option("--minari-root", o->minari_root,
                   "Datasets root (default $MINARI_DATASETS_PATH, else ~/.minari/datasets)");
+  AddDatasetAuthorOptions(sub, &o->author);
   sub->add_flag("--overwrite", o->overwrite,
                 "Replace the record run already in --out: only the files fetchscope wrote (its "
                 "manifest, the files the manifest lists, its report); other files stay, and one "
                 "under a run's name that fetchscope did not write is refused, naming it. The "
                 "earlier run is kept aside until the new one has its manifest, and put back if it "
                 "fails or is interrupted before an episode is complete. Without --overwrite or "
-                "--resume such a folder is refused");
+                "--resume such a folder is refused. With --minari, also replaces the dataset of "
+                "that id (after the run, atomically)");
   sub->add_flag("--resume", o->resume,
                 "Continue the interrupted record run in --out: keep its complete episodes and "
                 "record the others, byte-identical to an uninterrupted run; the options must "

@@ -15,6 +15,7 @@
 #include "run/episode_scheduler.h"
 #include "src/episode.h"
 #include "src/fetch_env.h"
+#include "src/observation_layout.h"
 #include "src/trajectory.h"
 
 namespace fetchscope::cli {
@@ -35,6 +36,7 @@ struct RolloutOptions {
   std::string minari_root;  // --minari-root
   bool overwrite =
       false;  // replace an existing Minari dataset, or a --json-out file of another env or seed
+  DatasetAuthor author;  // --minari-author, --minari-author-email
 };
 
 // The played episodes as a Minari dataset, added as they arrive (in index order: the scheduler
@@ -45,11 +47,12 @@ class MinariSink {
   MinariSink(const RolloutOptions& o, const MinariWriteOptions& options, const AssetSource& assets,
              uint64_t seed, std::vector<int> indices)
       : o_(o), assets_(assets), seed_(seed), writer_(options), indices_(std::move(indices)) {
-    width_ = options.spec->has_object ? 25 : 10;
+    width_ = ObservationSize(options.spec->has_object);
     spec_ = options.spec;
   }
 
   void Done(int k, const nlohmann::json& episode) {
+    if (stopped_) return;  // SIGINT/SIGTERM: the run ends as interrupted, the dataset unwritten
     pending_.emplace(k, episode);
     while (next_ < indices_.size()) {
       const auto it = pending_.find(indices_[next_]);
@@ -58,9 +61,15 @@ class MinariSink {
           TrajectoryJson(*spec_, assets_, seed_, o_.policy, nlohmann::json::array({it->second})),
           "rollout");
       // episode 0 was reset with the run's seed; the others continued its generator
-      writer_.Add(ToMinariEpisode(one.episodes.front(),
-                                  it->first == 0 ? std::optional<uint64_t>(seed_) : std::nullopt,
-                                  width_));
+      try {
+        writer_.Add(ToMinariEpisode(one.episodes.front(),
+                                    it->first == 0 ? std::optional<uint64_t>(seed_) : std::nullopt,
+                                    width_));
+      } catch (const MinariInterrupted&) {  // the scheduler reports the signal when it returns
+        stopped_ = true;
+        pending_.clear();
+        return;
+      }
       pending_.erase(it);
       ++next_;
     }
@@ -79,6 +88,7 @@ class MinariSink {
   std::vector<int> indices_;
   size_t next_ = 0;  // indices_[next_] is the next episode to add
   std::map<int, nlohmann::json> pending_;
+  bool stopped_ = false;  // a stop signal arrived while adding: add nothing more
 };
 
 // Plays episodes and reports each as its trajectory JSON entry.
@@ -118,6 +128,7 @@ int RunRollout(const RolloutOptions& o) {
   const std::string path = JsonOutPath(o.json_out, "rollout");
   CheckJsonOutReplaces(path, {{"env_id", spec.id}, {"seed", seed}}, o.overwrite);
   { FetchEnv check(spec, assets); }  // bad assets fail here, before any worker starts
+  const int count = static_cast<int>(indices.size());
   MinariWriteOptions minari;
   if (!o.minari.empty()) {
     minari.dataset_id = o.minari;
@@ -125,9 +136,10 @@ int RunRollout(const RolloutOptions& o) {
     minari.overwrite = o.overwrite;
     minari.spec = &spec;
     minari.algorithm_name = o.policy;
-    minari.code_permalink = "fetchscope " FETCHSCOPE_VERSION " rollout --env-id " + spec.id +
-                            " --policy " + o.policy + " --seed " + std::to_string(seed) +
-                            " --steps " + std::to_string(o.steps);
+    minari.code_permalink = DatasetPermalink("rollout", spec.id, o.policy, seed, count, o.steps);
+    minari.max_episode_steps = o.steps;  // gym.make(id, max_episode_steps=--steps)
+    if (!o.author.name.empty()) minari.author = o.author.name;
+    minari.author_email = o.author.email;
     minari.description = spec.id + " episodes played by fetchscope's " + o.policy + " policy";
     CheckMinariDestination(minari);  // an existing id fails now, not after the run
   }
@@ -136,7 +148,6 @@ int RunRollout(const RolloutOptions& o) {
   ScheduleOptions schedule;
   schedule.episodes = indices;
   if (sink) schedule.on_done = [&](int k, const nlohmann::json& e) { sink->Done(k, e); };
-  const int count = static_cast<int>(indices.size());
   schedule.jobs = ResolveJobs(o.jobs, count);
   schedule.mode = mode;
   const ScheduleResult result = RunEpisodes(schedule, [&](int) {
@@ -151,7 +162,13 @@ int RunRollout(const RolloutOptions& o) {
                  result.signal == SIGINT ? "SIGINT" : "SIGTERM");
     return 128 + result.signal;
   }
-  const std::string dataset = sink ? sink->Commit() : "";
+  std::string dataset;
+  try {
+    if (sink) dataset = sink->Commit();
+  } catch (const MinariInterrupted& e) {  // a signal after the last episode: still nothing
+    std::fprintf(stderr, "rollout: %s; nothing written\n", e.what());
+    return 128 + e.signal;
+  }
   nlohmann::json episodes = nlohmann::json::array();
   int successes = 0;
   for (const auto& [k, episode] : result.results) {
@@ -207,6 +224,7 @@ Command AddRollout(CLI::App& app) {
   sub->add_flag("--overwrite", o->overwrite,
                 "Replace an existing Minari dataset of that id, and let --json-out replace a "
                 "result file of another env, seed or task");
+  AddDatasetAuthorOptions(sub, &o->author);
   AddJobsOptions(sub, &o->jobs, &o->worker_mode);
   return {sub, [o, sub] {
             o->episodes_given = sub->count("--episodes") > 0;

@@ -67,7 +67,14 @@ void ValidateMinariDatasetId(const std::string& id) {
 
 std::filesystem::path MinariRoot(const std::string& flag) {
   if (!flag.empty()) return flag;
-  if (const char* env = std::getenv("MINARI_DATASETS_PATH"); env && *env) return env;
+  if (const char* env = std::getenv("MINARI_DATASETS_PATH")) {
+    if (!*env) {
+      throw UsageError(
+          "MINARI_DATASETS_PATH is set but empty: name a folder, or unset it for the default "
+          "~/.minari/datasets (or give --minari-root DIR)");
+    }
+    return env;
+  }
   const char* home = std::getenv("HOME");
   if (!home || !*home) {
     throw UsageError(
@@ -90,11 +97,17 @@ std::string FetchObservationSpaceJson(int obs_dim) {
 
 std::string FetchActionSpaceJson() { return BoxJson("float32", 4, "-1.0", "1.0"); }
 
-std::string FetchEnvSpecJson(const EnvSpec& spec) {
+std::vector<std::string> FetchRequirements() {
+  // reference/fetch-env.md: Gymnasium-Robotics 1.4.2's Fetch v4, on MuJoCo 2.2.2
+  return {"gymnasium_robotics==1.4.2", "mujoco==2.2.2"};
+}
+
+std::string FetchEnvSpecJson(const EnvSpec& spec, int max_episode_steps) {
+  if (max_episode_steps <= 0) max_episode_steps = spec.max_episode_steps;
   // dataclasses.asdict(EnvSpec) in field order, less namespace/name/version (gymnasium 1.x)
   return "{\"id\": " + PythonJsonString(spec.id) + ", \"entry_point\": \"" + EntryPoint(spec.task) +
          "\", \"reward_threshold\": null, \"nondeterministic\": false, \"max_episode_steps\": " +
-         std::to_string(spec.max_episode_steps) +
+         std::to_string(max_episode_steps) +
          ", \"order_enforce\": true, \"disable_env_checker\": false, \"kwargs\": "
          "{\"reward_type\": \"" +
          (spec.dense ? "dense" : "sparse") +

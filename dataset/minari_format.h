@@ -60,8 +60,13 @@ std::string FetchObservationSpaceJson(int obs_dim);
 std::string FetchActionSpaceJson();
 
 /// gymnasium's EnvSpec.to_json() for a registered Fetch v4 id after gymnasium.make (id,
-/// entry_point, max_episode_steps 50, order_enforce true, kwargs.reward_type, ...).
-std::string FetchEnvSpecJson(const EnvSpec& spec);
+/// entry_point, max_episode_steps, order_enforce true, kwargs.reward_type, ...):
+/// `max_episode_steps` is the TimeLimit of gym.make(id, max_episode_steps=N); 0: the spec's 50.
+std::string FetchEnvSpecJson(const EnvSpec& spec, int max_episode_steps = 0);
+
+/// metadata `requirements`: the pip requirements recover_environment() checks (the
+/// Gymnasium-Robotics release whose v4 envs fetchscope matches, and MuJoCo's version).
+std::vector<std::string> FetchRequirements();
 
 /// A string as Python's json.dumps writes it (quoted, ASCII-only, \uXXXX escapes).
 std::string PythonJsonString(const std::string& s);

@@ -5,7 +5,9 @@
 #include <sstream>
 
 #include "base/errors.h"
+#include "base/suggest.h"
 #include "dataset/hdf5_handles.h"
+#include "src/observation_layout.h"
 
 namespace fetchscope {
 namespace {
@@ -85,7 +87,7 @@ int CheckObservationSpace(const std::string& label, const json& space) {
   }
   const int width =
       subspaces.contains("observation") ? BoxWidth(subspaces["observation"], "float64") : 0;
-  if (width != 10 && width != 25) Fail(label, expected);
+  if (width <= 0 || !LayoutHasObject(static_cast<size_t>(width))) Fail(label, expected);
   return width;
 }
 
@@ -277,7 +279,28 @@ MinariLocation LocateMinariDataset(const std::string& what, const fs::path& root
     return in(root / what / "data");
   }
   throw UsageError("no Minari dataset '" + what + "': not a file or folder, nor an id under " +
-                   root.string() + " (--minari-root, $MINARI_DATASETS_PATH, ~/.minari/datasets)");
+                   root.string() + " (--minari-root, $MINARI_DATASETS_PATH, ~/.minari/datasets)" +
+                   DidYouMean(what, ListLocalMinariIds(root)));
+}
+
+std::vector<std::string> ListLocalMinariIds(const fs::path& root) {
+  std::vector<std::string> ids;
+  std::error_code ec;
+  auto it = fs::recursive_directory_iterator(root, ec);
+  for (; !ec && it != fs::recursive_directory_iterator(); it.increment(ec)) {
+    const fs::path& p = it->path();
+    if (!it->is_directory(ec)) continue;
+    if (p.filename().string().front() == '.' || p.filename() == "data") {
+      it.disable_recursion_pending();  // temporary folders of writes; a dataset's own data/
+      continue;
+    }
+    if (fs::is_regular_file(p / "data" / "metadata.json", ec)) {
+      ids.push_back(fs::relative(p, root, ec).generic_string());
+      it.disable_recursion_pending();
+    }
+  }
+  std::sort(ids.begin(), ids.end());
+  return ids;
 }
 
 MinariMetadata ParseMinariMetadata(const std::string& text, const std::string& label) {
@@ -313,6 +336,9 @@ MinariMetadata ParseMinariMetadata(const std::string& text, const std::string& l
   m.total_episodes = count("total_episodes");
   m.total_steps = count("total_steps");
   if (j.contains("dataset_id") && j["dataset_id"].is_string()) m.dataset_id = j["dataset_id"];
+  if (j.contains("code_permalink") && j["code_permalink"].is_string()) {
+    m.code_permalink = j["code_permalink"];
+  }
   if (j.contains("algorithm_name") && j["algorithm_name"].is_string()) {
     m.algorithm_name = j["algorithm_name"];
   }
@@ -330,6 +356,7 @@ MinariMetadata ParseMinariMetadata(const std::string& text, const std::string& l
     }
     if (!env) Fail(label, "env_spec id '" + id + "' is not a Fetch environment (" + ids + ")");
     m.env_id = id;
+    if (spec.value("entry_point", json()).is_string()) m.entry_point = spec["entry_point"];
     if (spec.value("max_episode_steps", json()).is_number_integer()) {
       m.max_episode_steps = spec["max_episode_steps"].get<int>();
     }
@@ -338,7 +365,7 @@ MinariMetadata ParseMinariMetadata(const std::string& text, const std::string& l
       m.reward_type = kwargs["reward_type"].get<std::string>();
     }
   }
-  const int env_width = env ? (env->has_object ? 25 : 10) : 0;
+  const int env_width = env ? ObservationSize(env->has_object) : 0;
   if (j.contains("observation_space")) {
     m.obs_dim =
         CheckObservationSpace(label, SpaceJson(label, j["observation_space"], "observation_space"));

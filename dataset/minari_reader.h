@@ -31,6 +31,9 @@ struct MinariMetadata {
   std::optional<int> max_episode_steps;    ///< env_spec's max_episode_steps
   std::optional<std::string> reward_type;  ///< env_spec's kwargs.reward_type
   std::string algorithm_name;              ///< `algorithm_name` (empty when absent)
+  std::string code_permalink;              ///< `code_permalink` (empty when absent)
+  /// env_spec's entry_point, e.g. "gymnasium_robotics.envs.fetch.push:MujocoFetchPushEnv"
+  std::string entry_point;
 };
 
 /// A dataset read whole (or the episodes asked for).
@@ -59,5 +62,9 @@ std::vector<MinariEpisode> ReadMinariEpisodes(const std::string& label,
 /// add up to `total_steps` when every episode is read.
 MinariDataset ReadMinariDataset(const std::string& what, const std::filesystem::path& root,
                                 const std::vector<int64_t>& indices = {});
+
+/// The ids of the datasets under `root` (folders holding data/metadata.json, as Minari's
+/// `list_local_datasets` finds them; hidden folders skipped), sorted.
+std::vector<std::string> ListLocalMinariIds(const std::filesystem::path& root);
 
 }  // namespace fetchscope

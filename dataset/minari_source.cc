@@ -6,6 +6,7 @@
 #include "base/errors.h"
 #include "dataset/minari_reader.h"
 #include "dataset/minari_trajectory.h"
+#include "src/observation_layout.h"
 
 namespace fetchscope {
 namespace {
@@ -55,8 +56,9 @@ MinariSource LoadMinariSource(const MinariSourceRequest& r) {
                      "FetchPush-v4)");
   }
   const EnvSpec& spec = FindEnvSpec(env_id);
-  if ((spec.has_object ? 25 : 10) != m.obs_dim) {
-    throw UsageError("--env-id " + env_id + " has " + std::to_string(spec.has_object ? 25 : 10) +
+  if (ObservationSize(spec.has_object) != m.obs_dim) {
+    throw UsageError("--env-id " + env_id + " has " +
+                     std::to_string(ObservationSize(spec.has_object)) +
                      " observation values, the dataset " + file + " " + std::to_string(m.obs_dim));
   }
   std::sort(d.episodes.begin(), d.episodes.end(),
@@ -90,6 +92,9 @@ MinariSource LoadMinariSource(const MinariSourceRequest& r) {
               " episode(s), " + std::to_string(steps) + " steps, seeds " + SeedsFound(d.episodes) +
               ", minari_version " + m.minari_version;
   s.found = out.found;
+  out.env_from_spec = m.env_id.has_value();
+  out.genuine_env = m.entry_point.rfind("gymnasium_robotics.", 0) == 0 &&
+                    m.code_permalink.rfind("fetchscope ", 0) != 0;
   return out;
 }
 

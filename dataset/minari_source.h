@@ -20,8 +20,12 @@ struct MinariSourceRequest {
 
 /// A dataset read as an episode source, and what was found, as one line for the console.
 struct MinariSource {
-  TrajectorySource source;  ///< dataset = true, a start per episode
-  std::string found;        ///< "Minari dataset ID (FILE): env ..., N episode(s), ..."
+  TrajectorySource source;     ///< dataset = true, a start per episode
+  std::string found;           ///< "Minari dataset ID (FILE): env ..., N episode(s), ..."
+  bool env_from_spec = false;  ///< the env is the dataset's env_spec (not --env-id)
+  /// env_spec names Gymnasium-Robotics' own env and fetchscope did not write the dataset
+  /// (its code_permalink): it was made on the genuine assets
+  bool genuine_env = false;
 };
 
 /// Reads the dataset. Throws RunError (one line naming the file and what is wrong: the reader's)

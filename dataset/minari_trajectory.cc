@@ -3,6 +3,7 @@
 #include <algorithm>
 
 #include "base/errors.h"
+#include "src/observation_layout.h"
 
 namespace fetchscope {
 
@@ -83,11 +84,13 @@ EpisodeStart MinariEpisodeStart(const MinariEpisode& m, const EnvSpec& spec) {
   EpisodeStart start;
   start.seed = m.seed;
   for (int i = 0; i < 3; ++i) start.goal[i] = m.desired_goal[i];
-  if (spec.has_object && m.obs_dim == 25) {  // observation[3:6] object_pos, [11:14] object_rot
+  if (spec.has_object && m.obs_dim == ObservationSize(true)) {  // the first row's object pose
+    const int position = FindObservationSlice(true, "object_pos")->first;
+    const int euler = FindObservationSlice(true, "object_rot")->first;
     ObjectPose pose;
     for (int i = 0; i < 3; ++i) {
-      pose.position[i] = m.observation[3 + i];
-      pose.euler[i] = m.observation[11 + i];
+      pose.position[i] = m.observation[position + i];
+      pose.euler[i] = m.observation[euler + i];
     }
     start.object = pose;
   }
@@ -101,8 +104,14 @@ std::filesystem::path WriteMinariDataset(const Trajectory& trajectory, MinariWri
   std::sort(
       episodes.begin(), episodes.end(),
       [](const TrajectoryEpisode* a, const TrajectoryEpisode* b) { return a->index < b->index; });
+  if (options.max_episode_steps <= 0) {  // the TimeLimit they ran under: the longest episode
+    for (const TrajectoryEpisode* e : episodes) {
+      options.max_episode_steps =
+          std::max(options.max_episode_steps, static_cast<int>(e->steps.size()) - 1);
+    }
+  }
   MinariWriter writer(options);
-  const int width = options.spec->has_object ? 25 : 10;
+  const int width = ObservationSize(options.spec->has_object);
   for (const TrajectoryEpisode* e : episodes) {
     const std::optional<uint64_t> seed =
         e->index == 0 ? std::optional<uint64_t>(trajectory.seed) : std::nullopt;

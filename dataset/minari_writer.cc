@@ -1,14 +1,20 @@
 #include "dataset/minari_writer.h"
 
 #include <fcntl.h>
+#include <signal.h>
 #include <stdio.h>  // renameat2
+#include <unistd.h>
 
 #include <cerrno>
+#include <chrono>
 #include <cmath>
 #include <cstring>
+#include <regex>
 #include <system_error>
 
 #include "base/errors.h"
+#include "base/stop_signal.h"
+#include "src/observation_layout.h"
 
 namespace fetchscope {
 namespace {
@@ -129,18 +135,78 @@ fs::path DatasetFolder(const MinariWriteOptions& options) {
 
 }  // namespace
 
+namespace {
+
+// Throws MinariInterrupted where SIGINT/SIGTERM asked to stop.
+void ThrowIfStopped(const std::string& dataset_id) {
+  if (const int sig = StopSignal()) {
+    throw MinariInterrupted(sig, "interrupted (" +
+                                     std::string(sig == SIGINT ? "SIGINT" : "SIGTERM") +
+                                     ") while writing Minari dataset '" + dataset_id + "'");
+  }
+}
+
+// The newest modification time of anything under `folder` (itself included).
+fs::file_time_type NewestWrite(const fs::path& folder) {
+  std::error_code ec;
+  fs::file_time_type newest = fs::last_write_time(folder, ec);
+  for (auto it = fs::recursive_directory_iterator(folder, ec);
+       !ec && it != fs::recursive_directory_iterator(); it.increment(ec)) {
+    newest = std::max(newest, fs::last_write_time(it->path(), ec));
+  }
+  return newest;
+}
+
+}  // namespace
+
 void CheckMinariDestination(const MinariWriteOptions& options) {
   const fs::path final_path = DatasetFolder(options);
   std::error_code ec;
-  if (!fs::exists(fs::symlink_status(final_path, ec))) return;
-  if (!options.overwrite) {
-    throw UsageError("Minari dataset '" + options.dataset_id + "' already exists at " +
-                     final_path.string() + "; pass --overwrite to replace it");
+  if (fs::exists(fs::symlink_status(final_path, ec))) {
+    if (!options.overwrite) {
+      throw UsageError("Minari dataset '" + options.dataset_id + "' already exists at " +
+                       final_path.string() + "; pass --overwrite to replace it");
+    }
+    if (!fs::is_directory(final_path / "data", ec)) {
+      throw UsageError(final_path.string() +
+                       " is not a Minari dataset (no data/ folder); not replacing it");
+    }
   }
-  if (!fs::is_directory(final_path / "data", ec)) {
-    throw UsageError(final_path.string() +
-                     " is not a Minari dataset (no data/ folder); not replacing it");
+  // can the dataset be written there? make (and remove again) its temporary folder now, so an
+  // unwritable root fails before a long run, not after it
+  const ParentFolders parents(final_path.string());
+  const fs::path probe = TempPathFor(final_path.string());
+  if (!fs::create_directory(probe, ec) || ec) {
+    throw RunError("cannot write Minari dataset '" + options.dataset_id + "' under '" +
+                   final_path.parent_path().string() +
+                   "': " + (ec ? ec.message() : std::string("it exists")));
   }
+  fs::remove(probe, ec);
+}
+
+std::vector<fs::path> RemoveStaleMinariTemps(const fs::path& final_path) {
+  std::vector<fs::path> removed;
+  const fs::path folder = final_path.parent_path();
+  const std::regex ours("\\." +
+                        std::regex_replace(final_path.filename().string(),
+                                           std::regex(R"([.^$|()\[\]{}*+?\\-])"), R"(\$&)") +
+                        R"(\.tmp-(\d+)-\d+)");
+  std::error_code ec;
+  const auto now = fs::file_time_type::clock::now();
+  for (const auto& entry : fs::directory_iterator(folder, ec)) {
+    std::smatch m;
+    const std::string name = entry.path().filename().string();
+    if (!std::regex_match(name, m, ours) || !entry.is_directory(ec)) continue;
+    const long pid = std::stol(m[1].str());
+    // still being written: by a process alive on this machine, or lately (another machine
+    // sharing the folder, whose process ids mean nothing here)
+    if (pid == getpid() || kill(static_cast<pid_t>(pid), 0) == 0 || errno != ESRCH) continue;
+    if (now - NewestWrite(entry.path()) < std::chrono::minutes(1)) continue;
+    if (fs::remove_all(entry.path(), ec) != static_cast<std::uintmax_t>(-1) && !ec) {
+      removed.push_back(entry.path());
+    }
+  }
+  return removed;
 }
 
 MinariWriter::MinariWriter(const MinariWriteOptions& options)
@@ -150,14 +216,18 @@ MinariWriter::MinariWriter(const MinariWriteOptions& options)
       parents_(final_path_.string()) {
   if (!options_.spec) throw RunError("MinariWriter: no env spec");
   SilenceHdf5Errors();
+  ThrowIfStopped(options_.dataset_id);
   CheckMinariDestination(options_);
+  for (const fs::path& stale : RemoveStaleMinariTemps(final_path_)) {
+    std::fprintf(stderr, "removed %s, left by an interrupted dataset write\n", stale.c_str());
+  }
   std::error_code ec;
   const fs::path data = temp_path_ / "data";
   if (!fs::create_directories(data, ec) || ec) {
     throw RunError("cannot create folder '" + data.string() + "': " + ec.message());
   }
   temp_exists_ = true;
-  obs_dim_ = options_.spec->has_object ? 25 : 10;
+  obs_dim_ = ObservationSize(options_.spec->has_object);
   // the root group tracks and indexes creation order, as h5py's File(track_order=True)
   H5PropList fcpl = NoTimesList(H5P_FILE_CREATE);
   const unsigned order = H5P_CRT_ORDER_TRACKED | H5P_CRT_ORDER_INDEXED;
@@ -187,6 +257,7 @@ MinariWriter::~MinariWriter() {
 
 void MinariWriter::Add(const MinariEpisode& e) {
   if (!file_) throw RunError("MinariWriter: Add after Commit");
+  ThrowIfStopped(options_.dataset_id);
   const size_t t = e.rewards.size();
   const size_t d = static_cast<size_t>(obs_dim_);
   CheckRows(e, "observation", e.observation.size(), t + 1, d);
@@ -224,7 +295,12 @@ void MinariWriter::Add(const MinariEpisode& e) {
               e.desired_goal.data());
   }
   w.Dataset(group.get(), "actions", H5T_IEEE_F32LE, H5T_NATIVE_FLOAT, 4, t, 4, e.actions.data());
-  w.Dataset(group.get(), "rewards", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 8, t, 0, e.rewards.data());
+  if (options_.spec->dense) {  // Gymnasium-Robotics' dtypes: float64 dense, float32 sparse
+    w.Dataset(group.get(), "rewards", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 8, t, 0, e.rewards.data());
+  } else {
+    const std::vector<float> rewards(e.rewards.begin(), e.rewards.end());
+    w.Dataset(group.get(), "rewards", H5T_IEEE_F32LE, H5T_NATIVE_FLOAT, 4, t, 0, rewards.data());
+  }
   const H5Datatype boolean = BoolType();
   w.Dataset(group.get(), "terminations", boolean.get(), boolean.get(), 1, t, 0,
             e.terminations.data());
@@ -244,17 +320,27 @@ std::string MinariWriter::MetadataJson(double dataset_size_mb) const {
                   ", \"data_format\": \"hdf5\", \"observation_space\": " +
                   PythonJsonString(FetchObservationSpaceJson(obs_dim_)) +
                   ", \"action_space\": " + PythonJsonString(FetchActionSpaceJson()) +
-                  ", \"env_spec\": " + PythonJsonString(FetchEnvSpecJson(*options_.spec)) +
+                  ", \"env_spec\": " +
+                  PythonJsonString(FetchEnvSpecJson(*options_.spec, options_.max_episode_steps)) +
                   ", \"dataset_id\": " + PythonJsonString(options_.dataset_id);
   if (!options_.code_permalink.empty()) {
     j += ", \"code_permalink\": " + PythonJsonString(options_.code_permalink);
   }
   j += ", \"author\": [" + PythonJsonString(options_.author) + "]";
+  if (!options_.author_email.empty()) {
+    j += ", \"author_email\": [" + PythonJsonString(options_.author_email) + "]";
+  }
   j += ", \"algorithm_name\": " + PythonJsonString(options_.algorithm_name);
   if (!options_.description.empty()) {
     j += ", \"description\": " + PythonJsonString(options_.description);
   }
   j += ", \"minari_version\": \"" + std::string(kMinariVersionWritten) + "\"";
+  j += ", \"requirements\": [";
+  const std::vector<std::string> requirements = FetchRequirements();
+  for (size_t i = 0; i < requirements.size(); ++i) {
+    j += (i ? ", " : "") + PythonJsonString(requirements[i]);
+  }
+  j += "]";
   j += ", \"dataset_size\": " + nlohmann::json(dataset_size_mb).dump() + "}";
   return j;
 }
@@ -270,6 +356,7 @@ fs::path MinariWriter::Commit() {
   auto size_mb = [&](size_t metadata_bytes) {
     return std::nearbyint(static_cast<double>(hdf5_bytes + metadata_bytes) / 1e6 * 10) / 10;
   };
+  ThrowIfStopped(options_.dataset_id);
   const double size = size_mb(MetadataJson(size_mb(MetadataJson(0).size())).size());
   WriteFileAtomically((data / "metadata.json").string(), MetadataJson(size));
 

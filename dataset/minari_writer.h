@@ -6,8 +6,10 @@
 #include <cstdint>
 #include <filesystem>
 #include <string>
+#include <vector>
 
 #include "base/atomic_file.h"
+#include "base/errors.h"
 #include "dataset/hdf5_handles.h"
 #include "dataset/minari_format.h"
 #include "src/env_spec.h"
@@ -22,13 +24,30 @@ struct MinariWriteOptions {
   const EnvSpec* spec = nullptr;      ///< the env the episodes come from (required)
   std::string algorithm_name;         ///< metadata `algorithm_name`: the policy
   std::string author = "fetchscope";  ///< metadata `author` (a one-element list)
-  std::string code_permalink;         ///< metadata `code_permalink`
-  std::string description;            ///< metadata `description` (omitted when empty)
+  std::string author_email;           ///< metadata `author_email` (a one-element list; omitted
+                                      ///< when empty)
+  /// env_spec `max_episode_steps`: the TimeLimit the episodes were run with (0: the spec's 50)
+  int max_episode_steps = 0;
+  std::string code_permalink;  ///< metadata `code_permalink`
+  std::string description;     ///< metadata `description` (omitted when empty)
 };
 
-/// Checks the id and refuses an existing dataset unless `overwrite` (UsageError naming the
-/// folder), without writing anything: a command calls it before a long run, MinariWriter again.
+/// Checks the id, refuses an existing dataset unless `overwrite` (UsageError naming the
+/// folder), and checks that the dataset's folder can be written (RunError naming the folder),
+/// leaving nothing behind: a command calls it before a long run, MinariWriter again.
 void CheckMinariDestination(const MinariWriteOptions& options);
+
+/// A write stopped by SIGINT/SIGTERM (StopSignal(), where a command installed the handlers):
+/// nothing of the new dataset is left, an old one of the same id is untouched.
+struct MinariInterrupted : RunError {
+  MinariInterrupted(int sig, const std::string& what) : RunError(what), signal(sig) {}
+  int signal;  ///< SIGINT or SIGTERM
+};
+
+/// Removes the temporary folders of dataset writes that were killed (`.<name>.tmp-<pid>-<n>`
+/// beside `final_path`, whose process no longer runs on this machine and which nothing has
+/// written to for a minute). Returns the folders removed. MinariWriter calls it.
+std::vector<std::filesystem::path> RemoveStaleMinariTemps(const std::filesystem::path& final_path);
 
 /// One dataset being written. It is written under a hidden temporary folder beside the final
 /// one (`.<name>.tmp-<pid>-<n>`, which Minari's listing skips) and renamed into place by

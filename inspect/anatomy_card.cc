@@ -22,6 +22,7 @@
 #include "render/projection.h"
 #include "src/env_spec.h"
 #include "src/episode.h"
+#include "src/observation_layout.h"
 #include "src/policy.h"
 
 namespace fetchscope {
@@ -247,7 +248,7 @@ std::string DetailCamera(const Vec3& at, double distance, const Vec3& across) {
 std::vector<PlacedLabel> Captions(const EnvSpec& spec, const std::string& seed,
                                   const CardContent& content, const CardStyle& st, int h) {
   const std::string title = spec.id + " after reset(seed=" + seed + ")\nobservation[" +
-                            std::to_string(spec.has_object ? 25 : 10) + "], action[4]\n" +
+                            std::to_string(ObservationSize(spec.has_object)) + "], action[4]\n" +
                             content.action_note;
   RectF footer = TextBox(content.footer, st, st.gap, 0);
   footer = {footer.x0, h - st.gap - footer.y1, footer.x1, h - st.gap - 0.0};
@@ -350,9 +351,7 @@ Panel RenderPanel(const std::string& env_id, const AnatomyCardOptions& o, GlCont
   auto policy = MakePolicy("zero", spec, context);
   const EpisodeRecord episode = RunEpisode(fetch, *policy, 0, context.seed, 0);
   const StepRecord& reset = episode.steps.back();
-  auto content_for = [&](const Vec3& view_up) {
-    return PanelContentFor(fetch, reset, view_up, o.observation_slice);
-  };
+  auto content_for = [&](const Vec3& view_up) { return PanelContentFor(fetch, reset, view_up); };
   const int w = o.width, h = o.height;
   const CardStyle st = StyleFor(w, h);
 

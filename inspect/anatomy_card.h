@@ -30,14 +30,13 @@ inline constexpr int kAnatomyMaxPanelSize = 4096;
 
 /// What the card shows and how it is rendered.
 struct AnatomyCardOptions {
-  uint64_t seed = 0;                     ///< reset(seed=...) of both panels
-  std::string seed_text = "0";           ///< the seed as given: the title and the sidecar show it
-  std::string assets = "bundled";        ///< as ResolveAssets takes it (the sidecar shows it)
-  int width = 720;                       ///< each panel, pixels (kAnatomyMinPanelWidth and up)
-  int height = 540;                      ///< pixels (kAnatomyMinPanelHeight and up)
-  int msaa_samples = kMsaaAuto;          ///< RenderOptions::msaa_samples
-  std::string msaa = "auto";             ///< --msaa as given, for the sidecar
-  ObservationSliceFn observation_slice;  ///< names the slices in the labels
+  uint64_t seed = 0;               ///< reset(seed=...) of both panels
+  std::string seed_text = "0";     ///< the seed as given: the title and the sidecar show it
+  std::string assets = "bundled";  ///< as ResolveAssets takes it (the sidecar shows it)
+  int width = 720;                 ///< each panel, pixels (kAnatomyMinPanelWidth and up)
+  int height = 540;                ///< pixels (kAnatomyMinPanelHeight and up)
+  int msaa_samples = kMsaaAuto;    ///< RenderOptions::msaa_samples
+  std::string msaa = "auto";       ///< --msaa as given, for the sidecar
 };
 
 /// Renders the card on `gl` and writes DIR/ch01_anatomy.png (Reach | Push) and

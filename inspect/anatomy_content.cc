@@ -4,6 +4,7 @@
 #include <string>
 
 #include "base/number_format.h"
+#include "src/observation_layout.h"
 
 namespace fetchscope {
 namespace {
@@ -19,6 +20,17 @@ Vec3 BodyPosition(const FetchEnv& env, const char* name, const Vec3& fallback) {
   return id < 0 ? fallback : Vec3{x[3 * id], x[3 * id + 1], x[3 * id + 2]};
 }
 
+// "obs[5]": observation component `name` ("object_pos.z") where the layout puts it.
+std::string Obs(bool has_object, const char* name) {
+  return "obs[" + std::to_string(ObservationIndex(has_object, name)) + "]";
+}
+
+// The first of three consecutive components from slice `slice` of `o`, as a point.
+Vec3 Point3(const std::vector<double>& o, bool has_object, const char* slice) {
+  const size_t i = static_cast<size_t>(FindObservationSlice(has_object, slice)->first);
+  return {o[i], o[i + 1], o[i + 2]};
+}
+
 std::string Fixed(double v, int digits) {
   return PictureNumber(("%." + std::to_string(digits) + "f").c_str(), v);  // never "-0.00"
 }
@@ -28,11 +40,11 @@ std::string Fixed(double v, int digits) {
 // so that the radius line ends on the shell's outline). `arrow_scale`: how many times 0.05 m
 // (one unit of a[0:3]) the arrows are drawn.
 CardContent CommonContent(const FetchEnv& env, const StepRecord& s, const Vec3& view_up,
-                          int arrow_scale, const ObservationSliceFn& slice) {
+                          int arrow_scale) {
   const EnvSpec& spec = env.spec();
   const bool obj = spec.has_object;
   const auto& o = s.obs.observation;
-  const Vec3 grip = {o[0], o[1], o[2]};
+  const Vec3 grip = Point3(o, obj, "grip_pos");
   const Vec3 goal = s.obs.desired_goal;
   const Vec3 right = BodyPosition(env, "robot0:r_gripper_finger_link", grip);
   const Vec3 left = BodyPosition(env, "robot0:l_gripper_finger_link", grip);
@@ -47,8 +59,8 @@ CardContent CommonContent(const FetchEnv& env, const StepRecord& s, const Vec3& 
   const Vec3 open = Unit(Add(left, right, -1.0));
   const Vec3 left_open = Add(left_low, open, 0.04), right_open = Add(right_low, open, -0.04);
   const Vec3 shell_edge = Add(goal, view_up, threshold);
-  const int r_index = obj ? 9 : 3;  // obs[r_index] r, obs[r_index + 1] l
-  const double width = o[r_index] + o[r_index + 1];
+  const FingerIndices fingers = FingerPositionIndices(obj);
+  const double width = o[fingers.right] + o[fingers.left];
 
   CardContent c;
   c.spheres = {{goal, threshold, kGoalRed, 0.25f}};
@@ -70,13 +82,15 @@ CardContent CommonContent(const FetchEnv& env, const StepRecord& s, const Vec3& 
       {"a[1] y", CardMarkerKind::kArrow, grip, ay, kGreen},
       {"a[2] z", CardMarkerKind::kArrow, grip, az, kBlue},
   };
-  const std::string r = "obs[" + std::to_string(r_index) + "]",
-                    l = "obs[" + std::to_string(r_index + 1) + "]";
+  const std::string r = Obs(obj, "gripper_state.right"), l = Obs(obj, "gripper_state.left");
   c.labels = {
-      {"grip_pos " + slice(obj, "grip_pos") + (obj ? "" : "\n= achieved_goal"), {grip}, kCyan, 200},
-      {"x obs[0] \xc2\xb7 a[0]", {ax}, kRed, 60, false},
-      {"y obs[1] \xc2\xb7 a[1]", {ay}, kGreen, -30, false},
-      {"z obs[2] \xc2\xb7 a[2]", {az}, kBlue, -30, false},
+      {"grip_pos " + ObservationSliceText(obj, "grip_pos") + (obj ? "" : "\n= achieved_goal"),
+       {grip},
+       kCyan,
+       200},
+      {"x " + Obs(obj, "grip_pos.x") + " \xc2\xb7 a[0]", {ax}, kRed, 60, false},
+      {"y " + Obs(obj, "grip_pos.y") + " \xc2\xb7 a[1]", {ay}, kGreen, -30, false},
+      {"z " + Obs(obj, "grip_pos.z") + " \xc2\xb7 a[2]", {az}, kBlue, -30, false},
 
       {"desired_goal (goal)", {goal}, kGoalRed, 60},
       {"success shell\nr = " + Fixed(threshold, 2) + " m", {shell_edge}, kCardWhite, -45},
@@ -100,45 +114,52 @@ CardContent CommonContent(const FetchEnv& env, const StepRecord& s, const Vec3& 
   return c;
 }
 
-CardContent ReachContent(const FetchEnv& env, const StepRecord& s, const Vec3& view_up,
-                         const ObservationSliceFn& slice) {
-  CardContent c = CommonContent(env, s, view_up, 5, slice);
-  c.footer = "obs[5:8] grip_velp  obs[8:10] finger vel\n(velocities x dt: per step)";
+// "obs[5:8] grip_velp": the slice's indices and a name for it
+std::string Named(bool has_object, const char* slice, const char* name) {
+  return ObservationSliceText(has_object, slice) + " " + name;
+}
+
+CardContent ReachContent(const FetchEnv& env, const StepRecord& s, const Vec3& view_up) {
+  CardContent c = CommonContent(env, s, view_up, 5);
+  c.footer = Named(false, "grip_velp", "grip_velp") + "  " +
+             Named(false, "gripper_vel", "finger vel") + "\n(velocities x dt: per step)";
   return c;
 }
 
-CardContent PushContent(const FetchEnv& env, const StepRecord& s, const Vec3& view_up,
-                        const ObservationSliceFn& slice) {
-  CardContent c = CommonContent(env, s, view_up, 3, slice);
+CardContent PushContent(const FetchEnv& env, const StepRecord& s, const Vec3& view_up) {
+  CardContent c = CommonContent(env, s, view_up, 3);
   const auto& o = s.obs.observation;
-  const Vec3 grip = {o[0], o[1], o[2]};
-  const Vec3 object = {o[3], o[4], o[5]};
+  const Vec3 grip = Point3(o, true, "grip_pos");
+  const Vec3 object = Point3(o, true, "object_pos");
   c.spheres.push_back({object, 0.036, kYellow, 0.3f});
   c.markers.insert(c.markers.begin(),
                    {"object_rel_pos", CardMarkerKind::kArrow, grip, object, kOrange});
   // after grip_pos and its axes
   c.labels.insert(
       c.labels.begin() + 4,
-      {{"object_pos " + slice(true, "object_pos") + "\n= achieved_goal", {object}, kYellow, 135},
-       {"object_rel_pos " + slice(true, "object_rel_pos") + "\n= object - grip",
+      {{"object_pos " + ObservationSliceText(true, "object_pos") + "\n= achieved_goal",
+        {object},
+        kYellow,
+        135},
+       {"object_rel_pos " + ObservationSliceText(true, "object_rel_pos") + "\n= object - grip",
         {Mid(grip, object)},
         kOrange,
         -135,
         false}});
   c.points.push_back(object);
-  c.footer =
-      "obs[11:14] object_rot  obs[14:17] object_velp\n"
-      "obs[17:20] object_velr  obs[20:23] grip_velp\n"
-      "obs[23:25] finger vel  (velocities x dt: per step)";
+  c.footer = Named(true, "object_rot", "object_rot") + "  " +
+             Named(true, "object_velp", "object_velp") + "\n" +
+             Named(true, "object_velr", "object_velr") + "  " +
+             Named(true, "grip_velp", "grip_velp") + "\n" +
+             Named(true, "gripper_vel", "finger vel") + "  (velocities x dt: per step)";
   return c;
 }
 
 }  // namespace
 
-CardContent PanelContentFor(const FetchEnv& env, const StepRecord& reset, const Vec3& view_up,
-                            const ObservationSliceFn& slice) {
-  return env.spec().has_object ? PushContent(env, reset, view_up, slice)
-                               : ReachContent(env, reset, view_up, slice);
+CardContent PanelContentFor(const FetchEnv& env, const StepRecord& reset, const Vec3& view_up) {
+  return env.spec().has_object ? PushContent(env, reset, view_up)
+                               : ReachContent(env, reset, view_up);
 }
 
 }  // namespace fetchscope

@@ -4,7 +4,6 @@
 // FetchReach-v4 or FetchPush-v4.
 #pragma once
 
-#include <functional>
 #include <string>
 #include <vector>
 
@@ -71,13 +70,9 @@ struct CardContent {
   std::string action_note;                 ///< what the arrows' length means
 };
 
-/// The indices of observation slice `slice` (e.g. "grip_pos") as the chapter writes them,
-/// "obs[0:3]": the labels name them (cli/chapter.h ObservationSlice).
-using ObservationSliceFn = std::function<std::string(bool has_object, const std::string& slice)>;
-
 /// The panel of `env` (Reach or Push: by whether it has an object) in the state of `reset`;
 /// `view_up` is the camera's up (world), so that the shell's radius line ends on its outline.
-CardContent PanelContentFor(const FetchEnv& env, const StepRecord& reset, const Vec3& view_up,
-                            const ObservationSliceFn& slice);
+/// The labels name the observation's slices and indices as src/observation_layout.h lays them out.
+CardContent PanelContentFor(const FetchEnv& env, const StepRecord& reset, const Vec3& view_up);
 
 }  // namespace fetchscope

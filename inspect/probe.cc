@@ -13,6 +13,7 @@
 #include "base/number_format.h"
 #include "render/vec.h"
 #include "src/episode.h"
+#include "src/observation_layout.h"
 
 namespace fetchscope {
 namespace {
@@ -92,14 +93,15 @@ std::vector<Probe> MakeProbes(const std::vector<double>& magnitudes) {
   return probes;
 }
 
-Vec3 GripPos(const Observation& obs) {
-  return {obs.observation[0], obs.observation[1], obs.observation[2]};
+Vec3 GripPos(const Observation& obs, bool has_object) {
+  const size_t i = static_cast<size_t>(FindObservationSlice(has_object, "grip_pos")->first);
+  return {obs.observation[i], obs.observation[i + 1], obs.observation[i + 2]};
 }
 
-// r finger + l finger positions: indices 3, 4 (Reach) or 9, 10 (object tasks).
+// r finger + l finger positions (gripper_state: indices 3, 4 on Reach, 9, 10 with an object).
 double FingerOpening(const Observation& obs, bool has_object) {
-  const size_t i = has_object ? 9 : 3;
-  return obs.observation[i] + obs.observation[i + 1];
+  const FingerIndices f = FingerPositionIndices(has_object);
+  return obs.observation[f.right] + obs.observation[f.left];
 }
 
 // Renders the env's current state with the grip site as the "achieved" point, so the trail
@@ -112,7 +114,7 @@ SheetTile RenderTile(Renderer& renderer, const FetchEnv& env, int step, const Pr
   info.has_action = true;  // the arrow shows the probe's command on both frames
   info.action = probe.command;
   info.goal = obs.desired_goal;
-  info.achieved = GripPos(obs);
+  info.achieved = GripPos(obs, env.spec().has_object);
   info.distance_threshold = env.spec().distance_threshold;
   info.title = env.spec().id;
   SheetTile tile;
@@ -153,7 +155,7 @@ Measurement RunProbe(FetchEnv& env, uint64_t seed, int steps, const Probe& probe
   Observation end = start;
   for (int t = 0; t < steps; ++t) end = env.Step(Action{probe.command, false}).obs;
 
-  const Vec3 p0 = GripPos(start), p1 = GripPos(end);
+  const Vec3 p0 = GripPos(start, has_object), p1 = GripPos(end, has_object);
   for (int k = 0; k < 3; ++k) m.mean_step[k] = (p1[k] - p0[k]) / steps;
   m.norm = Norm(m.mean_step);
   m.finger_delta = FingerOpening(end, has_object) - FingerOpening(start, has_object);
@@ -337,6 +339,7 @@ std::vector<double> ParseProbeMagnitudes(const std::string& text) {
 ProbeResult ProbeActions(FetchEnv& env, uint64_t seed, int steps,
                          const std::vector<double>& magnitudes, Renderer* renderer) {
   const EnvSpec& spec = env.spec();
+  const FingerIndices fingers = FingerPositionIndices(spec.has_object);
   const std::vector<Probe> probes = MakeProbes(magnitudes);
   const double baseline_reset = FingerBaseline(env, seed, steps, 0);
   const double baseline_open = FingerBaseline(env, seed, steps, kOpenPrepSteps);
@@ -351,15 +354,14 @@ ProbeResult ProbeActions(FetchEnv& env, uint64_t seed, int steps,
   for (size_t i = 0; i < probes.size(); ++i) probes_json.push_back(ProbeJson(probes[i], ms[i]));
   const nlohmann::json summary = SummaryJson(spec, probes, ms);
   ProbeResult result;
-  result.report = {
-      {"env_id", spec.id},
-      {"seed", seed},
-      {"steps", steps},
-      {"metres_per_unit_action", kProbeMetresPerUnit},
-      {"finger_indices", spec.has_object ? nlohmann::json({9, 10}) : nlohmann::json({3, 4})},
-      {"assets", AssetsJson(env.assets())},
-      {"probes", probes_json},
-      {"summary", summary}};
+  result.report = {{"env_id", spec.id},
+                   {"seed", seed},
+                   {"steps", steps},
+                   {"metres_per_unit_action", kProbeMetresPerUnit},
+                   {"finger_indices", {fingers.right, fingers.left}},
+                   {"assets", AssetsJson(env.assets())},
+                   {"probes", probes_json},
+                   {"summary", summary}};
   PrintTable(spec, seed, steps, probes, ms, summary);
   if (renderer) {
     for (auto& m : ms) {

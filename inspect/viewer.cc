@@ -9,6 +9,7 @@
 #include "encode/contact_sheet.h"
 #include "src/fetch_env.h"
 #include "src/hindsight.h"
+#include "src/observation_layout.h"
 
 namespace fetchscope {
 namespace {
@@ -35,13 +36,28 @@ double Distance3(const double* a, const std::array<double, 3>& b) {
   return GoalDistance({a[0], a[1], a[2]}, b);
 }
 
+// Where the plotted observation values are (src/observation_layout.h), as the plots' titles name
+// them: {"finger_width": "obs[9] + obs[10]", "object_height": "obs[5]" (null without an object)};
+// null for an env this build does not know.
+json ViewerLayout(const EnvSpec* spec) {
+  if (!spec) return nullptr;
+  const bool object = spec->has_object;
+  return {{"finger_width", FingerWidthText(object)},
+          {"object_height",
+           object ? json("obs[" + std::to_string(ObservationIndex(true, "object_pos.z")) + "]")
+                  : json()}};
+}
+
 }  // namespace
 
 json EpisodeSignals(const EnvSpec& spec, const std::vector<TrajectoryStep>& steps,
                     std::optional<uint64_t> hindsight_seed) {
-  // the observation's layout (reference section 5.3): Reach has no object and its fingers at 3, 4
-  const size_t fingers = spec.has_object ? 9 : 3;
-  const size_t needed = spec.has_object ? 25 : 10;
+  // the observation's layout (src/observation_layout.h)
+  const FingerIndices fingers = FingerPositionIndices(spec.has_object);
+  const size_t needed = static_cast<size_t>(ObservationSize(spec.has_object));
+  const size_t grip = static_cast<size_t>(FindObservationSlice(spec.has_object, "grip_pos")->first);
+  // with an object: its position (and its height, object_pos.z)
+  const int object = spec.has_object ? FindObservationSlice(true, "object_pos")->first : -1;
   json distance = json::array(), reward = json::array(), width = json::array();
   json gripper = json::array(), height = json::array(), object_goal = json::array();
   json action = Lists(4), commanded = Lists(3), achieved = Lists(3);
@@ -56,13 +72,14 @@ json EpisodeSignals(const EnvSpec& spec, const std::vector<TrajectoryStep>& step
     const bool moved = t > 0 && full && before.size() >= needed;
     for (size_t i = 0; i < 3; ++i) {
       commanded[i].push_back(a ? Plotted(kActionScale * Clip(a->value[i])) : json());
-      achieved[i].push_back(moved ? Plotted(s.observation[i] - before[i]) : json());
+      achieved[i].push_back(moved ? Plotted(s.observation[grip + i] - before[grip + i]) : json());
     }
-    width.push_back(full ? Plotted(s.observation[fingers] + s.observation[fingers + 1]) : json());
+    width.push_back(full ? Plotted(s.observation[fingers.right] + s.observation[fingers.left])
+                         : json());
     gripper.push_back(a ? Plotted(Clip(a->value[3])) : json());
-    height.push_back(full && spec.has_object ? Plotted(s.observation[5]) : json());
+    height.push_back(full && object >= 0 ? Plotted(s.observation[object + 2]) : json());
     object_goal.push_back(
-        full && spec.has_object ? Plotted(Distance3(&s.observation[3], s.desired_goal)) : json());
+        full && object >= 0 ? Plotted(Distance3(&s.observation[object], s.desired_goal)) : json());
   }
   json signals = {{"frames", steps.size()},
                   {"distance", std::move(distance)},
@@ -177,7 +194,8 @@ std::vector<PageBlock> AddEpisodeViewers(const fs::path& dir, const Manifest& ma
                     {"has_object", spec && spec->has_object},
                     {"gripper_command", spec && !spec->block_gripper},
                     {"hindsight", spec && hindsight},
-                    {"reach", spec && spec->task == Task::kReach}};
+                    {"reach", spec && spec->task == Task::kReach},
+                    {"layout", ViewerLayout(spec)}};
   for (json& e : data["episodes"]) {
     if (e["status"] == "missing") continue;
     e["viewer"] = false;
@@ -231,7 +249,8 @@ std::vector<PageBlock> AddCompareViewers(const RecordedRun& a, const RecordedRun
                     {"threshold", spec ? spec->distance_threshold : 0.05},
                     {"has_object", spec && spec->has_object},
                     {"gripper_command", spec && !spec->block_gripper},
-                    {"reach", spec && spec->task == Task::kReach}};
+                    {"reach", spec && spec->task == Task::kReach},
+                    {"layout", ViewerLayout(spec)}};
   for (json& row : page["episodes"]) {
     const int k = row.value("index", -1);
     for (const auto& [run, side] : {std::pair{&a, "a"}, std::pair{&b, "b"}}) {

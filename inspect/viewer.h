@@ -27,11 +27,11 @@ inline constexpr double kActionScale = 0.05;
 /// T; null where a step has none, such as the reset's action, or the value is not finite):
 /// "distance" (achieved to desired goal), "reward", "action" (4 lists, as given), "commanded"
 /// (3 lists: kActionScale x the action clipped to [-1, 1]), "achieved" (3 lists: grip_pos[t] -
-/// grip_pos[t-1], obs[0:3]), "finger_width" (obs[3] + obs[4] on Reach, obs[9] + obs[10] with an
-/// object), "gripper_command" (the clipped a[3]; only where the gripper is not blocked),
-/// "object_height" (obs[5]) and "object_goal_distance" (obs[3:6] to the desired goal) with an
-/// object; "her" when `hindsight_seed` is given: per transition the kHindsightK relabelled
-/// rewards ("rewards", k lists) and how many count as success ("successes"), as record's
+/// grip_pos[t-1]), "finger_width" (gripper_state.right + .left), "gripper_command" (the clipped
+/// a[3]; only where the gripper is not blocked), "object_height" (object_pos.z) and
+/// "object_goal_distance" (object_pos to the desired goal) with an object; the indices are
+/// src/observation_layout.h's; "her" when `hindsight_seed` is given: per transition the kHindsightK
+/// relabelled rewards ("rewards", k lists) and how many count as success ("successes"), as record's
 /// hindsight overlay samples them for that seed (HindsightSeed(run seed, episode)).
 nlohmann::json EpisodeSignals(const EnvSpec& spec, const std::vector<TrajectoryStep>& steps,
                               std::optional<uint64_t> hindsight_seed = std::nullopt);
@@ -64,7 +64,9 @@ using PageBlock = std::pair<std::string, std::string>;
 
 /// The viewer's part of the report of the run in `dir` described by `manifest` (the episodes'
 /// trajectories read with ReadTrajectory): adds to
-/// `report_data` (ReportData's JSON) a "viewer" object (fps, which plots the task has) and, per
+/// `report_data` (ReportData's JSON) a "viewer" object (which plots the task has, and "layout":
+/// the observation indices the plots' titles name, {"finger_width": "obs[9] + obs[10]",
+/// "object_height": "obs[5]" or null}, from src/observation_layout.h) and, per
 /// recorded episode, "viewer" (whether its signals are on the page) and "thumbs" (its sheet's
 /// first and last tile, or null); returns one block per episode with signals, id
 /// "fetchscope-episode-K", for the page to parse when the episode's view opens. An episode whose
@@ -73,7 +75,8 @@ std::vector<PageBlock> AddEpisodeViewers(const std::filesystem::path& dir, const
                                          nlohmann::json* report_data);
 
 /// The viewer's part of `compare`'s page (A and B on one step cursor, over the comparison video):
-/// adds to `page_data` a "viewer" object (the threshold, which plots the task has) and, per
+/// adds to `page_data` a "viewer" object (the threshold, which plots the task has, "layout" as
+/// AddEpisodeViewers writes it) and, per
 /// compared episode (its "episodes" rows, by "index"), "viewer_a" and "viewer_b" (whether the run's
 /// signals are on the page); returns their blocks, ids "fetchscope-a-episode-K" and
 /// "fetchscope-b-episode-K".

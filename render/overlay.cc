@@ -27,12 +27,15 @@ constexpr float kSuccessGreen[4] = {0.1f, 0.85f, 0.2f, 1.0f};
 constexpr float kMissOrange[4] = {1.0f, 0.55f, 0.0f, 1.0f};
 constexpr float kArrowYellow[4] = {1.0f, 0.85f, 0.0f, 1.0f};
 constexpr float kTrailCyan[4] = {0.0f, 0.75f, 1.0f, 1.0f};
-constexpr float kGhostViolet[4] = {0.8f, 0.3f, 1.0f, 0.6f};  // translucent: a dataset's own
+// a dataset's own achieved goal: opaque blue, a hue no other marker uses (not the goal's red or
+// its pink shell, the trail's cyan, HER's green and red)
+constexpr float kGhostBlue[4] = {0.15f, 0.25f, 1.0f, 1.0f};
 
 constexpr double kTargetRadius = 0.02;     // target0's size in the Fetch XMLs
 constexpr double kAchievedRadius = 0.012;  // opaque core
 constexpr double kAchievedHalo = 0.032;    // translucent halo: shows even around the 5 cm block
-constexpr double kGhostRadius = 0.022;     // a dataset's achieved goal: between core and halo
+constexpr double kGhostArm = 0.03;         // the ghost's cross: arms 3 cm each way (past the halo)
+constexpr double kGhostBar = 0.003;        // and 3 mm thick: a few pixels at 480x480
 constexpr double kArrowWidth = 0.008;      // m
 constexpr double kLineWidth = 2.0;         // pixels for mjGEOM_LINE
 
@@ -241,9 +244,15 @@ void AddOverlayGeoms(const OverlaySet& overlays, const FrameInfo& info,
       AddConnector(scene, mjGEOM_LINE, kLineWidth, points[i - 1], points[i], kTrailCyan);
     }
   }
-  if (overlays.ghost && info.ghost) {  // translucent, the replayed marker's size: both show
-    AddSphere(scene, *info.ghost, kGhostRadius, kGhostViolet);
-    AddConnector(scene, mjGEOM_LINE, kLineWidth, *info.ghost, info.achieved, kGhostViolet);
+  if (overlays.ghost && info.ghost) {  // a cross: it shows through and around the replayed marker
+    const auto& g = *info.ghost;
+    for (int axis = 0; axis < 3; ++axis) {
+      std::array<double, 3> from = g, to = g;
+      from[axis] -= kGhostArm;
+      to[axis] += kGhostArm;
+      AddConnector(scene, mjGEOM_CAPSULE, kGhostBar, from, to, kGhostBlue);
+    }
+    AddConnector(scene, mjGEOM_LINE, kLineWidth, g, info.achieved, kGhostBlue);
   }
   if (overlays.achieved) {
     const float halo[4] = {achieved_rgba[0], achieved_rgba[1], achieved_rgba[2], 0.35f};
@@ -309,7 +318,8 @@ void FormatHud(const FrameInfo& info, const OverlaySet& overlays, HudText* out) 
     const auto& g = *info.ghost;
     const double dx = g[0] - info.achieved[0], dy = g[1] - info.achieved[1],
                  dz = g[2] - info.achieved[2];
-    std::snprintf(text, sizeof(text), "%.5f m off", std::sqrt(dx * dx + dy * dy + dz * dz));
+    std::snprintf(text, sizeof(text), "%.1f mm off (blue +)",
+                  1000 * std::sqrt(dx * dx + dy * dy + dz * dz));
     line("ghost", text);
   }
   hud.labels.pop_back();  // no trailing newline

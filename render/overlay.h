@@ -26,8 +26,8 @@ struct OverlaySet {
   bool trail = false;      ///< polyline of recent achieved-goal positions
   bool labels = true;      ///< tiled cameras: each tile labelled with its camera name
   bool hindsight = false;  ///< goals HER's `future` strategy relabels this transition with
-  /// record --from DATASET: the dataset's own achieved goal (FrameInfo::ghost) as a translucent
-  /// violet sphere with a line to the replayed one, and a HUD row with their distance; on with
+  /// record --from DATASET: the dataset's own achieved goal (FrameInfo::ghost) as an opaque
+  /// blue cross with a line to the replayed one, and a HUD row with their distance; on with
   /// `achieved` (so by default) or alone as `ghost`
   bool ghost = true;
 };

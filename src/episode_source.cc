@@ -5,6 +5,9 @@
 #include <cstdio>
 #include <filesystem>
 #include <regex>
+#include <tuple>
+
+#include "src/observation_layout.h"
 
 namespace fetchscope {
 namespace {
@@ -203,12 +206,31 @@ EpisodeRecord EpisodeReplayer::ReplayFrom(int k, const Observation& reset,
 
 Observation ResetForStart(FetchEnv& env, const EpisodeStart& start) {
   if (start.seed) return env.Reset(start.seed);
+  if (start.generator) {
+    env.set_generator(*start.generator);
+    return env.Reset();
+  }
   return env.ResetTo(start.goal, start.object);
 }
 
 namespace {
 
-// compares one row; keeps the first value beyond the tolerance and the largest difference
+// the label and unit of value i of `name` ("observation", "achieved_goal", "desired_goal"), from
+// the observation's layout (src/observation_layout.h); an observation of neither layout's length
+// has only its index
+std::pair<std::string, std::string> Component(const char* name, size_t n, size_t i) {
+  if (std::string(name) == "observation") {
+    const std::optional<bool> has_object = LayoutHasObject(n);
+    if (has_object && i < n) {
+      return {ObservationIndexName(*has_object, i), ObservationIndexUnit(*has_object, i)};
+    }
+    return {"observation[" + std::to_string(i) + "]", ""};
+  }
+  return {GoalIndexName(name, i), kGoalUnit};
+}
+
+// compares one row; keeps the first value beyond the tolerance and the largest difference,
+// each with its place
 void CompareValues(const char* name, const std::vector<double>& recorded, const double* replayed,
                    size_t n, int t, EpisodeDivergence& d) {
   if (recorded.size() != n) {
@@ -218,18 +240,45 @@ void CompareValues(const char* name, const std::vector<double>& recorded, const 
   for (size_t i = 0; i < n; ++i) {
     const double diff = replayed[i] - recorded[i];
     const double size = std::isnan(diff) ? HUGE_VAL : std::fabs(diff);
-    d.max_difference = std::max(d.max_difference, size);
+    if (size > d.max_difference) {
+      d.max_difference = size;
+      d.max_step = t;
+      d.max_where = std::string(name) + "[" + std::to_string(i) + "]";
+      std::tie(d.max_component, d.max_unit) = Component(name, n, i);
+      d.max_signed = diff;
+    }
     if (d.first_step < 0 && size > d.tolerance) {
       d.first_step = t;
       d.where = std::string(name) + "[" + std::to_string(i) + "]";
+      std::tie(d.component, d.unit) = Component(name, n, i);
       d.difference = diff;
     }
   }
 }
 
+// |replayed - recorded| of observation[at:at+3], a position, in metres
+double PositionError(const std::vector<double>& recorded, const std::vector<double>& replayed,
+                     size_t at) {
+  double sum = 0;
+  for (size_t i = at; i < at + 3 && i < recorded.size() && i < replayed.size(); ++i) {
+    sum += (replayed[i] - recorded[i]) * (replayed[i] - recorded[i]);
+  }
+  return std::sqrt(sum);
+}
+
 void CompareRow(const StepRecord& recorded, const Observation& obs, int t, EpisodeDivergence& d) {
   CompareValues("observation", recorded.obs.observation, obs.observation.data(),
                 obs.observation.size(), t, d);
+  // the gripper's (grip_pos) and the object's (object_pos) positions, where the layout has them
+  const std::optional<bool> has_object = LayoutHasObject(obs.observation.size());
+  if (has_object) {
+    const size_t grip = FindObservationSlice(*has_object, "grip_pos")->first;
+    d.gripper_error.push_back(PositionError(recorded.obs.observation, obs.observation, grip));
+  }
+  if (has_object.value_or(false)) {
+    const size_t object = FindObservationSlice(true, "object_pos")->first;
+    d.object_error.push_back(PositionError(recorded.obs.observation, obs.observation, object));
+  }
   const auto& a = recorded.obs.achieved_goal;
   const auto& g = recorded.obs.desired_goal;
   CompareValues("achieved_goal", {a.begin(), a.end()}, obs.achieved_goal.data(), 3, t, d);
@@ -238,13 +287,41 @@ void CompareRow(const StepRecord& recorded, const Observation& obs, int t, Episo
 
 }  // namespace
 
+namespace {
+
+// the reset gives the recorded first row bit for bit (-0.0 and 0.0 alike)
+bool SameRow(const Observation& a, const Observation& b) {
+  return a.observation == b.observation && a.achieved_goal == b.achieved_goal &&
+         a.desired_goal == b.desired_goal;
+}
+
+}  // namespace
+
 void MeasureDivergence(FetchEnv& env, TrajectorySource* source) {
+  std::optional<NumpyGenerator> chain;  // after the previous episode's reset, where it was exact
+  int chain_from = -1, previous = -2;
   for (const auto& [k, episode] : source->episodes) {
-    const EpisodeStart& start = source->starts.at(k);
+    EpisodeStart& start = source->starts.at(k);
+    if (!start.seed && chain && k == previous + 1) {  // try the generator continued
+      env.set_generator(*chain);
+      if (SameRow(env.Reset(), episode.steps.at(0).obs)) {
+        start.generator = chain;
+        start.continued_from = chain_from;
+      }
+    }
+    previous = k;
     EpisodeDivergence d;
     d.reset = start.Rule();
+    d.continued_from = start.continued_from;
     d.tolerance = source->tolerance;
-    CompareRow(episode.steps.at(0), ResetForStart(env, start), 0, d);
+    const Observation reset = ResetForStart(env, start);
+    if (start.seed) chain_from = k;
+    if (start.seed || start.generator) {
+      chain = env.generator();
+    } else {
+      chain.reset();
+    }
+    CompareRow(episode.steps.at(0), reset, 0, d);
     for (size_t t = 1; t < episode.steps.size(); ++t) {
       CompareRow(episode.steps[t], env.Step(*episode.steps[t].action).obs, static_cast<int>(t), d);
     }

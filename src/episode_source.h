@@ -49,18 +49,38 @@ struct EpisodeStart {
   std::optional<uint64_t> seed;      ///< the episode's `seed`; nullopt: rebuilt
   std::array<double, 3> goal{};      ///< desired_goal[0]
   std::optional<ObjectPose> object;  ///< observation[0]'s object pose (object tasks)
-  /// "seed" or "first observation": said per episode in the console, manifest and report.
-  const char* Rule() const { return seed ? "seed" : "first observation"; }
+  /// An episode without a seed that follows a seeded one: the reset generator as the previous
+  /// reset left it, where continuing it gives the dataset's first row bit for bit (the
+  /// "one seeded reset, then reset()" collection; MeasureDivergence finds it). Preferred to the
+  /// rebuild: it is the env's own reset, hidden state (the object's quaternion) included.
+  std::optional<NumpyGenerator> generator;
+  int continued_from = -1;  ///< the seeded episode whose generator it continues
+  /// "seed", "continued generator" or "first observation": said per episode in the console,
+  /// manifest and report.
+  const char* Rule() const {
+    return seed ? "seed" : generator ? "continued generator" : "first observation";
+  }
 };
 
 /// How far a replayed dataset episode drifts from the dataset, row by row.
 struct EpisodeDivergence {
   std::string reset;          ///< EpisodeStart::Rule()
+  int continued_from = -1;    ///< "continued generator": the seeded episode it continues
   double tolerance = 0;       ///< --tolerance
   int first_step = -1;        ///< first row t (0 = the reset) off by more than it; -1: none
   std::string where;          ///< its first value off, e.g. "observation[3]"
+  std::string component;      ///< its name in src/observation_layout.h, e.g. "object_pos.x"
+  std::string unit;           ///< its unit: "m", "m/step", "rad", "rad/step"
   double difference = 0;      ///< replayed - recorded there
   double max_difference = 0;  ///< largest |replayed - recorded| over every row
+  int max_step = -1;          ///< the row of the largest difference; -1: none differs
+  std::string max_where;      ///< its value, e.g. "observation[11]"
+  std::string max_component;  ///< e.g. "object_rot.z"
+  std::string max_unit;       ///< e.g. "rad"
+  double max_signed = 0;      ///< replayed - recorded there
+  /// per row t: how far the replayed gripper (grip_pos) and object (object_pos; empty for
+  /// Reach) are from the recorded ones, in metres (the viewer's "replayed vs recorded" plot)
+  std::vector<double> gripper_error, object_error;
 };
 
 /// Recorded episodes to replay (record --from): one trajectory file, or every episode_NNN.json
@@ -138,12 +158,16 @@ std::string FirstDifference(const StepRecord& replayed, const StepRecord& record
 /// ReplayMismatch.
 void VerifyRecording(FetchEnv& env, const TrajectorySource& source);
 
-/// Resets `env` as `start` says (its seed, else FetchEnv::ResetTo).
+/// Resets `env` as `start` says (its seed, else its generator continued, else
+/// FetchEnv::ResetTo).
 Observation ResetForStart(FetchEnv& env, const EpisodeStart& start);
 
 /// Replays every episode of the dataset `source` on `env` (no rendering) and fills
 /// `source->divergence`: every observation, achieved_goal and desired_goal row against the
-/// dataset's, within `source->tolerance`.
+/// dataset's, within `source->tolerance`. An episode without a seed whose id follows a seeded
+/// (or continued) one is first reset by continuing that generator; where that gives the
+/// dataset's first row bit for bit, its start keeps the generator (Rule() "continued
+/// generator"), else it is rebuilt from the first row.
 void MeasureDivergence(FetchEnv& env, TrajectorySource* source);
 
 /// The dataset's own achieved goal at row `t` of episode `k` (the ghost marker); nullopt for a

@@ -189,7 +189,10 @@ Observation FetchEnv::ResetTo(const std::array<double, 3>& goal,
     // kinematics alone (no solver, so the warm start stays as mj_resetData left it): does the
     // settled quaternion give these angles? A reset never rotates the object, so it usually does
     mj_kinematics(m, d);
-    if (Mat2Euler(d->site_xmat + 9 * object_site_) != object->euler) {
+    const std::array<double, 3> settled = Mat2Euler(d->site_xmat + 9 * object_site_);
+    bool same = true;
+    for (int k = 0; k < 3; ++k) same = same && std::fabs(settled[k] - object->euler[k]) <= 1e-12;
+    if (!same) {
       const std::array<double, 4> quat = Euler2Quat(object->euler);
       std::copy(quat.begin(), quat.end(), q + 3);
     }
@@ -306,6 +309,7 @@ Observation FetchEnv::Observe() const {
   const double gripper_state[2] = {d->qpos[r_finger_qpos_], d->qpos[l_finger_qpos_]};
   const double gripper_vel[2] = {d->qvel[r_finger_dof_] * dt, d->qvel[l_finger_dof_] * dt};
 
+  // the order src/observation_layout.h declares (its test checks it against this)
   auto& o = obs.observation;
   o.insert(o.end(), grip, grip + 3);
   if (spec_.has_object) {

@@ -57,8 +57,16 @@ class FetchEnv {
   /// A reset to a known start instead of a sampled one (re-rendering a dataset episode that
   /// was reset without a seed): _reset_sim with the object at `object` (object tasks; ignored
   /// for Reach), one mj_forward as reset does, then goal = `goal`. The generator is untouched.
-  /// The settled quaternion is kept where its Euler angles are `object->euler` exactly.
+  /// The settled quaternion is kept where its Euler angles are `object->euler` to within
+  /// rounding (1e-12 rad: another atan2, e.g. numpy's SIMD one, may round the last bits
+  /// differently; a reset never rotates the object, so the angles it recorded are the settled
+  /// quaternion's).
   Observation ResetTo(const std::array<double, 3>& goal, const std::optional<ObjectPose>& object);
+
+  /// The reset generator as it stands (nullopt before the first Reset), and setting it: the next
+  /// Reset() without a seed continues from it, as the env that made a dataset did.
+  const std::optional<NumpyGenerator>& generator() const { return rng_; }
+  void set_generator(const NumpyGenerator& generator) { rng_ = generator; }
 
   /// env.step(action) with TimeLimit semantics. Requires a prior Reset().
   StepResult Step(const Action& action);

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "src/observation_layout.h"
 #include "src/policy.h"
 
 namespace fetchscope {
@@ -27,10 +28,22 @@ Action Toward(const Vec3& grip, const Vec3& target, double gripper, double speed
 
 Vec3 At(const std::vector<double>& o, int i) { return {o[i], o[i + 1], o[i + 2]}; }
 
+// Where the policies read the observation (src/observation_layout.h), looked up once.
+struct Where {
+  int reach_grip = FindObservationSlice(false, "grip_pos")->first;
+  int grip = FindObservationSlice(true, "grip_pos")->first;
+  int object = FindObservationSlice(true, "object_pos")->first;
+  FingerIndices fingers = FingerPositionIndices(true);
+};
+const Where& Layout() {
+  static const Where where;
+  return where;
+}
+
 class ScriptedReach : public Policy {
  public:
   Action Act(const Observation& obs, int) override {
-    return Toward(At(obs.observation, 0), obs.desired_goal, 0.0);
+    return Toward(At(obs.observation, Layout().reach_grip), obs.desired_goal, 0.0);
   }
   std::string name() const override { return "scripted"; }
 };
@@ -45,8 +58,8 @@ class ScriptedPush : public Policy {
     last_grip_ = {0, 0, 0};
   }
   Action Act(const Observation& obs, int) override {
-    const Vec3 grip = At(obs.observation, 0);
-    const Vec3 object = At(obs.observation, 3);
+    const Vec3 grip = At(obs.observation, Layout().grip);
+    const Vec3 object = At(obs.observation, Layout().object);
     const Vec3 goal = obs.desired_goal;
     // Push: once the block is in the goal (is_success), stop there instead of pushing on
     if (!slide_ && Norm(Sub(obs.achieved_goal, goal)) < threshold_) return Toward(grip, grip, 0.0);
@@ -128,10 +141,11 @@ class ScriptedPickAndPlace : public Policy {
     rest_z_ = obs.achieved_goal[2];  // the block resting on the table
   }
   Action Act(const Observation& obs, int) override {
-    const Vec3 grip = At(obs.observation, 0);
-    const Vec3 object = At(obs.observation, 3);
+    const Vec3 grip = At(obs.observation, Layout().grip);
+    const Vec3 object = At(obs.observation, Layout().object);
     const Vec3 goal = obs.desired_goal;
-    const double opening = obs.observation[9] + obs.observation[10];
+    const double opening =
+        obs.observation[Layout().fingers.right] + obs.observation[Layout().fingers.left];
     switch (phase_) {
       case kAbove: {
         const Vec3 above = {object[0], object[1], object[2] + 0.08};

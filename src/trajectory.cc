@@ -26,7 +26,8 @@ json FileJson(const std::string& env_id, uint64_t seed, const std::string& polic
            " and callers reset it there, so such steps are not in Gymnasium's episodes";
     break;
   }
-  json file = {{"env_id", env_id},
+  json file = {{"schema_version", kTrajectorySchemaVersion},
+               {"env_id", env_id},
                {"seed", seed},
                {"policy", policy},
                {"assets", AssetsJson(assets)},
@@ -41,10 +42,23 @@ class TrajectoryReader {
   explicit TrajectoryReader(const std::string& file) : file_(file) {}
 
   Trajectory Read(const json& root) {
+    Trajectory out;
+    // the version first: a newer one may have moved anything else
+    out.schema_version = 0;  // absent: written before versions existed, the same layout
+    if (const json* version = root.is_object() ? Find(root, "schema_version") : nullptr) {
+      if (!version->is_number_integer() || version->get<long long>() < 0) {
+        Fail("schema_version", "expected an integer of at least 0, found " + version->dump());
+      }
+      if (version->get<long long>() > kTrajectorySchemaVersion) {
+        Fail("", "has trajectory schema version " + version->dump() +
+                     "; this fetchscope reads versions 0 to " +
+                     std::to_string(kTrajectorySchemaVersion) + ": use a newer fetchscope");
+      }
+      out.schema_version = version->get<int>();
+    }
     if (!root.is_object() || !root.contains("episodes")) {
       Fail("", "not a fetchscope trajectory (an object with env_id, seed and episodes)");
     }
-    Trajectory out;
     out.env_id = String(root, "env_id", "", /*required=*/true);
     try {
       FindEnvSpec(out.env_id);  // an edited id is named here, with the file and the key
@@ -323,7 +337,9 @@ std::optional<Trajectory> ReadReplayTrajectory(const std::string& path) {
   std::ostringstream text;
   text << in.rdbuf();
   const json root = json::parse(text.str(), nullptr, /*allow_exceptions=*/false);
-  if (!root.is_object() || !root.contains("episodes") || !root["episodes"].is_array()) {
+  const bool versioned = root.is_object() && root.contains("schema_version");  // a newer one too
+  if (!versioned &&
+      (!root.is_object() || !root.contains("episodes") || !root["episodes"].is_array())) {
     return std::nullopt;  // bare action rows, or not JSON: ReadReplayFile says which
   }
   try {

@@ -4,7 +4,7 @@
 // formatted as Python's json.dumps writes them (base/json_util.h), so that bytes are stable.
 //
 // The file (docs/reference/file-formats.md, "Trajectory JSON"):
-//   {"env_id", "seed", "policy", "assets": {kind, path, sha256, origin},
+//   {"schema_version", "env_id", "seed", "policy", "assets": {kind, path, sha256, origin},
 //    "episodes": [{"index", "length", "complete", "return", "is_success", "action_dtype",
 //                  "steps": [{"t", "observation", "achieved_goal", "desired_goal", "action",
 //                             "reward", "is_success"}, ...]}, ...]}
@@ -13,6 +13,11 @@
 // {"max_episode_steps", "first_step", "steps"} and the file a "note"; files without such steps
 // have none of these keys. Non-finite values are written as the strings
 // "inf", "-inf" and "nan" (JSON has no literal for them) and read back as such.
+//
+// Versions, as the manifest's (run/manifest.h): the file carries "schema_version"
+// (kTrajectorySchemaVersion). A file without one was written before versions existed and is read
+// as version 0, the same layout; a newer version is refused in one line naming the file and both
+// versions.
 #pragma once
 
 #include <cstdint>
@@ -27,6 +32,9 @@
 #include "src/fetch_env.h"
 
 namespace fetchscope {
+
+/// The trajectory schema version this build writes, and the newest it reads.
+inline constexpr int kTrajectorySchemaVersion = 1;
 
 /// One row of a trajectory: t = 0 is the reset observation.
 struct TrajectoryStep {
@@ -56,6 +64,9 @@ struct TrajectoryEpisode {
 
 /// A trajectory file: the run's environment and policy, and its episodes in file order.
 struct Trajectory {
+  /// as read: 0 for a file from before versions; what this build writes otherwise (the writer
+  /// always writes kTrajectorySchemaVersion)
+  int schema_version = kTrajectorySchemaVersion;
   std::string env_id;                       ///< e.g. "FetchPush-v4"
   uint64_t seed = 0;                        ///< the run's seed (episode 0's reset)
   std::string policy;                       ///< the policy that made it ("" when unknown)
@@ -95,10 +106,12 @@ std::string TrajectoryText(const Trajectory& trajectory);
 
 /// Parses the text of a trajectory file. `file` names it in errors. Throws RunError naming the
 /// file and the key, e.g. "run.json: episodes[2].steps[5].action: expected 4 numbers": for text
-/// that is not JSON, a missing or mistyped member, an action_dtype other than float32, float64
-/// or none, a float32 episode with a value that is not a float32, a non-finite action, an
-/// index given twice. Numbers keep every bit (-0.0 included); "inf", "-inf" and "nan" read as
-/// those values, except in actions.
+/// that is not JSON, a schema_version that is not an integer of at least 0 or is newer than
+/// kTrajectorySchemaVersion ("run.json: has trajectory schema version 2; this fetchscope reads
+/// versions 0 to 1: use a newer fetchscope"), a missing or mistyped member, an action_dtype other
+/// than float32, float64 or none, a float32 episode with a value that is not a float32, a
+/// non-finite action, an index given twice. Numbers keep every bit (-0.0 included); "inf", "-inf"
+/// and "nan" read as those values, except in actions.
 Trajectory ParseTrajectory(const std::string& text, const std::string& file);
 
 /// ParseTrajectory of a document already parsed (or built in memory): the same checks, with no

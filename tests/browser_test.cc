@@ -12,6 +12,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -434,8 +435,32 @@ TEST_F(BrowserTest, ViewerFollowsDeepLinksKeysAndClicks) {
   }
   ASSERT_EQ(failures, (std::vector<int>{0, 1})) << "the run should fail twice, then succeed";
   const fs::path grabs = tmp.path() / "grabs";
-  const json result = CheckViewer(run / "index.html", "3:7,0:12", 15, grabs);
-  ASSERT_EQ(result["links"].size(), 2u) << result.dump();
+  const json result = CheckViewer(run / "index.html", "3:7,0:12,99:0", 15, grabs);
+  ASSERT_EQ(result["links"].size(), 3u) << result.dump();
+  // a link to an episode the run does not have says so, and shows the first one
+  EXPECT_TRUE(result["links"][0]["missing_note"].is_null()) << result["links"][0].dump();
+  const std::string note = result["links"][2]["missing_note"].is_string()
+                               ? result["links"][2]["missing_note"].get<std::string>()
+                               : "";
+  EXPECT_NE(note.find("no episode 99 (episodes 000–004, 5 in all); showing episode 000"),
+            std::string::npos)
+      << result["links"][2].dump();
+  EXPECT_EQ(result["links"][2]["state"]["episode"], 0);
+  // the step cursor's colour is far from every plotted series' (it was the object-goal
+  // distance's magenta, 39 apart in RGB)
+  ASSERT_TRUE(result["cursor_color"].is_string()) << result.dump();
+  ASSERT_GT(result["series_colors"].size(), 5u) << result.dump();
+  const auto parse_rgb = [](const json& c) {
+    std::array<int, 3> v{};
+    std::sscanf(c.get<std::string>().c_str(), "rgb(%d, %d, %d)", &v[0], &v[1], &v[2]);
+    return v;
+  };
+  const std::array<int, 3> cursor = parse_rgb(result["cursor_color"]);
+  for (const json& c : result["series_colors"]) {
+    const std::array<int, 3> s = parse_rgb(c);
+    const double d = std::hypot(cursor[0] - s[0], cursor[1] - s[1], cursor[2] - s[2]);
+    EXPECT_GT(d, 90) << c << " is near the cursor's " << result["cursor_color"];
+  }
   const double fps = 25;
 
   // the deep link: episode 3 at step 7, frame 7 on screen
@@ -492,6 +517,10 @@ TEST_F(BrowserTest, ViewerFollowsDeepLinksKeysAndClicks) {
   ASSERT_TRUE(result["plots"].is_object()) << result.dump();
   EXPECT_EQ(result["cursor_lines"], result["plots"].size());
   EXPECT_EQ(result["thumbs"], 2 * manifest["episodes"].size());
+  // the titles name the observation indices the report's data gives (src/observation_layout.h)
+  const std::string titles = result["plot_titles"].dump();
+  EXPECT_NE(titles.find("Finger width (obs[9] + obs[10])"), std::string::npos) << titles;
+  EXPECT_NE(titles.find("Object height (obs[5]) and"), std::string::npos) << titles;
   // the lag, in the data episode 3's plots hold: at |a| = 1 (commanded 0.05 m) the grip moves
   // about 0.03 m a step once moving, less than commanded
   int saturated = 0;
@@ -653,6 +682,31 @@ TEST_F(BrowserTest, ComparePageLoadsPlaysPlotsAndSorts) {
   EXPECT_GE(tolerance["colour_pixels"].get<int>(), kDrawnPixels) << tolerance.dump();
   EXPECT_EQ(result["table"]["header"], "max state difference");
   ExpectSorts(result["table"]);
+}
+
+// record --from DATASET: the viewer plots how far the replay is from the dataset (gripper and
+// object position error per step, mm) on the same cursor. Scripted episodes (float64 actions
+// stored as float32) drift, so the divergence column holds its longest text.
+TEST_F(BrowserTest, ViewerPlotsTheReplayAgainstTheDataset) {
+  TempDir tmp;
+  const fs::path root = tmp.path() / "datasets", run = tmp.path() / "run";
+  auto r = RunFetchscope(
+      "rollout --env-id FetchPush-v4 --policy scripted --episodes 2 --steps 30 --seed 0 "
+      "--minari-root " +
+      root.string() + " --minari br/push-v0");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  r = RunFetchscope("record --from br/push-v0 --minari-root " + root.string() +
+                    " --width 96 --height 96 --quiet --out " + run.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const json result = CheckViewer(run / "index.html", "1:4", 6, tmp.path() / "grabs");
+  ASSERT_TRUE(result["plots"].contains("replay")) << result["plots"].dump();
+  const json& replay = result["plots"]["replay"];
+  ASSERT_TRUE(replay.contains("gripper error") && replay.contains("object error")) << replay;
+  EXPECT_EQ(replay["gripper error"].size(), 31u) << replay;
+  EXPECT_EQ(replay["object error"][0], 0.0) << replay;  // its reset continued the generator
+  // the episode table, divergence and reset columns included, fits the 1,280 px window
+  ASSERT_TRUE(result["table"].is_object()) << result.dump();
+  EXPECT_LE(result["table"]["width"], result["table"]["box"]) << result["table"];
 }
 
 }  // namespace

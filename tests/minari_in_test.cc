@@ -138,14 +138,35 @@ TEST(GhostOverlay, DrawsTheDatasetsAchievedGoal) {
   const Trail trail;
   AddOverlayGeoms(OverlaySet{}, info, info.achieved, trail, false, &scene);
   const int without = scene.ngeom;
+  std::vector<std::array<float, 3>> others;  // the colours of every other overlay geom
+  for (int i = 0; i < without; ++i) {
+    const float* c = scene.geoms[i].rgba;
+    others.push_back({c[0], c[1], c[2]});
+  }
   EXPECT_EQ(FormatHud(info, OverlaySet{}).labels.find("ghost"), std::string::npos);
   scene.ngeom = 0;
   info.ghost = std::array<double, 3>{1.3, 0.7, 0.45};
   AddOverlayGeoms(OverlaySet{}, info, info.achieved, trail, false, &scene);
-  EXPECT_EQ(scene.ngeom, without + 2);  // the translucent sphere and its line
+  EXPECT_EQ(scene.ngeom, without + 4);  // the cross's three bars and its line
+  // the ghost's geoms: opaque, in a colour no other overlay geom has; bars 6 cm long (many
+  // pixels at 480x480)
+  int ghost = 0;
+  for (int i = 0; i < scene.ngeom; ++i) {
+    const float* c = scene.geoms[i].rgba;
+    if (std::find(others.begin(), others.end(), std::array<float, 3>{c[0], c[1], c[2]}) !=
+        others.end()) {
+      continue;
+    }
+    ++ghost;
+    EXPECT_EQ(c[3], 1.0f);
+    if (scene.geoms[i].type == mjGEOM_CAPSULE) {
+      EXPECT_GE(2 * scene.geoms[i].size[2], 0.05f);
+    }
+  }
+  EXPECT_EQ(ghost, 4);
   const HudText hud = FormatHud(info, OverlaySet{});
   EXPECT_NE(hud.labels.find("ghost"), std::string::npos);
-  EXPECT_NE(hud.values.find("0.03000 m off"), std::string::npos) << hud.values;
+  EXPECT_NE(hud.values.find("30.0 mm off (blue +)"), std::string::npos) << hud.values;
   scene.ngeom = 0;
   AddOverlayGeoms(ParseOverlays("goal,hud"), info, info.achieved, trail, false, &scene);
   EXPECT_EQ(scene.ngeom, without - 3);  // neither the achieved marker (2 geoms, halo) nor the ghost
@@ -154,7 +175,7 @@ TEST(GhostOverlay, DrawsTheDatasetsAchievedGoal) {
 
 // rollout --minari, then record --from the id: the rollout's trajectories, bit for bit
 // (random policy: float32 actions, as the dataset stores them). Episode 0 resets with its seed,
-// the others, which continued the generator, from their first observation.
+// the others, which continued the generator, by continuing it (their first rows match).
 TEST(RecordFromDataset, RoundTripIsBitForBit) {
   unsetenv("DISPLAY");
   TempDir tmp;
@@ -176,7 +197,8 @@ TEST(RecordFromDataset, RoundTripIsBitForBit) {
   EXPECT_NE(r.output.find("episode 0: reset from its seed; replays within 1e-06"),
             std::string::npos)
       << r.output;
-  EXPECT_NE(r.output.find("episode 2: reset from its first observation; replays within 1e-06"),
+  EXPECT_NE(r.output.find("episode 2: reset by continuing the generator of episode 0's seed; "
+                          "replays within 1e-06"),
             std::string::npos)
       << r.output;
   const Trajectory t = ReadTrajectory((tmp.path() / "t.json").string());
@@ -185,7 +207,7 @@ TEST(RecordFromDataset, RoundTripIsBitForBit) {
     ExpectSameSteps(RecordedEpisode(run, e.index), e);
   }
   const json m = Manifest(run);
-  ExpectNoDivergence(m, {"seed", "first observation", "first observation"});
+  ExpectNoDivergence(m, {"seed", "continued generator", "continued generator"});
   EXPECT_EQ(m["env_id"], "FetchPush-v4");
   EXPECT_EQ(m["from"], "rt/push-v0");
   EXPECT_NE(m["dataset"]["found"].get<std::string>().find("rt/push-v0"), std::string::npos);
@@ -296,8 +318,10 @@ TEST(RecordFromDataset, PerturbedObservationsReportTheirFirstDivergence) {
   r = RunFetchscope("record --from edited/push-v0 --minari-root " + root.string() +
                     " --width 40 --height 40 --out " + run.string());
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  EXPECT_NE(r.output.find("episode 1: reset from its first observation; diverges at step 7, "
-                          "observation[3] off by -0.001 (tolerance 1e-06; largest difference 1)"),
+  // the component as describe names it, positions in mm, and where the largest difference is
+  EXPECT_NE(r.output.find("episode 1: reset from its first observation; diverges at step 7 in "
+                          "object_pos.x (observation[3]) by -1 mm (tolerance 1e-06); largest "
+                          "difference -1000 mm in object_pos.z (observation[5]) at step 9"),
             std::string::npos)
       << r.output;
   const json m = Manifest(run);
@@ -305,6 +329,10 @@ TEST(RecordFromDataset, PerturbedObservationsReportTheirFirstDivergence) {
   const json& d = m["episodes"][1]["divergence"];
   EXPECT_EQ(d["first_step"], 7);
   EXPECT_EQ(d["where"], "observation[3]");
+  EXPECT_EQ(d["component"], "object_pos.x");
+  EXPECT_EQ(d["unit"], "m");
+  EXPECT_EQ(d["max_step"], 9);
+  EXPECT_EQ(d["max_component"], "object_pos.z");
   EXPECT_NEAR(d["difference"].get<double>(), -1e-3, 1e-12);
   EXPECT_NEAR(d["max_difference"].get<double>(), 1.0, 1e-12);
   EXPECT_EQ(m["episodes"][1]["frames"], 13);  // still rendered, every frame
@@ -402,6 +430,175 @@ TEST_F(RecordFromBadDataset, UnsupportedMinariVersion) {
 TEST_F(RecordFromBadDataset, TruncatedHdf5) {
   fs::resize_file(Hdf5(), fs::file_size(Hdf5()) / 2);
   ExpectOneLine(Hdf5(), "truncated HDF5 file");
+}
+
+// A dataset without env_spec replayed on the wrong --env-id: its reset differs at step 0, so the
+// run stops with a line that says why and what to do, before anything is written; a raised
+// --tolerance renders it anyway. A misspelt id gets a "did you mean" from the local datasets;
+// `fetchscope datasets` lists them.
+TEST(RecordFromDataset, WrongEnvIdStopsAndMisspeltIdsAreSuggested) {
+  unsetenv("DISPLAY");
+  TempDir tmp;
+  const fs::path root = tmp.path() / "datasets", run = tmp.path() / "run";
+  auto r = RunFetchscope(
+      "rollout --env-id FetchPush-v4 --episodes 2 --steps 6 --seed 4 --minari "
+      "ns/FetchPush/nospec-v0 --minari-root " +
+      root.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  // drop env_spec, as a dataset made without an env (DataCollector on a bare env) has none
+  const fs::path meta = root / "ns/FetchPush/nospec-v0/data/metadata.json";
+  std::string text = ReadFile(meta);
+  const size_t from = text.find(", \"env_spec\": "), to = text.find(", \"dataset_id\"");
+  ASSERT_TRUE(from != std::string::npos && to != std::string::npos);
+  text.erase(from, to - from);
+  std::ofstream(meta, std::ios::binary) << text;
+  const std::string record =
+      "record --from ns/FetchPush/nospec-v0 --minari-root " + root.string() + kSmall;
+  r = RunFetchscope(record + "--env-id FetchSlide-v4 --out " + run.string());
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("the reset differs from the dataset's first row"), std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("its reset is not one of --env-id FetchSlide-v4"), std::string::npos)
+      << r.output;
+  EXPECT_FALSE(fs::exists(run));
+  r = RunFetchscope(record + "--env-id FetchSlide-v4 --tolerance 10 --out " + run.string());
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  r = RunFetchscope(record + "--env-id FetchPush-v4 --overwrite --out " + run.string());
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  // a misspelt id
+  r = RunFetchscope("record --from ns/FetchPush/nospek-v0 --minari-root " + root.string() + kSmall +
+                    "--out " + (tmp.path() / "run2").string());
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("did you mean 'ns/FetchPush/nospec-v0'?"), std::string::npos) << r.output;
+  // the listing: ours, and another writer's (a code_permalink that is not fetchscope's)
+  r = RunFetchscope(
+      "rollout --env-id FetchReach-v4 --episodes 1 --steps 3 --minari other-v1 "
+      "--minari-root " +
+      root.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const fs::path other = root / "other-v1/data/metadata.json";
+  text = ReadFile(other);
+  const size_t at = text.find("\"fetchscope ");
+  ASSERT_NE(at, std::string::npos);
+  text.replace(at + 1, 10, "elsewhere");
+  std::ofstream(other, std::ios::binary) << text;
+  r = RunFetchscope("datasets --minari-root " + root.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("ns/FetchPush/nospec-v0  (no env_spec)  2         12     "),
+            std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("other-v1"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("FetchReach-v4"), std::string::npos) << r.output;
+  const json listed =
+      json::parse(RunFetchscope("datasets --json --minari-root " + root.string()).output);
+  ASSERT_EQ(listed["datasets"].size(), 2u) << listed.dump();
+  EXPECT_EQ(listed["datasets"][0]["id"], "ns/FetchPush/nospec-v0");
+  EXPECT_EQ(listed["datasets"][0]["seeded_episodes"], 1);
+  EXPECT_EQ(listed["datasets"][0]["fetchscope"], true);
+  EXPECT_EQ(listed["datasets"][1]["id"], "other-v1");
+  EXPECT_EQ(listed["datasets"][1]["fetchscope"], false);
+  EXPECT_EQ(listed["datasets"][1]["env"], "FetchReach-v4");
+}
+
+// DataCollector-made datasets of the sparse ids: float32 rewards, a 64-bit seed on every episode,
+// no infos: replayed exactly. And a dataset whose recorded Euler angles differ from ours in the
+// last bits (another atan2: numpy's SIMD one rounds differently) keeps the settled quaternion:
+// the episodes rebuilt from their first observation are the rollout's, bit for bit, after the
+// reset.
+TEST(RecordFromDataset, SparseSeededAndRoundedEulerAnglesReplayExactly) {
+  const std::string py = PythonWithH5py();
+  if (py.empty()) GTEST_SKIP() << "python3-h5py is not installed";
+  unsetenv("DISPLAY");
+  TempDir tmp;
+  const fs::path root = tmp.path() / "datasets";
+  std::string files;
+  for (const char* seed : {"18446744073709551557", "3"}) {
+    const fs::path file = tmp.path() / ("s" + std::string(seed) + ".json");
+    const auto r = RunFetchscope("rollout --env-id FetchPush-v4 --episodes 1 --steps 25 --seed " +
+                                 std::string(seed) + " --json-out " + file.string());
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    files += " " + file.string();
+  }
+  auto r = RunCommand(py + " " + Script() + " " + root.string() + " sparse/buffers-v0 buffers" +
+                      files + " 2>&1");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto dtype = RunCommand(py + " -c 'import h5py; f = h5py.File(\"" +
+                                (root / "sparse/buffers-v0/data/main_data.hdf5").string() +
+                                "\"); print(f[\"episode_0/rewards\"].dtype, \"infos\" in "
+                                "f[\"episode_0\"])'");
+  EXPECT_EQ(dtype.output, "float32 False\n");
+  r = RunFetchscope("record --from sparse/buffers-v0 --minari-root " + root.string() + kSmall +
+                    "--out " + (tmp.path() / "run").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  ExpectNoDivergence(Manifest(tmp.path() / "run"), {"seed", "seed"});
+  // the Euler angles of every reset one ulp off, no seeds: rebuilt, the settled quaternion kept
+  const fs::path rollout = tmp.path() / "rounded.json";
+  r = RunFetchscope("rollout --env-id FetchPush-v4 --episodes 2 --steps 40 --seed 21 --json-out " +
+                    rollout.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const Trajectory played = ReadTrajectory(rollout.string());
+  json j = json::parse(ReadFile(rollout));
+  for (json& e : j["episodes"]) {
+    for (int i = 11; i < 14; ++i) {
+      const double v = e["steps"][0]["observation"][i].get<double>();
+      e["steps"][0]["observation"][i] = std::nextafter(v, v < 0 ? 1.0 : -1.0);
+    }
+  }
+  std::ofstream(rollout) << j.dump();
+  r = RunCommand(py + " " + Script() + " " + root.string() + " rounded/push-v0 collector " +
+                 rollout.string() + " 2>&1");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const fs::path run = tmp.path() / "run2";
+  r = RunFetchscope("record --from rounded/push-v0 --minari-root " + root.string() + kSmall +
+                    "--out " + run.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  for (const TrajectoryEpisode& e : played.episodes) {
+    SCOPED_TRACE(e.index);
+    TrajectoryEpisode replayed = RecordedEpisode(run, e.index);
+    TrajectoryEpisode expected = e;
+    replayed.steps.erase(replayed.steps.begin());  // the reset row holds our own angles
+    expected.steps.erase(expected.steps.begin());
+    ExpectSameSteps(replayed, expected);
+  }
+  const json m = Manifest(run);
+  EXPECT_EQ(m["episodes"][0]["reset"], "first observation");
+  EXPECT_LT(m["episodes"][0]["divergence"]["max_difference"].get<double>(), 1e-15);
+}
+
+// A dataset the genuine env made (env_spec Gymnasium-Robotics', code_permalink not ours):
+// without --assets, record --from replays it on the genuine assets where --assets auto finds
+// them, and says so; otherwise it says once that the bundled models drift, and by how much.
+TEST(RecordFromDataset, GenuineDatasetsReplayOnTheGenuineAssetsWhereFound) {
+  const std::string py = PythonWithH5py();
+  if (py.empty()) GTEST_SKIP() << "python3-h5py is not installed";
+  const fs::path genuine = testing::GenuineAssetsDir();
+  if (genuine.empty()) GTEST_SKIP() << "no genuine assets in ../shared";
+  unsetenv("DISPLAY");
+  TempDir tmp;
+  const fs::path root = tmp.path() / "datasets", file = tmp.path() / "g.json";
+  auto r =
+      RunFetchscope("rollout --env-id FetchPush-v4 --episodes 1 --steps 50 --seed 0 --assets " +
+                    genuine.string() + " --json-out " + file.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  r = RunCommand(py + " " + Script() + " " + root.string() + " gen/push-v0 buffers " +
+                 file.string() + " 2>&1");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const std::string record = "record --from gen/push-v0 --minari-root " + root.string() +
+                             " --width 40 --height 40 --no-report --out ";
+  r = RunCommand("FETCHSCOPE_ASSETS=" + genuine.string() + " " FETCHSCOPE_BIN " " + record +
+                 (tmp.path() / "run").string() + " 2>&1");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("replaying on its assets at " + genuine.string()), std::string::npos)
+      << r.output;
+  ExpectNoDivergence(Manifest(tmp.path() / "run"), {"seed"});
+  r = RunCommand("env -u FETCHSCOPE_ASSETS " FETCHSCOPE_BIN " " + record +
+                 (tmp.path() / "run2").string() + " 2>&1");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  // (a machine with gymnasium_robotics installed replays on its assets instead)
+  if (r.output.find("(--assets auto: ") == std::string::npos) {
+    EXPECT_NE(r.output.find("replaying on the bundled models"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("positions up to about 0.02 mm off"), std::string::npos) << r.output;
+  }
 }
 
 }  // namespace

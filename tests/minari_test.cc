@@ -4,15 +4,21 @@
 // by MinariReader; every bad input is one line naming the file. The Python side is
 // tests/data/minari/minari_h5py.py.
 #include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <random>
 #include <string>
+#include <thread>
 
 #include "base/errors.h"
 #include "dataset/hdf5_handles.h"
@@ -38,7 +44,9 @@ using testing::ReadFile;
 using testing::RunCommand;
 using testing::RunFetchscope;
 using testing::SourceDir;
+using testing::SpawnFetchscope;
 using testing::TempDir;
+using testing::WaitExit;
 
 std::string Script() { return (SourceDir() / "tests/data/minari/minari_h5py.py").string(); }
 
@@ -586,6 +594,289 @@ TEST(MinariCommands, RecordMinariReplaysBitForBit) {
   r = RunFetchscope(record + "--shard 0/2 --overwrite --minari rec/shard-v0");
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_NE(r.output.find("a shard records part of the run"), std::string::npos) << r.output;
+}
+
+// --- Writing datasets as Minari's own tools would, and leaving nothing behind
+
+// The names in `folder` that start with '.': temporary folders of unfinished writes.
+std::vector<std::string> HiddenEntries(const fs::path& folder) {
+  std::vector<std::string> names;
+  std::error_code ec;
+  for (const auto& entry : fs::directory_iterator(folder, ec)) {
+    const std::string name = entry.path().filename().string();
+    if (name[0] == '.') names.push_back(name);
+  }
+  return names;
+}
+
+json DatasetMetadata(const fs::path& dataset) {
+  return json::parse(ReadFile(dataset / "data/metadata.json"));
+}
+
+// The metadata keys and values that Minari 0.5.3's create_dataset_from_buffers writes:
+// author_email where given, requirements, env_spec's max_episode_steps the TimeLimit the
+// episodes ran under; sparse rewards float32 and dense float64 (checked with h5py).
+TEST(MinariWriter, AuthorRequirementsTimeLimitAndRewardDtypes) {
+  const std::string py = PythonWithH5py();
+  if (py.empty()) GTEST_SKIP() << "python3-h5py is not installed";
+  for (const char* env_id : {"FetchPush-v4", "FetchPushDense-v4"}) {
+    SCOPED_TRACE(env_id);
+    TempDir tmp;
+    const EnvSpec& spec = FindEnvSpec(env_id);
+    auto options = Options(tmp.path(), "meta/push-v0", spec);
+    options.author = "Jane Doe";
+    options.author_email = "jane@example.org";
+    options.max_episode_steps = 80;
+    const auto episodes = SomeEpisodes(25);
+    Write(options, episodes);
+    json expected = Expected(env_id, episodes);
+    expected["author"] = "Jane Doe";
+    expected["author_email"] = "jane@example.org";
+    expected["max_episode_steps"] = 80;
+    WriteText(tmp.path() / "expected.json", expected.dump());
+    const auto r = RunCommand(py + " " + Script() + " check " + tmp.path().string() +
+                              " meta/push-v0 " + (tmp.path() / "expected.json").string() + " 2>&1");
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_EQ(r.output, "ok\n");
+    const auto dtype = RunCommand(py + " -c 'import h5py; print(h5py.File(\"" +
+                                  (tmp.path() / "meta/push-v0/data/main_data.hdf5").string() +
+                                  "\")[\"episode_0/rewards\"].dtype)'");
+    EXPECT_EQ(dtype.output, spec.dense ? "float64\n" : "float32\n");
+    // read back: the same rewards either way
+    const MinariDataset d = ReadMinariDataset("meta/push-v0", tmp.path());
+    ASSERT_EQ(d.episodes.size(), episodes.size());
+    for (size_t k = 0; k < episodes.size(); ++k) ExpectSameEpisode(d.episodes[k], episodes[k]);
+  }
+}
+
+// rollout --steps 80: env_spec says max_episode_steps 80 (gym.make(id, max_episode_steps=80));
+// the code_permalink of rollout and record has one shape, without the binary's path or --jobs.
+TEST(MinariCommands, TimeLimitAuthorAndPermalinkOfRolloutAndRecord) {
+  unsetenv("DISPLAY");
+  TempDir tmp;
+  const fs::path root = tmp.path() / "datasets";
+  auto r = RunFetchscope(
+      "rollout --env-id FetchReach-v4 --episodes 2 --steps 80 --seed 5 --jobs 2 --minari-root " +
+      root.string() +
+      " --minari perm/rollout-v0 --minari-author 'Jane Doe' --minari-author-email j@x.org");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  json m = DatasetMetadata(root / "perm/rollout-v0");
+  EXPECT_NE(m["env_spec"].get<std::string>().find("\"max_episode_steps\": 80,"), std::string::npos)
+      << m["env_spec"];
+  EXPECT_EQ(m["author"], json::array({"Jane Doe"}));
+  EXPECT_EQ(m["author_email"], json::array({"j@x.org"}));
+  EXPECT_EQ(m["code_permalink"], "fetchscope " FETCHSCOPE_VERSION
+                                 " rollout --env-id FetchReach-v4 --policy random --seed 5 "
+                                 "--episodes 2 --steps 80");
+  r = RunFetchscope(
+      "record --quiet --env-id FetchReach-v4 --width 32 --height 32 --steps 7 "
+      "--episodes 2 --seed 5 --minari-root " +
+      root.string() + " --out " + (tmp.path() / "run").string() + " --minari perm/record-v0");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  m = DatasetMetadata(root / "perm/record-v0");
+  EXPECT_NE(m["env_spec"].get<std::string>().find("\"max_episode_steps\": 7,"), std::string::npos)
+      << m["env_spec"];
+  EXPECT_EQ(m["author"], json::array({"fetchscope"}));
+  EXPECT_FALSE(m.contains("author_email"));
+  EXPECT_EQ(m["code_permalink"], "fetchscope " FETCHSCOPE_VERSION
+                                 " record --env-id FetchReach-v4 --policy random --seed 5 "
+                                 "--episodes 2 --steps 7");
+  // export of that run folder: the TimeLimit of its episodes
+  r = RunFetchscope("export " + (tmp.path() / "run").string() +
+                    " --minari perm/export-v0 --minari-root " + root.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(DatasetMetadata(root / "perm/export-v0")["env_spec"],
+            DatasetMetadata(root / "perm/record-v0")["env_spec"]);
+}
+
+// MINARI_DATASETS_PATH= (set, empty) is an error, as in Minari, not a fallback to ~/.minari.
+TEST(MinariCommands, EmptyDatasetsPathIsAnError) {
+  TempDir tmp;
+  const auto r = RunCommand("HOME=" + tmp.path().string() +
+                            " MINARI_DATASETS_PATH= " FETCHSCOPE_BIN
+                            " rollout --env-id FetchReach-v4 --steps 3 --minari e/x-v0 2>&1");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("MINARI_DATASETS_PATH is set but empty"), std::string::npos) << r.output;
+  EXPECT_TRUE(fs::is_empty(tmp.path()));
+}
+
+// export of a run cut off by an interrupt: the partial episode is refused, named; with
+// --include-incomplete it is exported, its last step truncated, and that is said.
+TEST(MinariCommands, ExportRefusesAnIncompleteEpisodeUnlessAsked) {
+  TempDir tmp;
+  const fs::path root = tmp.path() / "datasets", file = tmp.path() / "t.json";
+  auto r = RunFetchscope(
+      "rollout --env-id FetchPush-v4 --episodes 3 --steps 10 --seed 2 "
+      "--json-out " +
+      file.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  Trajectory t = ReadTrajectory(file.string());
+  t.episodes[2].steps.resize(4);  // cut off after 3 steps
+  t.episodes[2].complete = false;
+  WriteText(file, TrajectoryText(t));
+  const std::string run =
+      "export " + file.string() + " --minari-root " + root.string() + " --minari cut/run-v0";
+  r = RunFetchscope(run);
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("episode 2 (3 steps) is incomplete"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("--include-incomplete"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(root / "cut"));
+  r = RunFetchscope(run + " --include-incomplete");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("not by the TimeLimit"), std::string::npos) << r.output;
+  const MinariDataset d = ReadMinariDataset("cut/run-v0", root);
+  ASSERT_EQ(d.episodes.size(), 3u);
+  EXPECT_EQ(d.episodes[2].steps(), 3);
+  EXPECT_EQ(d.episodes[2].truncations.back(), 1);
+  // the TimeLimit is that of the complete episodes
+  EXPECT_NE(DatasetMetadata(root / "cut/run-v0")["env_spec"].get<std::string>().find(
+                "\"max_episode_steps\": 10,"),
+            std::string::npos);
+}
+
+// export interrupted at random points (SIGINT, SIGTERM): it exits 128 + the signal and leaves
+// nothing: no temporary folder, the old dataset byte for byte; or it finished, and the dataset
+// is the new one whole.
+TEST(MinariCommands, ExportInterruptedAtRandomPointsLeavesNothing) {
+  TempDir tmp;
+  const fs::path root = tmp.path() / "datasets", oldf = tmp.path() / "old.json",
+                 newf = tmp.path() / "new.json";
+  const std::string rollout = "rollout --env-id FetchPush-v4 --episodes 150 --steps 50 --jobs 2 ";
+  ASSERT_EQ(RunFetchscope(rollout + "--seed 1 --json-out " + oldf.string()).exit_code, 0);
+  ASSERT_EQ(RunFetchscope(rollout + "--seed 2 --json-out " + newf.string()).exit_code, 0);
+  const std::string export_to = " --minari-root " + root.string() + " --minari int/push-v0 ";
+  ASSERT_EQ(RunFetchscope("export " + oldf.string() + export_to).exit_code, 0);
+  const fs::path hdf5 = root / "int/push-v0/data/main_data.hdf5";
+  const std::string old_bytes = ReadFile(hdf5);
+  const std::string old_meta = ReadFile(root / "int/push-v0/data/metadata.json");
+  // how long a whole export takes, to spread the interrupts over it
+  const auto start = std::chrono::steady_clock::now();
+  ASSERT_EQ(RunFetchscope("export " + newf.string() + export_to + "--overwrite").exit_code, 0);
+  const double whole_ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  const std::string new_bytes = ReadFile(hdf5);
+  ASSERT_NE(old_bytes, new_bytes);
+  ASSERT_EQ(RunFetchscope("export " + oldf.string() + export_to + "--overwrite").exit_code, 0);
+  std::mt19937 rng(26);
+  int interrupted = 0;
+  for (int i = 0; i < 8; ++i) {
+    const int sig = i % 2 ? SIGTERM : SIGINT;
+    const int delay_ms =
+        static_cast<int>(std::uniform_real_distribution<>(0.1, 0.9)(rng) * whole_ms);
+    SCOPED_TRACE("signal " + std::to_string(sig) + " after " + std::to_string(delay_ms) + " ms");
+    const fs::path log = tmp.path() / "export.log";
+    const pid_t pid = SpawnFetchscope("export " + newf.string() + export_to + "--overwrite", log);
+    std::this_thread::sleep_for(std::chrono::milliseconds(delay_ms));
+    kill(pid, sig);
+    const int status = WaitExit(pid);
+    EXPECT_TRUE(HiddenEntries(root / "int").empty()) << ReadFile(log);
+    if (status == 0) {  // it finished first: the new dataset, whole
+      EXPECT_TRUE(ReadFile(hdf5) == new_bytes);
+      ASSERT_EQ(RunFetchscope("export " + oldf.string() + export_to + "--overwrite").exit_code, 0);
+      continue;
+    }
+    ++interrupted;
+    EXPECT_EQ(status, 128 + sig) << ReadFile(log);
+    EXPECT_TRUE(ReadFile(hdf5) == old_bytes);
+    EXPECT_EQ(ReadFile(root / "int/push-v0/data/metadata.json"), old_meta);
+    const std::string said = ReadFile(log);
+    // before main installed the handler the signal ends it silently, which leaves nothing too
+    if (!said.empty()) {
+      EXPECT_NE(said.find("interrupted (" + std::string(sig == SIGINT ? "SIGINT" : "SIGTERM")),
+                std::string::npos)
+          << said;
+      EXPECT_NE(said.find("nothing written"), std::string::npos) << said;
+    }
+  }
+  EXPECT_GT(interrupted, 0);
+}
+
+// A temporary folder left by a killed write (SIGKILL, power loss) is removed by the next write
+// of a dataset beside it; one of a process still running, or written to lately, is not.
+TEST(MinariWriter, RemovesStaleTemporaryFoldersOfOurs) {
+  TempDir tmp;
+  const EnvSpec& spec = FindEnvSpec("FetchPush-v4");
+  const fs::path ns = tmp.path() / "st";
+  const pid_t dead = fork();
+  if (dead == 0) _exit(0);
+  waitpid(dead, nullptr, 0);
+  const auto make = [&](const std::string& name, bool old) {
+    fs::create_directories(ns / name / "data");
+    WriteText(ns / name / "data/main_data.hdf5", "partial");
+    if (old) {
+      const auto when = fs::file_time_type::clock::now() - std::chrono::hours(1);
+      fs::last_write_time(ns / name / "data/main_data.hdf5", when);
+      fs::last_write_time(ns / name / "data", when);
+      fs::last_write_time(ns / name, when);
+    }
+  };
+  const std::string stale = ".gone-v0.tmp-" + std::to_string(dead) + "-0";
+  const std::string alive = ".gone-v0.tmp-" + std::to_string(getpid()) + "-0";
+  const std::string recent = ".gone-v0.tmp-" + std::to_string(dead) + "-1";
+  const std::string other = ".other-v0.tmp-" + std::to_string(dead) + "-0";
+  make(stale, true);
+  make(alive, true);
+  make(recent, false);
+  make(other, true);
+  Write(Options(tmp.path(), "st/gone-v0", spec), SomeEpisodes(25));
+  EXPECT_FALSE(fs::exists(ns / stale));
+  EXPECT_TRUE(fs::exists(ns / alive));
+  EXPECT_TRUE(fs::exists(ns / recent));
+  EXPECT_TRUE(fs::exists(ns / other));  // another dataset's: its own next write cleans it
+}
+
+// record --minari checks the datasets folder before rendering anything; an existing id is
+// refused before the run, and --overwrite replaces it after the run.
+TEST(MinariCommands, RecordChecksTheDatasetUpFrontAndOverwriteReplacesIt) {
+  unsetenv("DISPLAY");
+  TempDir tmp;
+  const fs::path out = tmp.path() / "run";
+  WriteText(tmp.path() / "file", "not a folder");
+  const std::string record =
+      "record --quiet --env-id FetchReach-v4 --width 32 --height 32 --steps 4 --episodes 1 "
+      "--out " +
+      out.string() + " ";
+  auto r = RunFetchscope(record + "--minari-root " + (tmp.path() / "file").string() +
+                         " --minari up/front-v0");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find((tmp.path() / "file").string()), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(out / "episode_000.mp4")) << "rendered before checking the dataset";
+  const fs::path root = tmp.path() / "datasets";
+  r = RunFetchscope(record + "--seed 1 --minari-root " + root.string() + " --minari up/front-v0");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const std::string first = ReadFile(root / "up/front-v0/data/main_data.hdf5");
+  r = RunFetchscope(record + "--seed 2 --overwrite --minari-root " + root.string() +
+                    " --minari up/front-v0");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(ReadFile(root / "up/front-v0/data/main_data.hdf5"), first);
+  r = RunFetchscope(
+      "record --quiet --env-id FetchReach-v4 --width 32 --height 32 --steps 4 "
+      "--episodes 1 --out " +
+      (tmp.path() / "run4").string() + " --minari-root " + root.string() + " --minari up/front-v0");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("pass --overwrite to replace it"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(tmp.path() / "run4" / "episode_000.json"));
+}
+
+// rollout --minari stopped by SIGINT or SIGTERM while it adds episodes: 128 + the signal, the
+// usual line, and no dataset, temporary folder or namespace folder left (any --jobs).
+TEST(MinariCommands, RolloutInterruptedLeavesNoDataset) {
+  TempDir tmp;
+  const fs::path root = tmp.path() / "datasets";
+  int i = 0;
+  for (const int sig : {SIGINT, SIGTERM}) {
+    SCOPED_TRACE(sig);
+    const fs::path log = tmp.path() / ("rollout" + std::to_string(i) + ".log");
+    const pid_t pid = SpawnFetchscope("rollout --env-id FetchPush-v4 --episodes 2000 --jobs " +
+                                          std::to_string(++i) + " --minari-root " + root.string() +
+                                          " --minari ri/push-v0",
+                                      log);
+    std::this_thread::sleep_for(std::chrono::milliseconds(1200));
+    kill(pid, sig);
+    EXPECT_EQ(WaitExit(pid), 128 + sig) << ReadFile(log);
+    EXPECT_NE(ReadFile(log).find("nothing written"), std::string::npos) << ReadFile(log);
+    EXPECT_FALSE(fs::exists(root / "ri")) << "a dataset or its folder was left";
+  }
 }
 
 }  // namespace

@@ -202,6 +202,45 @@ TEST(Trajectory, IncompleteEpisodesStayIncompleteAndOlderFilesReadAsBefore) {
   EXPECT_EQ(old.episodes[1].episode_return, -0.06283185307179587);
 }
 
+// The schema version, as the manifest's: written, absent = version 0 (read as before), newer =
+// refused in one line naming the file and both versions.
+TEST(Trajectory, SchemaVersionIsWrittenAndANewerOneIsRefused) {
+  static_assert(kTrajectorySchemaVersion == 1, "the messages below name version 1");
+  nlohmann::json j = nlohmann::json::parse(TrajectoryText(HardTrajectory()));
+  EXPECT_EQ(j["schema_version"], kTrajectorySchemaVersion);
+  EXPECT_EQ(ParseTrajectory(j.dump(), "v1.json").schema_version, 1);
+
+  // a file from before versions: read as version 0, the same values, written back versioned
+  j.erase("schema_version");
+  const Trajectory old = ParseTrajectory(j.dump(), "old.json");
+  EXPECT_EQ(old.schema_version, 0);
+  ExpectSameTrajectory(old, HardTrajectory());
+  EXPECT_EQ(TrajectoryText(old), TrajectoryText(HardTrajectory()));
+
+  TempDir tmp;
+  const fs::path newer = tmp.path() / "newer.json";
+  j["schema_version"] = 2;
+  std::ofstream(newer) << j.dump();
+  const std::string refusal = newer.string() +
+                              ": has trajectory schema version 2; this fetchscope reads versions "
+                              "0 to 1: use a newer fetchscope";
+  try {
+    ReadTrajectory(newer.string());
+    FAIL() << "accepted";
+  } catch (const RunError& e) {
+    EXPECT_EQ(std::string(e.what()), refusal);
+  }
+  // as a replay file too, even where the newer layout has moved the episodes
+  j.erase("episodes");
+  std::ofstream(newer) << j.dump();
+  try {
+    ReadReplayTrajectory(newer.string());
+    FAIL() << "accepted";
+  } catch (const RunError& e) {
+    EXPECT_EQ(std::string(e.what()), "replay file " + refusal);
+  }
+}
+
 // A real episode: what RunEpisode played is what the file gives back.
 TEST(Trajectory, ARecordedEpisodeReadsBackExactly) {
   const EnvSpec& spec = FindEnvSpec("FetchPush-v4");
@@ -256,6 +295,10 @@ INSTANTIATE_TEST_SUITE_P(
                 },
                 "not a fetchscope trajectory (an object with env_id, seed and episodes)"},
         BadCase{"NoEnvId", [](json& j) { j.erase("env_id"); }, "env_id: expected a string"},
+        BadCase{"VersionNotAnInteger", [](json& j) { j["schema_version"] = "1"; },
+                "schema_version: expected an integer of at least 0, found \"1\""},
+        BadCase{"NegativeVersion", [](json& j) { j["schema_version"] = -1; },
+                "schema_version: expected an integer of at least 0, found -1"},
         BadCase{"NegativeSeed", [](json& j) { j["seed"] = -1; },
                 "seed: expected a non-negative integer below 2^64"},
         BadCase{"EpisodesNotAList", [](json& j) { j["episodes"] = 3; },

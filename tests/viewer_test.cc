@@ -206,6 +206,9 @@ TEST(ViewerPageTest, ARunsPageCarriesEachEpisodesSignals) {
   EXPECT_EQ(data["viewer"]["has_object"], true);
   EXPECT_EQ(data["viewer"]["gripper_command"], true);
   EXPECT_EQ(data["viewer"]["hindsight"], false);
+  // where the plotted values are, for viewer.js's titles (src/observation_layout.h)
+  EXPECT_EQ(data["viewer"]["layout"],
+            json({{"finger_width", "obs[9] + obs[10]"}, {"object_height", "obs[5]"}}));
   for (int k = 0; k < 2; ++k) {
     const json& e = data["episodes"][k];
     EXPECT_EQ(e["viewer"], true);

@@ -15,6 +15,7 @@ _fetchscope() {
       ':anatomy') cmd='anatomy' ;;
       ':rollout') cmd='rollout' ;;
       ':export') cmd='export' ;;
+      ':datasets') cmd='datasets' ;;
       ':render') cmd='render' ;;
       ':list-cameras') cmd='list-cameras' ;;
       ':record') cmd='record' ;;
@@ -48,22 +49,23 @@ _fetchscope() {
     --assets) COMPREPLY=($(compgen -W 'bundled auto' -- "$cur")); return ;;
     --gpu) COMPREPLY=($(compgen -W 'all cuda:0' -- "$cur")); return ;;
     --what) COMPREPLY=($(compgen -W 'sim render encode record all node soak' -- "$cur")); return ;;
-    --backends|--crf|--episodes|--exec-timeout|--fps|--from|--genuine-assets|--gif-fps|--gif-width|--golden-dir|--height|--hud-opacity|--jobs|--json-out|--magnitudes|--minari|--minari-root|--n-episodes|--n-steps|--only|--out|--output|--pixel-tolerance|--seconds|--seed|--shard|--shard-count|--sheet-every|--soak-frames|--steps|--tolerance|--width|-j|-o)
+    --backends|--crf|--episodes|--exec-timeout|--fps|--from|--genuine-assets|--gif-fps|--gif-width|--golden-dir|--height|--hud-opacity|--jobs|--json-out|--magnitudes|--minari|--minari-author|--minari-author-email|--minari-root|--n-episodes|--n-steps|--only|--out|--output|--pixel-tolerance|--seconds|--seed|--shard|--shard-count|--sheet-every|--soak-frames|--steps|--tolerance|--width|-j|-o)
       COMPREPLY=($(compgen -f -- "$cur")); return ;;
   esac
   local words=''
   case $cmd in
-    '') words='list-envs describe reward-check random-episodes anatomy rollout export render list-cameras record bench probe-actions merge-manifests golden list-gpus report compare help --help --version' ;;
+    '') words='list-envs describe reward-check random-episodes anatomy rollout export datasets render list-cameras record bench probe-actions merge-manifests golden list-gpus report compare help --help --version' ;;
     'list-envs') words='--help -h --json' ;;
     'describe') words='--help -h --env-id --assets --json-out --overwrite' ;;
     'reward-check') words='--help -h --env-id --assets --seed --n-steps --json-out --overwrite' ;;
     'random-episodes') words='--help -h --env-id --assets --seed --n-episodes --json-out --overwrite --jobs -j --worker-mode' ;;
     'anatomy') words='--help -h --env-id --assets --seed --out --width --height --backend --msaa --no-card --overwrite' ;;
-    'rollout') words='--help -h --env-id --assets --seed --episodes --steps --policy --exec-timeout --replay-dtype --json-out --minari --minari-root --overwrite --jobs -j --worker-mode' ;;
-    'export') words='--help -h --minari --minari-root --overwrite' ;;
+    'rollout') words='--help -h --env-id --assets --seed --episodes --steps --policy --exec-timeout --replay-dtype --json-out --minari --minari-root --overwrite --minari-author --minari-author-email --jobs -j --worker-mode' ;;
+    'export') words='--help -h --minari --minari-root --overwrite --include-incomplete --minari-author --minari-author-email' ;;
+    'datasets') words='--help -h --minari-root --json' ;;
     'render') words='--help -h --env-id --assets --seed --camera --overlay --width --height --hud-position --hud-opacity --backend --msaa --readback --gpu --steps --policy --layers --output -o --verbose -v' ;;
     'list-cameras') words='--help -h --env-id --assets' ;;
-    'record') words='--help -h --env-id --assets --seed --camera --overlay --width --height --hud-position --hud-opacity --backend --msaa --readback --gpu --episodes --steps --policy --exec-timeout --replay-dtype --fps --codec --crf --preset --format --gif-fps --gif-width --layers --sheet-every --out --quiet -q --minari --minari-root --overwrite --resume --jobs -j --worker-mode --shard --shard-count --no-report --from --tolerance' ;;
+    'record') words='--help -h --env-id --assets --seed --camera --overlay --width --height --hud-position --hud-opacity --backend --msaa --readback --gpu --episodes --steps --policy --exec-timeout --replay-dtype --fps --codec --crf --preset --format --gif-fps --gif-width --layers --sheet-every --out --quiet -q --minari --minari-root --minari-author --minari-author-email --overwrite --resume --jobs -j --worker-mode --shard --shard-count --no-report --from --tolerance' ;;
     'bench') words='--help -h --what --soak-frames --width --height --assets --seconds --backends --no-peers --json-out' ;;
     'probe-actions') words='--help -h --env-id --assets --seed --camera --overlay --width --height --hud-position --hud-opacity --backend --msaa --readback --gpu --steps --magnitudes --out --json-out' ;;
     'merge-manifests') words='--help -h --out --quiet -q --no-report' ;;
@@ -73,7 +75,7 @@ _fetchscope() {
     'list-gpus') words='--help -h --gpu --json' ;;
     'report') words='--help -h --quiet -q' ;;
     'compare') words='--help -h --out --tolerance --pixel-tolerance --states-only --quiet -q' ;;
-    'help') words='--help -h --markdown --man --bash-completion list-envs describe reward-check random-episodes anatomy rollout export render list-cameras record bench probe-actions merge-manifests golden list-gpus report compare help' ;;
+    'help') words='--help -h --markdown --man --bash-completion list-envs describe reward-check random-episodes anatomy rollout export datasets render list-cameras record bench probe-actions merge-manifests golden list-gpus report compare help' ;;
   esac
   if [[ $cur == -* || -n $words && $cmd == '' ]]; then
     COMPREPLY=($(compgen -W "$words" -- "$cur"))

@@ -102,7 +102,7 @@
   const v = data.viewer || {};
   const viewer = FSViewer.create(page, {
     id: 'viewer', fps: data.fps || 25, threshold: v.threshold || 0.05, linkable: true,
-    has_object: v.has_object, gripper_command: v.gripper_command, reach: v.reach,
+    has_object: v.has_object, gripper_command: v.gripper_command, layout: v.layout || {},
     episodes: rows.map((r) => ({index: r.index, label: r.label, className: r.same ? 'ok' : 'fail',
       title: `episode ${r.label} — ` + (r.first_divergence_step === null ? 'states equal within the tolerance'
           : `states diverge at step ${r.first_divergence_step}`) + ' · A solid, B dashed',

@@ -123,9 +123,18 @@
   }
   if (data.has_replay) {  // record --from DATASET: the reset used, and the first divergence
     columns.push({label: 'reset', value: (e) => (e.replay ? e.replay.reset : null), render: (e) => (e.replay ? e.replay.reset : '—')});
+    // a difference in its unit, metres as mm (as the console says it)
+    const amount = (v, unit) => (v === null || v === undefined ? 'not finite'
+      : unit === 'm' || unit === 'm/step' ? `${(v * 1000).toPrecision(3)} mm${unit.slice(1)}`
+        : `${v.toPrecision(3)}${unit ? ' ' + unit : ''}`);
+    const largest = (r) => (r.max_step === undefined ? 'largest 0'
+      : `largest ${amount(r.max_difference, r.max_unit)} in ${r.max_component || r.max_where} at step ${r.max_step}`);
     columns.push({label: 'divergence', value: (e) => (e.replay ? (e.replay.first_step ?? -1) : null),
-                  render: (e) => (!e.replay ? '—' : e.replay.first_step === null ? `none (within ${e.replay.tolerance})`
-                    : `step ${e.replay.first_step}, ${e.replay.where} off by ${e.replay.difference.toPrecision(3)}`), numeric: true});
+                  // two lines that wrap in a narrow column: the table fits 1,280 px
+                  render: (e) => (!e.replay ? '—' : el('span', {class: 'divergence'},
+                    e.replay.first_step === null ? `none (within ${e.replay.tolerance})`
+                      : `step ${e.replay.first_step}, ${e.replay.component || e.replay.where} off by ${amount(e.replay.difference, e.replay.unit)}`,
+                    el('br'), largest(e.replay))), numeric: true});
   }
   columns.push({label: 'first / last frame', value: () => null,
                 render: (e) => (e.thumbs && e.sheet ? el('span', {class: 'thumbs'}, thumb(e, 'first'), thumb(e, 'last')) : '')});
@@ -159,15 +168,22 @@
   // --- the episode viewer: one episode's video and per-step signals on one step cursor
   page.append(el('h2', {}, 'Episode viewer'));
   const viewable = recorded.filter((e) => e.video || e.viewer);
+  // a link to an episode the viewer does not have (#episode=99 of a 10-episode run) says so
+  const missing = el('p', {class: 'notes viewer-missing'});
+  missing.hidden = true;
+  page.append(missing);
   const headline = (e) => `episode ${e.label} — ${e.success ? 'success' : 'failure'}, return ${num(e.return, 2)}, ` +
       `final distance ${num(e.final_distance, 3)} m` + (e.complete ? '' : ', interrupted');
   const v = data.viewer || {};
+  // record --from DATASET: the replay's position errors against the dataset, for their plot
+  const withReplay = (s, replay) => (s && replay && replay.position_error_mm
+    ? Object.assign({}, s, {replay_error: replay.position_error_mm}) : s);
   viewer = FSViewer.create(page, {
     id: 'viewer', fps: data.fps, threshold: data.threshold, linkable: true,
-    has_object: v.has_object, gripper_command: v.gripper_command, reach: v.reach,
+    has_object: v.has_object, gripper_command: v.gripper_command, layout: v.layout || {},
     episodes: viewable.map((e) => ({index: e.index, label: e.label, title: headline(e), className: e.success ? 'ok' : 'fail',
       tracks: () => [{name: `episode ${e.label}`, video: e.video, format: e.video_format, frames: e.frames,
-                      signals: e.viewer ? FSViewer.episodeSignals(`fetchscope-episode-${e.index}`) : null}]})),
+                      signals: e.viewer ? withReplay(FSViewer.episodeSignals(`fetchscope-episode-${e.index}`), e.replay) : null}]})),
     // the episodes ↑/↓ visit: the table's rows in their order, those the filter shows
     visible: () => [...table.tBodies[0].rows]
         .filter((row) => row.dataset.outcome !== 'missing' && (table.dataset.filter === 'all' || row.dataset.outcome === table.dataset.filter))
@@ -177,7 +193,15 @@
   window.fetchscopeViewer = viewer;
   const openFromHash = (scroll) => {
     const link = FSViewer.parseHash(location.hash);
-    if (!link || !viewer.open(link.episode, link.t)) return false;
+    missing.hidden = true;
+    if (!link) return false;
+    if (!viewer.open(link.episode, link.t)) {
+      const range = viewable.length ? `episodes ${viewable[0].label}–${viewable[viewable.length - 1].label}` : 'no episodes';
+      missing.textContent = `#episode=${link.episode}: this run's viewer has no episode ${link.episode} (${range}, ` +
+          `${viewable.length} in all)` + (viewable.length ? `; showing episode ${viewable[0].label}` : '');
+      missing.hidden = false;
+      return false;
+    }
     // after the page's first layout, which it would otherwise force while the page is built
     if (scroll) requestAnimationFrame(() => viewer.element.scrollIntoView({block: 'start'}));
     return true;

@@ -50,20 +50,30 @@ const FSViewer = (() => {
         {label: named(tr, `commanded ${axis}`), stroke: axisColors[j], dash: [5, 4], width: 1.25, values: s.commanded[j]},
         {label: named(tr, `achieved ${axis}`), stroke: i ? '#333' : '#111', dash: trackDash[i], width: 2, values: s.achieved[j]}]),
       readout: readouts((s, t) => `commanded ${fmt(at(s.commanded[j], t), 4)} m, achieved ${fmt(at(s.achieved[j], t), 4)} m`)}));
-    const finger = options.reach ? 'obs[3] + obs[4]' : 'obs[9] + obs[10]';
+    // where the plotted values are in the observation: the report's data says (src/observation_layout.h)
+    const layout = options.layout || {};
+    const where = (text) => (text ? ` (${text})` : '');
     specs.push({id: 'fingers', unit: 'm',
-      title: `Finger width (${finger})` + (options.gripper_command ? ' and gripper command (clipped a[3], right axis)' : ''),
+      title: `Finger width${where(layout.finger_width)}` + (options.gripper_command ? ' and gripper command (clipped a[3], right axis)' : ''),
       series: each((tr, s, i) => [
         {label: named(tr, 'finger width'), stroke: '#8c510a', dash: trackDash[i], values: s.finger_width},
         ...(s.gripper_command ? [{label: named(tr, 'gripper command'), stroke: axisColors[3], dash: [5, 4], values: s.gripper_command, scale: 'cmd'}] : [])]),
       readout: readouts((s, t) => `width ${fmt(at(s.finger_width, t), 4)} m` +
         (s.gripper_command ? `, command ${fmt(at(s.gripper_command, t), 3)}` : ''))});
     if (options.has_object) {
-      specs.push({id: 'object', title: 'Object height (obs[5]) and object–goal distance', unit: 'm',
+      specs.push({id: 'object', title: `Object height${where(layout.object_height)} and object–goal distance`, unit: 'm',
         series: each((tr, s, i) => [
           {label: named(tr, 'object height'), stroke: '#35978f', dash: trackDash[i], values: s.object_height},
           {label: named(tr, 'object–goal distance'), stroke: '#c51b7d', dash: trackDash[i], values: s.object_goal_distance}]),
         readout: readouts((s, t) => `height ${fmt(at(s.object_height, t), 4)} m, to goal ${fmt(at(s.object_goal_distance, t), 4)} m`)});
+    }
+    if (tracks.some((tr) => tr.signals && tr.signals.replay_error)) {  // record --from DATASET
+      specs.push({id: 'replay', title: 'Replayed vs recorded: how far the replay is from the dataset (the ghost)', unit: 'mm',
+        series: each((tr, s, i) => (s.replay_error ? [
+          {label: named(tr, 'gripper error'), stroke: '#111', dash: trackDash[i], values: s.replay_error.gripper},
+          ...(s.replay_error.object ? [{label: named(tr, 'object error'), stroke: '#35978f', dash: trackDash[i], values: s.replay_error.object}] : [])] : [])),
+        readout: readouts((s, t) => (s.replay_error ? `gripper ${fmt(at(s.replay_error.gripper, t), 3)} mm` +
+          (s.replay_error.object ? `, object ${fmt(at(s.replay_error.object, t), 3)} mm` : '') : '—'))});
     }
     if (tracks.some((tr) => tr.signals && tr.signals.her)) {
       specs.push({id: 'her', title: 'HER relabelled rewards (future, k = 4) of the transition into step t', unit: '',
@@ -74,7 +84,8 @@ const FSViewer = (() => {
     return specs;
   }
 
-  // One viewer in `parent`. options: {id, fps, threshold, has_object, gripper_command, reach,
+  // One viewer in `parent`. options: {id, fps, threshold, has_object, gripper_command,
+  // layout: {finger_width, object_height} (the observation indices the titles name),
   // episodes: [{index, label, title, tracks: () => [{name, caption, video, format, signals, frames,
   // noMedia (signals only)}]}],
   // visible: () => indices allowed by the page's filter, onOpen(index)}.

@@ -77,6 +77,11 @@ try {
     await page.waitForSelector('body[data-ready="1"]', {timeout});
     const entry = {asked: {episode, t}, state: await settle(page)};
     entry.grab = await grab(page, join(args['grab-dir'], `grab_${episode}_${t}.png`));
+    // the note of a link to an episode the viewer does not have (null: none shown)
+    entry.missing_note = await page.evaluate(() => {
+      const note = document.querySelector('.viewer-missing');
+      return note && !note.hidden ? note.textContent : null;
+    });
     result.links.push(entry);
     if (i > 0) continue;
     if (args.screenshot) {
@@ -122,6 +127,23 @@ try {
     result.plots = await page.evaluate(() => Object.fromEntries(Object.entries(window.fetchscopeViewer.charts).map(([id, chart]) =>
       [id, Object.fromEntries(chart.series.slice(1).map((s, j) => [s.label, chart.data[j + 1]]))])));
     result.cursor_lines = await page.$$eval('#viewer .viewer-cursor', (lines) => lines.length);
+    result.plot_titles = await page.$$eval('#viewer .viewer-plots h4', (hs) => hs.map((h) => h.textContent));
+    // the episode table's width against its box at this 1,280 px viewport (the report's)
+    result.table = await page.evaluate(() => {
+      const t = document.querySelector('#episode-table');
+      return t ? {width: t.scrollWidth, box: t.parentElement.clientWidth} : null;
+    });
+    // the cursor's colour and every plotted series' stroke, as rgb() strings
+    result.cursor_color = await page.$eval('#viewer .viewer-cursor', (line) => getComputedStyle(line).borderLeftColor);
+    result.series_colors = await page.evaluate(() => {
+      const probe = document.createElement('span');
+      document.body.append(probe);
+      const rgb = (c) => { probe.style.color = ''; probe.style.color = c; return getComputedStyle(probe).color; };
+      const out = Object.values(window.fetchscopeViewer.charts).flatMap((chart) => chart.series.slice(1)
+          .map((s) => (typeof s.stroke === 'function' ? s.stroke(chart, 1) : s.stroke)).filter((c) => typeof c === 'string').map(rgb));
+      probe.remove();
+      return [...new Set(out)];
+    });
     // the table's filter (the report's; compare's page has none)
     if (await page.$('#episode-filter')) {
       const rows = () => page.$$eval('#episode-table tbody tr', (trs) => trs.filter((tr) => tr.offsetParent !== null)

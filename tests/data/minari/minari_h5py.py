@@ -40,12 +40,13 @@ def env_facts(env_id):
     return task, dense, 10 if task == "Reach" else 25
 
 
-def env_spec_json(env_id):
+def env_spec_json(env_id, max_episode_steps=50):
     # gymnasium 1.x: dataclasses.asdict(EnvSpec) less namespace/name/version, after make()
     task, dense, _ = env_facts(env_id)
     return json.dumps({
         "id": env_id, "entry_point": "gymnasium_robotics.envs.fetch." + TASKS[task],
-        "reward_threshold": None, "nondeterministic": False, "max_episode_steps": 50,
+        "reward_threshold": None, "nondeterministic": False,
+        "max_episode_steps": max_episode_steps,
         "order_enforce": True, "disable_env_checker": False,
         "kwargs": {"reward_type": "dense" if dense else "sparse"},
         "additional_wrappers": [], "vector_entry_point": None})
@@ -198,23 +199,33 @@ def check(root, dataset_id, expected_path):
             assert json.load(f) == {}
     raw = open(os.path.join(data_path, "metadata.json")).read()
     meta = json.loads(raw)
+    # MinariStorage.new's keys, then _generate_dataset_metadata's (author_email where given,
+    # requirements), then update_episodes' dataset_size
     keys = ["total_episodes", "total_steps", "data_format", "observation_space", "action_space",
-            "env_spec", "dataset_id", "code_permalink", "author", "algorithm_name",
-            "description", "minari_version", "dataset_size"]
+            "env_spec", "dataset_id", "code_permalink", "author"]
+    keys += ["author_email"] if want.get("author_email") else []
+    keys += ["algorithm_name", "description", "minari_version", "requirements", "dataset_size"]
     assert list(meta) == keys, list(meta)
     assert meta["dataset_id"] == dataset_id
     assert meta["minari_version"] in SUPPORTED
     assert meta["data_format"] == "hdf5"
-    assert meta["author"] == ["fetchscope"]
+    assert meta["author"] == [want.get("author", "fetchscope")], meta["author"]
+    if want.get("author_email"):
+        assert meta["author_email"] == [want["author_email"]], meta["author_email"]
+    assert meta["requirements"] == ["gymnasium_robotics==1.4.2", "mujoco==2.2.2"], meta
+    # what recover_environment() parses with packaging's Requirement
+    for req in meta["requirements"]:
+        assert re.fullmatch(r"[A-Za-z0-9_.-]+==[0-9.]+", req), req
     assert meta["algorithm_name"] == want["algorithm_name"]
     assert isinstance(meta["code_permalink"], str)
     obs_space, act_space = spaces(env_id)
     assert meta["observation_space"] == obs_space, meta["observation_space"]
     assert meta["action_space"] == act_space, meta["action_space"]
     assert "-Infinity" in meta["observation_space"] and "null" not in meta["observation_space"]
-    assert meta["env_spec"] == env_spec_json(env_id), meta["env_spec"]
+    steps = want.get("max_episode_steps", 50)
+    assert meta["env_spec"] == env_spec_json(env_id, steps), meta["env_spec"]
     spec = json.loads(meta["env_spec"].replace('"order_enforce": true,', ""))
-    assert spec["id"] == env_id and spec["max_episode_steps"] == 50
+    assert spec["id"] == env_id and spec["max_episode_steps"] == steps
     # json.dump's own spacing, so the file is what Python would have written
     assert raw == json.dumps(meta), "metadata.json is not json.dump's output"
     assert meta["dataset_size"] == get_size(data_path), (meta["dataset_size"], get_size(data_path))
@@ -250,7 +261,9 @@ def check(root, dataset_id, expected_path):
                 assert d.dtype == dt and d.shape == (rows, n), (k, d.dtype, d.shape)
                 assert d.maxshape == (None, n) and d.chunks is not None, (k, d.maxshape)
                 assert np.array_equal(d[()], np.asarray(ep[k.split("/")[-1]], dtype=dt)), k
-            for k, dt in [("rewards", np.float64), ("terminations", np.bool_),
+            # Gymnasium-Robotics' reward dtypes: float32 for the sparse ids, float64 dense
+            reward_dt = np.float64 if env_facts(env_id)[1] else np.float32
+            for k, dt in [("rewards", reward_dt), ("terminations", np.bool_),
                           ("truncations", np.bool_)]:
                 d = g[k]
                 assert d.dtype == dt and d.shape == (t,) and d.maxshape == (None,), (k, d.dtype)
