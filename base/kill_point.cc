@@ -19,6 +19,7 @@ namespace {
 struct Hook {
   long target = -1;  // -1: no hook, 0: list the points, N: act at the Nth
   bool pause = false;
+  std::string resume;  // pause: go on also once this file exists
 };
 
 const Hook& TheHook() {
@@ -42,6 +43,7 @@ const Hook& TheHook() {
     }
     const char* how = std::getenv("FETCHSCOPE_TEST_KILL_HOW");
     h.pause = how && std::strcmp(how, "pause") == 0;
+    if (const char* resume = std::getenv("FETCHSCOPE_TEST_KILL_RESUME")) h.resume = resume;
     if (std::strcmp(at, "list") == 0) {
       h.target = 0;
       return h;
@@ -68,6 +70,7 @@ void KillPoint(const char* what) {
     std::fprintf(stderr, "fetchscope: paused at kill point %ld: %s\n", n, what);
     std::fflush(stderr);
     for (int i = 0; i < 2400 && StopSignal() == 0; ++i) {
+      if (!hook.resume.empty() && ::access(hook.resume.c_str(), F_OK) == 0) break;
       std::this_thread::sleep_for(std::chrono::milliseconds(50));
     }
   } else if (n == hook.target) {

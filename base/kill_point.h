@@ -9,6 +9,8 @@
 //                                 kill point N") and wait (up to 120 s) for SIGINT/SIGTERM
 //                                 instead of dying, then go on: a test can signal a run it
 //                                 knows to be in the middle of writing
+//   FETCHSCOPE_TEST_KILL_RESUME=PATH  with pause: also go on (unsignalled) once PATH exists, so
+//                                 that a test can change the world between two points
 //   FETCHSCOPE_TEST_KILL_IF=NAME=VALUE[,NAME=VALUE...]  only in a process whose environment has
 //                                 each NAME=VALUE (NAME= : unset or empty); e.g.
 //                                 SLURM_ARRAY_TASK_ID=1,SLURM_RESTART_COUNT= : one task of an

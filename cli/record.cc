@@ -484,8 +484,9 @@ int RunRecord(const RecordOptions& options, const std::string& command_line,
         DatasetPermalink("record", t.env_id, o.policy, plan.seed, o.episodes, o.steps);
     fs::path path;
     const std::string advice = "; the run is kept in " + o.out + ": `fetchscope export " + o.out +
-                               " --minari " + o.minari + (o.overwrite ? " --overwrite" : "") +
-                               "` writes the dataset from it";
+                               " --minari " + o.minari +
+                               (o.minari_root.empty() ? "" : " --minari-root " + o.minari_root) +
+                               (o.overwrite ? " --overwrite" : "") + "` writes the dataset from it";
     try {
       path = WriteMinariDataset(t, minari);
     } catch (const MinariInterrupted& e) {

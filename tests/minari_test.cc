@@ -858,6 +858,69 @@ TEST(MinariCommands, RecordChecksTheDatasetUpFrontAndOverwriteReplacesIt) {
   EXPECT_FALSE(fs::exists(tmp.path() / "run4" / "episode_000.json"));
 }
 
+// record --minari whose dataset write fails at the end (the datasets folder, fine when the run
+// began, replaced by a file while it renders): the message says how to write the dataset from
+// the kept run, the run folder keeps its episodes, nothing is left under the dataset's name, and
+// the export it names then writes the dataset.
+TEST(MinariCommands, RecordWhoseDatasetWriteFailsAtTheEndKeepsTheRunAndSaysHowToExport) {
+  unsetenv("DISPLAY");
+  TempDir tmp;
+  const fs::path out = tmp.path() / "run", root = tmp.path() / "datasets",
+                 aside = tmp.path() / "datasets.aside", resume = tmp.path() / "resume",
+                 log = tmp.path() / "record.log";
+  fs::create_directories(root);
+  // pause at the first kill point (episode 0's video flush: after the up-front check)
+  setenv("FETCHSCOPE_TEST_KILL_AT", "1", 1);
+  setenv("FETCHSCOPE_TEST_KILL_HOW", "pause", 1);
+  setenv("FETCHSCOPE_TEST_KILL_RESUME", resume.c_str(), 1);
+  const pid_t pid = SpawnFetchscope(
+      "record --quiet --env-id FetchReach-v4 --width 32 --height 32 --steps 4 --episodes 2 "
+      "--out " +
+          out.string() + " --minari-root " + root.string() + " --minari late/fail-v0",
+      log);
+  unsetenv("FETCHSCOPE_TEST_KILL_AT");
+  unsetenv("FETCHSCOPE_TEST_KILL_HOW");
+  unsetenv("FETCHSCOPE_TEST_KILL_RESUME");
+  for (int i = 0; i < 1200 && ReadFile(log).find("paused at kill point") == std::string::npos;
+       ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  ASSERT_NE(ReadFile(log).find("paused at kill point 1"), std::string::npos) << ReadFile(log);
+  fs::rename(root, aside);
+  WriteText(root, "not a folder any more");
+  WriteText(resume, "");
+  const int status = WaitExit(pid);
+  const std::string said = ReadFile(log);
+  EXPECT_EQ(status, 1) << said;
+  EXPECT_NE(said.find("record --minari: "), std::string::npos) << said;
+  // the command names the run and the dataset, and the datasets root it was given
+  const std::string named = "`fetchscope export " + out.string() + " --minari late/fail-v0";
+  const size_t at = said.find(named);
+  ASSERT_NE(at, std::string::npos) << said;
+  const size_t end = said.find('`', at + 1);
+  ASSERT_NE(end, std::string::npos) << said;
+  const std::string command = said.substr(at + 1 + 11, end - at - 1 - 11);  // after "fetchscope "
+  EXPECT_EQ(command,
+            "export " + out.string() + " --minari late/fail-v0 --minari-root " + root.string());
+  EXPECT_EQ(said.find("wrote Minari dataset"), std::string::npos) << said;
+  // the run is kept: both episodes' files and the manifest
+  for (const char* file : {"episode_000.json", "episode_000.mp4", "episode_001.json",
+                           "episode_001.mp4", "manifest.json"}) {
+    EXPECT_TRUE(fs::is_regular_file(out / file)) << file;
+  }
+  // nothing under the dataset's name, in the folder the check saw or the file now in its place
+  EXPECT_EQ(ReadFile(root), "not a folder any more");
+  EXPECT_FALSE(fs::exists(aside / "late/fail-v0"));
+  EXPECT_TRUE(HiddenEntries(aside / "late").empty());
+  EXPECT_TRUE(HiddenEntries(aside).empty());
+  // and the command it names writes the dataset from the kept run
+  fs::remove(root);
+  fs::rename(aside, root);
+  const auto r = RunFetchscope(command);
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(fs::is_regular_file(root / "late/fail-v0/data/main_data.hdf5")) << r.output;
+}
+
 // rollout --minari stopped by SIGINT or SIGTERM while it adds episodes: 128 + the signal, the
 // usual line, and no dataset, temporary folder or namespace folder left (any --jobs).
 TEST(MinariCommands, RolloutInterruptedLeavesNoDataset) {
