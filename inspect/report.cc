@@ -17,6 +17,7 @@
 #include "base/json_util.h"
 #include "inspect/html_page.h"
 #include "inspect/viewer.h"
+#include "render/overlay.h"
 #include "run/run_files.h"
 #include "run/run_folder.h"
 #include "run/run_summary.h"
@@ -439,6 +440,18 @@ json ReportData(const RecordedRun& run) {
     notes.insert(notes.begin(),
                  std::to_string(missing) + " episode(s) missing (see the table)" + resume);
   }
+  // the markers the frames show, in their colours (the viewer's and the sheets' legend); the
+  // ghost where the run replayed a dataset
+  json overlay_legend = json::array();
+  try {
+    const OverlaySet overlays = ParseOverlays(m.overlay.empty() ? "default" : m.overlay);
+    for (const OverlayLegendEntry& entry : OverlayLegend(overlays, has_replay)) {
+      overlay_legend.push_back(
+          {{"name", entry.name}, {"color", entry.color}, {"meaning", entry.meaning}});
+    }
+  } catch (const std::exception&) {
+    // an --overlay this build does not know: no legend
+  }
   json provenance = RunProvenance(run);
   // the re-rendered run's own page, where the path record --from was given still finds one
   for (json& row : provenance) {
@@ -464,6 +477,7 @@ json ReportData(const RecordedRun& run) {
           {"fps", m.video.contains("fps") ? m.video.at("fps") : json(25)},
           {"has_hindsight", has_hindsight},
           {"has_replay", has_replay},
+          {"overlay_legend", std::move(overlay_legend)},
           {"episodes", std::move(episodes)},
           {"summary",
            {{"expected", all.size()},

@@ -165,6 +165,55 @@ OverlaySet ParseOverlays(const std::string& spec) {
   return set;
 }
 
+namespace {
+
+// A colour (rgba in [0, 1]) as CSS: #rrggbb where opaque, rgba() where translucent.
+std::string CssColor(const float rgba[4]) {
+  const auto byte = [](float c) { return static_cast<int>(std::lround(255.0 * c)); };
+  char text[48];
+  if (rgba[3] >= 1.0f) {
+    std::snprintf(text, sizeof(text), "#%02x%02x%02x", byte(rgba[0]), byte(rgba[1]), byte(rgba[2]));
+  } else {
+    std::snprintf(text, sizeof(text), "rgba(%d, %d, %d, %.2f)", byte(rgba[0]), byte(rgba[1]),
+                  byte(rgba[2]), rgba[3]);
+  }
+  return text;
+}
+
+}  // namespace
+
+std::vector<OverlayLegendEntry> OverlayLegend(const OverlaySet& overlays, bool replay) {
+  std::vector<OverlayLegendEntry> out;
+  out.push_back({"goal", CssColor(kGoalRed), "the goal (the model's target0 sphere)"});
+  if (overlays.goal) {
+    out.push_back({"goal shell", CssColor(kGoalShell), "success radius around the goal"});
+  }
+  if (overlays.achieved) {
+    out.push_back({"achieved (success)", CssColor(kSuccessGreen),
+                   "achieved goal and its line to the goal, within the success radius"});
+    out.push_back({"achieved (not yet)", CssColor(kMissOrange),
+                   "achieved goal and its line to the goal, outside the success radius"});
+  }
+  if (overlays.action) {
+    out.push_back({"action", CssColor(kArrowYellow), "arrow along the commanded displacement"});
+  }
+  if (overlays.trail) {
+    out.push_back({"trail", CssColor(kTrailCyan), "recent achieved-goal positions"});
+  }
+  if (overlays.hindsight) {
+    out.push_back(
+        {"HER success", CssColor(kHindsightGreen), "a relabelled goal that counts as success"});
+    out.push_back(
+        {"HER failure", CssColor(kHindsightRed), "a relabelled goal that does not count"});
+  }
+  if (overlays.ghost && replay) {
+    out.push_back({"ghost", CssColor(kGhostBlue),
+                   "the dataset's own achieved goal (blue cross, with a line to the replayed "
+                   "one; the HUD row: how far apart)"});
+  }
+  return out;
+}
+
 void Trail::Add(int step, const std::array<double, 3>& position) {
   if (step == 0 || step < last_step_) points_.clear();  // a new episode
   if (step == last_step_ && !points_.empty()) {

@@ -128,6 +128,19 @@ std::vector<HindsightPin> HindsightPins(const FrameInfo& info);
 inline constexpr float kHindsightGreen[4] = {0.0f, 0.9f, 0.25f, 1.0f};
 inline constexpr float kHindsightRed[4] = {0.95f, 0.1f, 0.1f, 1.0f};
 
+/// One marker of a run's frames, for the report's legend: its name, its colour as CSS
+/// ("#rrggbb", or "rgba(r, g, b, a)" where translucent, as drawn) and what it shows.
+struct OverlayLegendEntry {
+  std::string name;
+  std::string color;
+  std::string meaning;
+};
+
+/// The markers `overlays` draws in a run's frames, each in the colour it is drawn with: the
+/// goal (always), then those of the set that show markers. The ghost only where `replay` (record
+/// --from DATASET: the frames have a dataset's achieved goal to show).
+std::vector<OverlayLegendEntry> OverlayLegend(const OverlaySet& overlays, bool replay);
+
 /// Geoms the overlays may add at most (so the scene can reserve room for them): 3 per
 /// hindsight pin, up to 16 pins.
 inline constexpr int kMaxOverlayGeoms = 10 + 3 * 16 + static_cast<int>(Trail::kMaxPoints);

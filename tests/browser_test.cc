@@ -704,6 +704,15 @@ TEST_F(BrowserTest, ViewerPlotsTheReplayAgainstTheDataset) {
   ASSERT_TRUE(replay.contains("gripper error") && replay.contains("object error")) << replay;
   EXPECT_EQ(replay["gripper error"].size(), 31u) << replay;
   EXPECT_EQ(replay["object error"][0], 0.0) << replay;  // its reset continued the generator
+  // the ghost is in the markers' legend, under the videos and above the sheets, in the blue
+  // the marker is drawn with (render/overlay.cc kGhostBlue {0.15, 0.25, 1})
+  for (const char* id : {"viewer-overlay-legend", "sheet-overlay-legend"}) {
+    const json& legend = result["overlay_legends"][id];
+    ASSERT_TRUE(legend.is_array() && !legend.empty()) << id << ": " << result["overlay_legends"];
+    const json ghost = {{"name", "ghost"}, {"color", "rgb(38, 64, 255)"}};
+    EXPECT_NE(std::find(legend.begin(), legend.end(), ghost), legend.end()) << id << ": " << legend;
+    EXPECT_EQ(legend[0]["name"], "goal") << legend;
+  }
   // the episode table, divergence and reset columns included, fits the 1,280 px window
   ASSERT_TRUE(result["table"].is_object()) << result.dump();
   EXPECT_LE(result["table"]["width"], result["table"]["box"]) << result["table"];

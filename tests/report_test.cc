@@ -5,11 +5,13 @@
 // runs, a changed policy, bundled against genuine assets, no video format in common).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <vector>
 
 #include "encode/video_reader.h"
 #include "encode/video_writer.h"
@@ -356,6 +358,57 @@ TEST_F(ReportTest, ARerenderedRunNamesItsSource) {
   EXPECT_TRUE(fs::equivalent(again / (*from)["href"].get<std::string>(), Run() / "index.html"));
   // a run recorded afresh has no such row
   EXPECT_EQ(ProvenanceRow(PageData(Run() / "index.html"), "from"), nullptr);
+}
+
+// The report's legend of the markers in the frames: each in the colour it is drawn with; the
+// ghost (a dataset's own achieved goal) only where record --from replayed a dataset with it on.
+std::vector<std::string> LegendNames(const json& data) {
+  std::vector<std::string> names;
+  for (const json& m : data["overlay_legend"]) names.push_back(m["name"]);
+  return names;
+}
+
+std::string LegendColor(const json& data, const std::string& name) {
+  for (const json& m : data["overlay_legend"]) {
+    if (m["name"] == name) return m["color"];
+  }
+  return "";
+}
+
+TEST_F(ReportTest, TheMarkersLegendHasTheGhostOnlyForADatasetReplay) {
+  const auto has = [](const std::vector<std::string>& names, const std::string& name) {
+    return std::find(names.begin(), names.end(), name) != names.end();
+  };
+  const json fresh = PageData(Run() / "index.html");
+  EXPECT_EQ(
+      LegendNames(fresh),
+      (std::vector<std::string>{"goal", "goal shell", "achieved (success)", "achieved (not yet)"}));
+  EXPECT_EQ(LegendColor(fresh, "goal"), "#ff0000");
+  EXPECT_EQ(LegendColor(fresh, "achieved (not yet)"), "#ff8c00");
+  TempDir tmp;
+  const fs::path root = tmp.path() / "datasets";
+  auto r = RunFetchscope(
+      "rollout --env-id FetchReach-v4 --episodes 1 --steps 6 --seed 3 --minari-root " +
+      root.string() + " --minari lg/reach-v0");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const std::string from = "record --quiet --from lg/reach-v0 --minari-root " + root.string() +
+                           " --width 32 --height 32 ";
+  r = RunFetchscope(from + "--out " + (tmp.path() / "ghost").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const json ghost = PageData(tmp.path() / "ghost" / "index.html");
+  EXPECT_TRUE(has(LegendNames(ghost), "ghost")) << ghost["overlay_legend"];
+  // kGhostBlue {0.15, 0.25, 1.0}: the cross's colour, and the HUD row's "(blue +)"
+  EXPECT_EQ(LegendColor(ghost, "ghost"), "#2640ff");
+  // without the ghost overlay, or replaying a run (no dataset's achieved goal to show): none
+  r = RunFetchscope(from + "--overlay goal,hud,trail --out " + (tmp.path() / "plain").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const json plain = PageData(tmp.path() / "plain" / "index.html");
+  EXPECT_FALSE(has(LegendNames(plain), "ghost")) << plain["overlay_legend"];
+  EXPECT_TRUE(has(LegendNames(plain), "trail")) << plain["overlay_legend"];
+  r = RunFetchscope("record --quiet --from " + Run().string() + " --width 32 --height 32 --out " +
+                    (tmp.path() / "again").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_FALSE(has(LegendNames(PageData(tmp.path() / "again" / "index.html")), "ghost"));
 }
 
 TEST_F(ReportTest, AFailedReportIsAWarningNotAFailedRun) {

@@ -174,12 +174,18 @@
   page.append(missing);
   const headline = (e) => `episode ${e.label} — ${e.success ? 'success' : 'failure'}, return ${num(e.return, 2)}, ` +
       `final distance ${num(e.final_distance, 3)} m` + (e.complete ? '' : ', interrupted');
+  // the markers drawn in the frames (the videos' and the sheets'), each in its colour
+  const markerLegend = (id) => (data.overlay_legend && data.overlay_legend.length
+    ? el('p', {class: 'caption overlay-legend', id}, 'Markers in the frames:',
+         data.overlay_legend.map((m) => el('span', {class: 'overlay-marker', 'data-marker': m.name, title: m.meaning},
+                                            FS.swatch(m.color), m.name)))
+    : null);
   const v = data.viewer || {};
   // record --from DATASET: the replay's position errors against the dataset, for their plot
   const withReplay = (s, replay) => (s && replay && replay.position_error_mm
     ? Object.assign({}, s, {replay_error: replay.position_error_mm}) : s);
   viewer = FSViewer.create(page, {
-    id: 'viewer', fps: data.fps, threshold: data.threshold, linkable: true,
+    id: 'viewer', fps: data.fps, threshold: data.threshold, linkable: true, legend: markerLegend('viewer-overlay-legend'),
     has_object: v.has_object, gripper_command: v.gripper_command, layout: v.layout || {},
     episodes: viewable.map((e) => ({index: e.index, label: e.label, title: headline(e), className: e.success ? 'ok' : 'fail',
       tracks: () => [{name: `episode ${e.label}`, video: e.video, format: e.video_format, frames: e.frames,
@@ -212,6 +218,8 @@
   performance.mark('fetchscope-viewer');
   // --- each episode
   page.append(el('h2', {}, 'Videos and contact sheets'));
+  const sheetLegend = markerLegend('sheet-overlay-legend');
+  if (sheetLegend) page.append(sheetLegend);
   const grid = el('div', {class: 'episodes'});
   // A large run's cards get their player and sheet when they come near the screen: a thousand
   // video elements would take seconds to create and lay out, and load nothing anyone looks at.

@@ -85,7 +85,8 @@ const FSViewer = (() => {
   }
 
   // One viewer in `parent`. options: {id, fps, threshold, has_object, gripper_command,
-  // layout: {finger_width, object_height} (the observation indices the titles name),
+  // layout: {finger_width, object_height} (the observation indices the titles name), legend (an
+  // element under the videos: the markers the frames show),
   // episodes: [{index, label, title, tracks: () => [{name, caption, video, format, signals, frames,
   // noMedia (signals only)}]}],
   // visible: () => indices allowed by the page's filter, onOpen(index)}.
@@ -112,7 +113,7 @@ const FSViewer = (() => {
     const link = el('a', {class: 'viewer-link', href: '#'}, '');
     hint.append(link);
     const plotsBox = el('div', {class: 'viewer-plots'});
-    root.append(title, media, controls, hint, plotsBox);
+    root.append(title, media, ...(options.legend ? [options.legend] : []), controls, hint, plotsBox);
     parent.append(root);
     playButton.addEventListener('click', () => togglePlay());
     slider.addEventListener('input', () => seek(Number(slider.value)));

@@ -128,6 +128,10 @@ try {
       [id, Object.fromEntries(chart.series.slice(1).map((s, j) => [s.label, chart.data[j + 1]]))])));
     result.cursor_lines = await page.$$eval('#viewer .viewer-cursor', (lines) => lines.length);
     result.plot_titles = await page.$$eval('#viewer .viewer-plots h4', (hs) => hs.map((h) => h.textContent));
+    // the markers' legends (the viewer's, the sheets'): each marker's name and swatch colour as rgb()
+    result.overlay_legends = await page.evaluate(() => Object.fromEntries(
+        ['viewer-overlay-legend', 'sheet-overlay-legend'].map((id) => [id, [...document.querySelectorAll(`#${id} .overlay-marker`)]
+          .map((m) => ({name: m.dataset.marker, color: getComputedStyle(m.querySelector('.legend-swatch')).backgroundColor}))])));
     // the episode table's width against its box at this 1,280 px viewport (the report's)
     result.table = await page.evaluate(() => {
       const t = document.querySelector('#episode-table');
