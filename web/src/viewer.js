@@ -184,7 +184,11 @@ const FSViewer = (() => {
         video.addEventListener('timeupdate', () => { if (!video.paused) fromTime(video.currentTime); });
       }
       video.addEventListener('pause', () => {
-        if (video === state.videos[0] && !video.seeking && stoppedByUser) fromTime(video.currentTime);
+        // a pause from the play button or space stays on the step on screen: the frame the video
+        // last presented (state.step). Its currentTime can lag that frame's time by a few ms on a
+        // busy machine (frames are presented a little early), so the video is put at the middle
+        // of that frame, and its time and the cursor agree.
+        if (video === state.videos[0] && !video.seeking && stoppedByUser) seek(state.step);
         stoppedByUser = false;
         render(true);
       });
