@@ -10,6 +10,7 @@
 #include "base/stop_signal.h"
 #include "dataset/minari_trajectory.h"
 #include "encode/episode_sink.h"
+#include "encode/video_format.h"
 #include "render/layers.h"
 #include "run/progress.h"
 #include "run/run_files.h"
@@ -25,8 +26,7 @@ namespace fs = std::filesystem;
 // H.264 is encoded, and nothing is probed for it.
 NodeProbe ProbeRecordNode(RecordJob* job) {
   RecordPlan& plan = job->plan;
-  const bool h264 =
-      std::find(plan.formats.begin(), plan.formats.end(), "mp4") != plan.formats.end();
+  const bool h264 = EncodesH264(plan.formats);
   const NodeProbe node = ProbeNode(plan.view, h264 ? &plan.video : nullptr);
   plan.gpu = node.gpu;
   if (h264) plan.video.codec = node.codec.codec;

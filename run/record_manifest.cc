@@ -6,6 +6,7 @@
 
 #include "base/suggest.h"
 #include "encode/episode_sink.h"
+#include "encode/video_format.h"
 #include "render/layers.h"
 #include "run/record_command.h"
 #include "src/observation_layout.h"
@@ -24,8 +25,7 @@ std::string PresetOrDefault(const std::string& preset) {
 nlohmann::json RecordVideoJson(const RecordJob& job, const NodeProbe& node) {
   const RecordPlan& plan = job.plan;
   const VideoOptions& v = plan.video;
-  const bool h264 =
-      std::find(plan.formats.begin(), plan.formats.end(), "mp4") != plan.formats.end();
+  const bool h264 = EncodesH264(plan.formats);
   nlohmann::json codecs = nlohmann::json::object();
   std::string codec_used;
   for (const std::string& format : plan.formats) {
