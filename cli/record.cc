@@ -115,9 +115,12 @@ void ValidatePolicy(const std::string& policy, const EnvSpec& spec, const Policy
 // The episodes this run records: those of its shard among 0 .. --episodes-1 or, replaying a
 // trajectory JSON, the file's episodes, each under its own index (and so with its own reset);
 // --episodes then becomes one past the last index.
-std::vector<int> RecordEpisodeList(RecordOptions* o, const Shard& shard, const RecordPlan& plan) {
-  const std::optional<std::vector<int>> indices = ReplayedEpisodes(
-      o->policy, o->episodes_given ? o->episodes : 0, plan.spec->id, plan.seed, o->quiet);
+// A trajectory file is read here once: the policy checked below and every worker replay the
+// trajectory kept in the plan's policy context.
+std::vector<int> RecordEpisodeList(RecordOptions* o, const Shard& shard, RecordPlan* plan) {
+  const std::optional<std::vector<int>> indices =
+      ReplayedEpisodes(o->policy, o->episodes_given ? o->episodes : 0, plan->spec->id, plan->seed,
+                       o->quiet, &plan->policy_context.replay_trajectory);
   if (!indices) return ShardEpisodes(shard, o->episodes);
   o->episodes = indices->back() + 1;
   std::vector<int> mine;
@@ -214,7 +217,7 @@ RecordJob ResolveRecord(RecordOptions* options, const TrajectorySource* from) {
   }
   ResolveRecordVideo(o, &plan);
   job.formats_text = o.formats;
-  job.episodes = from ? FromEpisodes(*from) : RecordEpisodeList(&o, job.shard, plan);
+  job.episodes = from ? FromEpisodes(*from) : RecordEpisodeList(&o, job.shard, &plan);
   job.episodes_requested = o.episodes;
   job.jobs = ResolveJobs(o.jobs, static_cast<int>(job.episodes.size()));
   plan.encoders = EncodersPerWorker(job.jobs);
