@@ -45,11 +45,6 @@ void ApplyFromSource(const TrajectorySource& source, const CLI::App& sub, std::s
                      std::string* seed, std::string* policy, int* steps, int* episodes,
                      std::string* assets);
 
-/// A dataset source: each manifest entry gets "reset" and "divergence", the manifest a
-/// "dataset" member (what was found, the tolerance). Nothing for a recording.
-void AddDivergence(const TrajectorySource& source, std::vector<ManifestEpisode>* episodes,
-                   nlohmann::json* manifest_extra);
-
 /// One episode's divergence as record prints it, e.g. "episode 2: reset from its first
 /// observation; diverges at step 17, observation[3] off by 0.0012 (tolerance 1e-06)".
 std::string DescribeDivergence(int k, const EpisodeDivergence& d);

@@ -8,6 +8,7 @@
 #include "base/atomic_file.h"
 #include "base/json_util.h"
 #include "encode/png_io.h"
+#include "encode/video_format.h"
 
 namespace fetchscope {
 namespace {
@@ -34,9 +35,9 @@ std::string LayerVideoName(int k, Layer layer, const std::string& format) {
 }
 
 std::string FormatCodec(const std::string& format, const std::string& h264) {
-  if (format == "mp4") return h264;
-  if (format == "webm") return "libvpx-vp9";
-  return format;  // gif
+  const VideoFormat* row = FindVideoFormat(format);
+  if (row == nullptr) return format;
+  return row->codec.empty() ? h264 : std::string(row->codec);
 }
 
 VideoOptions EpisodeVideoOptions(const EpisodeSinkOptions& options, int k,
@@ -54,9 +55,8 @@ VideoOptions EpisodeVideoOptions(const EpisodeSinkOptions& options, int k,
 }
 
 std::optional<ShownScale> GifTextScale(const EpisodeSinkOptions& options) {
-  const bool gif =
-      std::find(options.formats.begin(), options.formats.end(), "gif") != options.formats.end();
-  if (!gif || options.video.gif_width >= options.video.width) return std::nullopt;
+  if (!HasPaletteFormat(options.formats) || options.video.gif_width >= options.video.width)
+    return std::nullopt;
   return ShownScale{options.video.gif_width, options.video.width};
 }
 
@@ -153,7 +153,8 @@ void EpisodeEncoder::Body() {
           const auto t0 = Clock::now();
           for (size_t i = 0; i < writers_.size(); ++i) {
             // a scaled-down GIF takes the copy whose text is sized for it
-            const bool gif_copy = options_.formats[i] == "gif" && !f->gif_rgb.empty();
+            const VideoFormat* row = FindVideoFormat(options_.formats[i]);
+            const bool gif_copy = row != nullptr && row->palette && !f->gif_rgb.empty();
             writers_[i].AddFrame(gif_copy ? f->gif_rgb.data() : f->rgb.data());
           }
           const size_t formats = options_.formats.size();

@@ -9,6 +9,7 @@
 
 #include "base/errors.h"
 #include "base/suggest.h"
+#include "encode/video_format.h"
 #include "encode/video_writer.h"
 
 namespace fetchscope {
@@ -66,7 +67,7 @@ void ValidateVideoOptions(const VideoOptions& options) {
         "video crf " + std::to_string(options.crf) +
         " is out of range: accepted 0..51 (lower is better quality, 23 is the default)");
   }
-  if (options.format != "mp4" && options.format != "webm" && options.format != "gif") {
+  if (FindVideoFormat(options.format) == nullptr) {
     throw UsageError("unknown video format " + Quoted(options.format) + ": accepted " +
                      kVideoFormats);
   }
@@ -95,7 +96,11 @@ void ValidateVideoOptions(const VideoOptions& options) {
 }
 
 std::vector<std::string> ParseVideoFormats(const std::string& list) {
-  static const std::vector<std::string> kKnown = {"mp4", "webm", "gif"};
+  static const std::vector<std::string> kKnown = [] {
+    std::vector<std::string> names;
+    for (const VideoFormat& format : VideoFormats()) names.emplace_back(format.name);
+    return names;
+  }();
   std::vector<std::string> formats;
   for (const std::string& entry : SplitCommaList(list)) {  // "mp4, gif" as "mp4,gif"
     if (std::find(kKnown.begin(), kKnown.end(), entry) == kKnown.end()) {
@@ -112,7 +117,8 @@ std::vector<std::string> ParseVideoFormats(const std::string& list) {
 }
 
 std::string VideoFormatExtension(const std::string& format) {
-  return format == "webm" ? "webm" : format == "gif" ? "gif" : "mp4";
+  const VideoFormat* row = FindVideoFormat(format);
+  return std::string(row != nullptr ? row->extension : VideoFormats().front().extension);
 }
 
 bool GifKeepsFrame(int index, int fps, int gif_fps) {

@@ -21,6 +21,7 @@
 #include "encode/av_handles.h"
 #include "encode/av_log.h"
 #include "encode/video_files.h"
+#include "encode/video_format.h"
 #include "encode/video_options.h"
 
 extern "C" {
@@ -68,6 +69,11 @@ class TemporaryFile {
 }  // namespace
 
 struct VideoWriter::Impl {
+  // options.format's row of the format table (ValidateVideoOptions has checked it is one)
+  const VideoFormat& Format() const {
+    const VideoFormat* row = FindVideoFormat(options.format);
+    return row != nullptr ? *row : VideoFormats().front();
+  }
   Impl(const std::string& path, const VideoOptions& options);
   // Options and sizes only, no file: for ProbeEncoder.
   explicit Impl(const VideoOptions& opts)
@@ -132,7 +138,7 @@ VideoWriter::Impl::Impl(const std::string& path, const VideoOptions& opts)
   }
   CheckOutputFolder(path);
   InstallAvLogCapture();
-  gif = options.format == "gif";
+  gif = Format().palette;
   if (gif) {
     gif_fps = std::min(options.gif_fps, options.fps);
     encoded_width = std::min(options.gif_width, options.width);
@@ -189,8 +195,8 @@ void VideoWriter::Impl::ProbeEncoder(const VideoOptions& options) {
 }
 
 void VideoWriter::Impl::OpenEncoder() {
-  if (options.format == "webm" || options.format == "gif") {
-    const std::string name = options.format == "webm" ? "libvpx-vp9" : "gif";
+  if (!Format().codec.empty()) {  // a format of one encoder; H.264 follows --codec
+    const std::string name(Format().codec);
     std::string failure;
     if (!TryOpenEncoder(name, &failure)) {
       throw RunError("video codec " + name + " cannot open (" + failure +
@@ -294,16 +300,14 @@ void VideoWriter::Impl::OpenOutput() {
   AVFormatContext* raw = nullptr;
   ClearLastAvError();
   // The format is named: the muxer must not guess it from the temporary name.
-  const char* muxer_name = options.format == "mp4"    ? "mp4"
-                           : options.format == "webm" ? "webm"
-                                                      : "gif";
-  if (int rc = avformat_alloc_output_context2(&raw, nullptr, muxer_name, temp_path.c_str());
+  const std::string muxer_name(Format().muxer);
+  if (int rc = avformat_alloc_output_context2(&raw, nullptr, muxer_name.c_str(), temp_path.c_str());
       rc < 0) {
     throw RunError(std::string("cannot create a ") + muxer_name + " muxer: " + DescribeAvError(rc));
   }
   muxer.reset(raw);
   // Matroska writes a random segment UID and the library version unless asked to be bitexact.
-  if (options.format == "webm") muxer->flags |= AVFMT_FLAG_BITEXACT;
+  if (Format().bitexact_muxer) muxer->flags |= AVFMT_FLAG_BITEXACT;
   for (const auto& [key, value] : options.metadata) {
     av_dict_set(&muxer->metadata, key.c_str(), value.c_str(), 0);
   }
@@ -326,7 +330,7 @@ void VideoWriter::Impl::OpenOutput() {
   // faststart: after the last frame the muxer moves the index (moov) in front
   // of the data, so a browser can start playing before the whole file arrives.
   // use_metadata_tags: every tag is written (plain MP4 keeps only a few known names).
-  if (options.format == "mp4") muxer_options.Set("movflags", "+faststart+use_metadata_tags");
+  if (Format().faststart) muxer_options.Set("movflags", "+faststart+use_metadata_tags");
   if (int rc = avformat_write_header(muxer.get(), muxer_options.address()); rc < 0) {
     throw RunError("cannot write the " + options.format + " header of " + Quoted(final_path) +
                    ": " + DescribeAvError(rc));

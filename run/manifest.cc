@@ -8,6 +8,7 @@
 
 #include "base/atomic_file.h"
 #include "base/json_util.h"
+#include "encode/video_format.h"
 
 namespace fetchscope {
 namespace {
@@ -24,9 +25,7 @@ struct ParameterRow {
   bool same_episodes;                    // part of SameRunScope::kEpisodes
 };
 
-bool HasGif(const RunParameters& p) {
-  return std::find(p.formats.begin(), p.formats.end(), "gif") != p.formats.end();
-}
+bool HasGif(const RunParameters& p) { return HasPaletteFormat(p.formats); }
 
 #define FETCHSCOPE_PARAMETER(option, member, stored, episodes)                         \
   ParameterRow {                                                                       \
@@ -140,7 +139,8 @@ std::map<std::string, VideoFile> VideosFromJson(const json& j) {
 
 // mp4 (H.264) and webm (VP9) play in every browser; a gif is an image
 int FormatRank(const std::string& format) {
-  return format == "mp4" ? 0 : format == "webm" ? 1 : format == "gif" ? 2 : 3;
+  const VideoFormat* row = FindVideoFormat(format);
+  return row != nullptr ? row->browser_rank : static_cast<int>(VideoFormats().size());
 }
 
 std::vector<EpisodeVideo> SortedVideos(const std::string& video,

@@ -5,6 +5,8 @@
 #include <cstdio>
 #include <set>
 
+#include "encode/video_format.h"
+
 namespace fetchscope {
 namespace {
 
@@ -28,9 +30,9 @@ bool AllDigits(const std::string& s) {
 bool EpisodeFileTail(const std::string& tail) {
   static const std::set<std::string> tails = [] {
     std::set<std::string> t = {kSheetTail, ".json", kLegendTail};
-    for (const char* ext : {"mp4", "webm", "gif"}) {
+    for (const VideoFormat& format : VideoFormats()) {
       for (const char* layer : {"", "_depth", "_segmentation"}) {
-        t.insert(std::string(layer) + "." + ext);
+        t.insert(std::string(layer) + "." + std::string(format.extension));
       }
     }
     return t;

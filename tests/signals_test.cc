@@ -286,9 +286,47 @@ TEST_P(SignalsTest, WorkerProcessesStopCleanlyWithNoOrphans) {
   ExpectListedEpisodesPlay(m, out);
 }
 
+// Whether `pid` is stopped (state T in /proc/PID/stat), waiting up to 5 s for a SIGSTOP to land.
+bool WaitStopped(pid_t pid) {
+  for (int i = 0; i < 500; ++i) {
+    const std::string stat = ReadFile("/proc/" + std::to_string(pid) + "/stat");
+    const size_t paren = stat.rfind(')');
+    if (paren == std::string::npos || paren + 2 >= stat.size()) return false;  // gone
+    if (stat[paren + 2] == 'T' || stat[paren + 2] == 't') return true;
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  return false;
+}
+
+// A worker caught recording: each is stopped (SIGSTOP) in turn while its open files are read, so
+// that what it holds cannot change under the test, and the first with a file of the run folder
+// open (the episode it is writing) is returned still stopped; a worker between two episodes, with
+// nothing in hand, is let go (SIGCONT). -1 when none was caught within about 30 s.
+pid_t StopAWorkerThatIsRecording(const std::set<pid_t>& workers, const fs::path& out) {
+  const std::string folder = fs::weakly_canonical(out).string() + "/";
+  for (int round = 0; round < 1000; ++round) {
+    for (pid_t w : workers) {
+      if (kill(w, SIGSTOP) != 0) continue;
+      bool recording = false;
+      std::error_code ec;
+      if (WaitStopped(w)) {
+        for (const auto& fd : fs::directory_iterator("/proc/" + std::to_string(w) + "/fd", ec)) {
+          const fs::path target = fs::read_symlink(fd.path(), ec);
+          if (!ec && target.string().rfind(folder, 0) == 0) recording = true;
+        }
+      }
+      if (recording) return w;
+      kill(w, SIGCONT);
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  return -1;
+}
+
 // A worker that dies (here SIGKILL, as the OOM killer would) is reported with the episode it
 // was recording; the other workers' finished episodes stay and the manifest says what is
-// missing; exit 1.
+// missing; exit 1. The victim is caught with an episode file open: on a busy machine the first
+// worker could be between two episodes, holding none, and lose nothing.
 TEST(SignalsWorkers, DeadWorkerIsReportedAndTheOthersEpisodesStay) {
   unsetenv("DISPLAY");
   TempDir tmp;
@@ -297,7 +335,8 @@ TEST(SignalsWorkers, DeadWorkerIsReportedAndTheOthersEpisodesStay) {
   const pid_t pid = run.pid;
   const std::set<pid_t>& workers = run.workers;
   ASSERT_EQ(workers.size(), 3u);
-  const pid_t victim = *workers.begin();
+  const pid_t victim = StopAWorkerThatIsRecording(workers, out);
+  ASSERT_NE(victim, -1) << "no worker was caught with an episode file open";
   kill(victim, SIGKILL);
   const int code = WaitExit(pid);
   const std::string log = ReadFile(tmp.path() / "log");

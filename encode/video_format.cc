@@ -1,0 +1,22 @@
+#include "encode/video_format.h"
+
+namespace fetchscope {
+
+const std::vector<VideoFormat>& VideoFormats() {
+  // name, extension, muxer, codec, bitexact_muxer, faststart, palette, browser_rank
+  static const std::vector<VideoFormat> kTable = {
+      {"mp4", "mp4", "mp4", "", false, true, false, 0},
+      {"webm", "webm", "webm", "libvpx-vp9", true, false, false, 1},
+      {"gif", "gif", "gif", "gif", false, false, true, 2},
+  };
+  return kTable;
+}
+
+const VideoFormat* FindVideoFormat(std::string_view name) {
+  for (const VideoFormat& format : VideoFormats()) {
+    if (format.name == name) return &format;
+  }
+  return nullptr;
+}
+
+}  // namespace fetchscope

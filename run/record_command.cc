@@ -1,0 +1,209 @@
+#include "run/record_command.h"
+
+#include <signal.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+
+#include "base/errors.h"
+#include "base/stop_signal.h"
+#include "dataset/minari_trajectory.h"
+#include "encode/episode_sink.h"
+#include "encode/video_format.h"
+#include "render/layers.h"
+#include "run/progress.h"
+#include "run/run_files.h"
+#include "run/run_folder.h"
+#include "run/run_summary.h"
+
+namespace fetchscope {
+namespace {
+
+namespace fs = std::filesystem;
+
+// The GPUs and the encoder, decided once (driver work in a child process); without mp4 no
+// H.264 is encoded, and nothing is probed for it.
+NodeProbe ProbeRecordNode(RecordJob* job) {
+  RecordPlan& plan = job->plan;
+  const bool h264 = EncodesH264(plan.formats);
+  const NodeProbe node = ProbeNode(plan.view, h264 ? &plan.video : nullptr);
+  plan.gpu = node.gpu;
+  if (h264) plan.video.codec = node.codec.codec;
+  if (!node.warnings.empty() && !job->quiet) {
+    std::fprintf(stderr, "fetchscope: warning: %s\n", node.warnings.c_str());
+  }
+  const std::string gif_note =
+      GifHudNote(MakeEpisodeSinkOptions(plan), plan.view.width, plan.view.height);
+  if (!gif_note.empty() && job->hud && !job->quiet) {
+    std::fprintf(stderr, "fetchscope: note: %s\n", gif_note.c_str());
+  }
+  return node;
+}
+
+RunFolderRequest MakeRunFolderRequest(const RecordJob& job, const RunParameters& parameters) {
+  const Shard shard = job.shard;
+  RunFolderRequest request;
+  request.out = job.plan.out;
+  request.mode = ParseReuseMode(job.overwrite, job.resume);
+  request.manifest_name = ShardManifestName(shard);
+  request.sharded = shard.sharded();
+  request.owns = [shard](int k) { return shard.Owns(k); };
+  request.episodes = job.episodes;
+  request.parameters = parameters;
+  request.sources = {{"--from", job.from_option}};
+  if (!job.replay_file.empty()) request.sources.push_back({"--policy", job.replay_file});
+  request.report = job.report && !shard.sharded();
+  return request;
+}
+
+// --resume of a whole run: say so, change nothing; a run killed between its manifest and its
+// report gets the report now.
+int FinishCompleteRun(const RecordJob& job, const RunFolder& folder) {
+  const std::string& out = job.plan.out;
+  if (!job.quiet) std::fprintf(stderr, "%s\n", AlreadyCompleteText(out, folder.kept()).c_str());
+  const fs::path manifest_path = fs::path(out) / ShardManifestName(job.shard);
+  if (job.report && !job.shard.sharded() &&
+      !fs::exists(manifest_path.parent_path() / kReportFileName)) {
+    job.write_report(manifest_path.string());
+  }
+  return 0;
+}
+
+// Records the folder's episodes still to do on the scheduler (nothing after an early signal).
+ScheduleResult ScheduleRecord(const RecordJob& job, const RunFolder& folder,
+                              ProgressReporter& progress, int early_signal) {
+  ScheduleResult result;
+  if (early_signal) {
+    result.signal = early_signal;
+    result.jobs = job.jobs;
+    result.missing = folder.todo();
+    return result;
+  }
+  ScheduleOptions schedule;
+  schedule.episodes = folder.todo();
+  schedule.jobs = job.jobs;
+  schedule.mode = job.mode;
+  schedule.on_progress = [&](int n) { progress.Frames(n); };
+  schedule.on_done = [&](int, const nlohmann::json&) { progress.EpisodeDone(); };
+  return RecordEpisodes(job.plan, schedule);
+}
+
+// The run folder's episode files, read back as export reads them, written as the dataset.
+int WriteRecordMinari(const RecordJob& job) {
+  const std::string& out = job.plan.out;
+  const MinariWriteOptions& minari = *job.minari;
+  const TrajectorySource run = LoadTrajectorySource(out);
+  Trajectory t;
+  t.env_id = run.env_id;
+  t.seed = run.seed;
+  t.policy = run.policy;
+  for (const auto& [k, episode] : run.episodes) t.episodes.push_back(episode);
+  fs::path path;
+  const std::string advice =
+      "; the run is kept in " + out + ": `fetchscope export " + out + " --minari " +
+      minari.dataset_id +
+      (job.minari_root_given.empty() ? "" : " --minari-root " + job.minari_root_given) +
+      (job.overwrite ? " --overwrite" : "") + "` writes the dataset from it";
+  try {
+    path = WriteMinariDataset(t, minari);
+  } catch (const MinariInterrupted& e) {
+    std::fprintf(stderr, "record --minari: %s%s\n", e.what(), advice.c_str());
+    return 128 + e.signal;
+  } catch (const std::exception& e) {
+    throw RunError("record --minari: " + std::string(e.what()) + advice);
+  }
+  std::printf("wrote Minari dataset %s at %s\n", minari.dataset_id.c_str(), path.c_str());
+  return 0;
+}
+
+}  // namespace
+
+MinariWriteOptions RecordMinariOptions(const RecordJob& job, const std::string& dataset_id,
+                                       const fs::path& root, const std::string& author,
+                                       const std::string& email) {
+  const RecordPlan& plan = job.plan;
+  if (job.shard.sharded()) {
+    throw UsageError(
+        "record --minari: a shard records part of the run; once every shard is "
+        "done, `fetchscope export " +
+        plan.out + " --minari " + dataset_id + "`");
+  }
+  MinariWriteOptions minari;
+  minari.dataset_id = dataset_id;
+  minari.root = root;
+  minari.spec = plan.spec;
+  minari.algorithm_name = plan.policy;
+  minari.overwrite = job.overwrite;       // replaced after the run, atomically
+  minari.max_episode_steps = plan.steps;  // gym.make(id, max_episode_steps=--steps)
+  if (!author.empty()) minari.author = author;
+  minari.author_email = email;
+  minari.description = plan.spec->id + " episodes recorded by fetchscope (policy " + plan.policy +
+                       ", seed " + plan.seed_text + ")";
+  // an existing id or an unwritable datasets folder fails now, not after the run
+  CheckMinariDestination(minari);
+  return minari;
+}
+
+int RecordRun(RecordJob job) {
+  const NodeProbe node = ProbeRecordNode(&job);
+  // never two runs in one folder; a failure below leaves nothing this run made. From here a
+  // SIGINT/SIGTERM is an interruption (the scheduler takes over the handlers when it starts).
+  InstallStopSignals();
+  const RunParameters parameters = RecordParameters(job);
+  RunFolder folder(MakeRunFolderRequest(job, parameters));
+  if (!folder.notice().empty() && !job.quiet) {
+    std::fprintf(stderr, "fetchscope: note: %s\n", folder.notice().c_str());
+  }
+  if (folder.already_complete()) return FinishCompleteRun(job, folder);
+  const int early_signal = StopSignal();  // before the scheduler: record nothing
+  ProgressReporter progress("record", static_cast<int>(folder.todo().size()), job.plan.steps + 1,
+                            job.quiet);
+  const ScheduleResult result = ScheduleRecord(job, folder, progress, early_signal);
+  const bool any_complete =
+      std::any_of(result.results.begin(), result.results.end(),
+                  [](const auto& r) { return r.second.value("complete", false); });
+  if (result.signal && !any_complete && folder.replacing()) {
+    // interrupted before --overwrite recorded a whole episode: the earlier run stays as it was
+    if (!job.quiet) {
+      std::fprintf(stderr,
+                   "record: interrupted before any episode was complete; the earlier "
+                   "run in %s is kept as it was\n",
+                   job.plan.out.c_str());
+    }
+    return 128 + result.signal;  // `folder` removes this run's files, puts the earlier run back
+  }
+  const double wall =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - job.wall_start).count();
+  RecordTally tally = TallyRecordResults(result);
+  tally.entries = folder.WithKept(std::move(tally.entries));
+  if (result.results.empty() && result.signal == 0 && !result.failures.empty()) {
+    // nothing was recorded: no manifest, and `folder` removes what this run made
+    const WorkerFailure& first = result.failures.front();
+    if (first.usage) throw UsageError(first.message);
+    throw RunError(DescribeFailures(result));
+  }
+  const Manifest manifest =
+      BuildRecordManifest(job, node, result, std::move(tally), wall, progress.frames(), parameters,
+                          job.resume && !folder.kept().empty());
+  const fs::path manifest_path = fs::path(job.plan.out) / ShardManifestName(job.shard);
+  WriteManifest(manifest_path, manifest);
+  folder.Commit();
+  const std::string summary =
+      RecordSummaryText(manifest, result.results.size(), folder.kept().size(), job.plan.out);
+  progress.Done(summary);
+  const size_t rest = summary.find("record: to record the rest");
+  if (job.quiet && rest != std::string::npos) {  // even --quiet: a batch job's log needs the way on
+    std::fprintf(stderr, "%s\n", summary.substr(rest).c_str());
+  }
+  // a shard's episodes are only part of the run: merge-manifests writes the run's report
+  if (job.report && !job.shard.sharded()) job.write_report(manifest_path.string());
+  if (result.signal) return 128 + result.signal;
+  if (!result.failures.empty()) {
+    throw RunError(DescribeFailures(result) + "; the manifest lists the missing episodes (" +
+                   std::to_string(result.missing.size()) + "): --resume records them");
+  }
+  return job.minari ? WriteRecordMinari(job) : 0;
+}
+
+}  // namespace fetchscope

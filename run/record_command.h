@@ -1,0 +1,88 @@
+// A whole record run, once cli/record.cc has parsed and resolved its options into a RecordJob:
+// the node probe (GPUs, encoder), the run folder, the episodes on the scheduler
+// (run/record_run.h), the manifest assembled from the workers' entries, the summary, and the
+// Minari dataset written from the run folder. Nothing here parses a user's text.
+#pragma once
+
+#include <chrono>
+#include <functional>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "dataset/minari_writer.h"
+#include "run/episode_scheduler.h"
+#include "run/manifest.h"
+#include "run/node_probe.h"
+#include "run/record_run.h"
+#include "run/shard.h"
+#include "src/episode_source.h"
+
+namespace fetchscope {
+
+/// A record run, resolved: the workers' plan and what the parent does around it.
+struct RecordJob {
+  RecordPlan plan;                         ///< what the workers read
+  Shard shard;                             ///< this run's shard (count 1: all)
+  WorkerMode mode = WorkerMode::kProcess;  ///< --worker-mode
+  std::string worker_mode;                 ///< --worker-mode as given (the manifest's)
+  int jobs = 1;                            ///< workers
+  std::vector<int> episodes;               ///< this run's episodes, ascending
+  int episodes_requested = 1;              ///< --episodes (a replay: one past its last)
+  std::string formats_text;                ///< --format as given
+  std::string from_option;                 ///< --from as given ("" none)
+  std::string replay_file;                 ///< a replay: policy's file ("" none)
+  bool hud = false;                        ///< the HUD overlay is drawn
+  bool quiet = false;                      ///< -q
+  bool report = true;                      ///< write the run's index.html
+  bool overwrite = false;                  ///< --overwrite
+  bool resume = false;                     ///< --resume
+  std::string command_line;                ///< as typed (the manifest's)
+  std::string minari_root_given;  ///< --minari-root as given (empty: none), for the export advice
+  std::optional<MinariWriteOptions> minari;          ///< --minari: the dataset written after
+  std::string model_path;                            ///< the model file the env loaded
+  std::chrono::steady_clock::time_point wall_start;  ///< when the command started
+  /// Writes the run's report (inspect/, above this layer) for the manifest at this path.
+  std::function<void(const std::string& manifest_path)> write_report;
+};
+
+/// --minari ID for `job` (plan.spec, plan.policy, plan.seed_text, plan.steps, shard and
+/// overwrite set): the dataset's options, its destination checked now (UsageError for a shard:
+/// export writes a sharded run's dataset; as CheckMinariDestination otherwise).
+MinariWriteOptions RecordMinariOptions(const RecordJob& job, const std::string& dataset_id,
+                                       const std::filesystem::path& root, const std::string& author,
+                                       const std::string& email);
+
+/// Runs `job` after cli/record.cc resolved it: probes the node, opens the run folder, records,
+/// writes the manifest, the summary, the report and the Minari dataset. Returns the exit status
+/// (128 + signal when interrupted); throws UsageError/RunError as the run fails.
+int RecordRun(RecordJob job);
+
+/// What makes two record runs the same run (SameRun): what a resumed run must repeat for its
+/// episodes to come out byte for byte as the run it continues (--jobs, --gpu and --backend are
+/// free: outputs do not depend on them on one machine).
+RunParameters RecordParameters(const RecordJob& job);
+
+/// The workers' results summed for the manifest.
+struct RecordTally {
+  std::vector<ManifestEpisode> entries;       ///< the episodes, without what differs with --jobs
+  std::map<std::string, double> timings;      ///< sim, render, encode, write: seconds summed
+  std::map<int, std::vector<int>> by_worker;  ///< the episodes each worker recorded
+  std::map<std::string, double> cpu_stages;   ///< thread CPU by stage (base/cpu_clock.h)
+};
+RecordTally TallyRecordResults(const ScheduleResult& result);
+
+/// The record run's manifest, typed except its video, backend, gpu, workers and timings
+/// sections; `tally.entries` already with the kept episodes of a resumed run.
+Manifest BuildRecordManifest(const RecordJob& job, const NodeProbe& node,
+                             const ScheduleResult& result, RecordTally tally, double wall,
+                             long frames, const RunParameters& parameters, bool resumed);
+
+/// A dataset source: each manifest entry gets "reset" and "divergence", the manifest a
+/// "dataset" member (what was found, the tolerance). Nothing for a recording.
+void AddDivergence(const TrajectorySource& source, std::vector<ManifestEpisode>* episodes,
+                   nlohmann::json* manifest_extra);
+
+}  // namespace fetchscope
