@@ -811,7 +811,9 @@ TEST(MinariWriter, RemovesStaleTemporaryFoldersOfOurs) {
     }
   };
   const std::string stale = ".gone-v0.tmp-" + std::to_string(dead) + "-0";
-  const std::string alive = ".gone-v0.tmp-" + std::to_string(getpid()) + "-0";
+  // a live process's (this one's, with a number its own writes do not reach here: the writer
+  // names its folder .ID.tmp-PID-N with N counting this process's writes from 0)
+  const std::string alive = ".gone-v0.tmp-" + std::to_string(getpid()) + "-999";
   const std::string recent = ".gone-v0.tmp-" + std::to_string(dead) + "-1";
   const std::string other = ".other-v0.tmp-" + std::to_string(dead) + "-0";
   make(stale, true);
