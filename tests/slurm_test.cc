@@ -161,6 +161,36 @@ class SlurmTest : public ::testing::Test {
                   << RunCommand("squeue; tail -n 20 " + (cluster_ / "log/*").string()).output;
   }
 
+  // Waits until the node is idle again (at most 60 s): a cancelled or killed task's node cleans
+  // up after the task's state is final, and a task started during that can fail at its launch.
+  void WaitNodeIdle() {
+    const auto t0 = Clock::now();
+    while (Since(t0) < 60) {
+      if (RunCommand("sinfo -h -o %T").output.find("idle") == 0) return;
+      std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    }
+    ADD_FAILURE() << "the node is not idle after 60 s: " << RunCommand("sinfo").output;
+  }
+
+  // Requeues task `task` of `job` and lets it start now (Slurm holds a requeued job back for a
+  // while); waits until it has ended. A launch that fails on the node (state FAILED before the
+  // script wrote a line: Slurm's own, not fetchscope's) is requeued again, at most twice, with
+  // what Slurm said about it in the test's output.
+  void RequeueAndWait(const std::string& job, int task, const std::string& expect_in_log) {
+    const std::string id = job + "_" + std::to_string(task);
+    for (int attempt = 0; attempt < 3; ++attempt) {
+      WaitNodeIdle();
+      Shell("scontrol requeue " + id + " && scontrol update JobId=" + id + " StartTime=now");
+      WaitFor(job);
+      if (State(id) == "COMPLETED" ||
+          ReadFile(Log(job, task)).find(expect_in_log) != std::string::npos) {
+        return;
+      }
+      std::printf("slurm: requeued %s ended %s before its script ran: %s\n", id.c_str(),
+                  State(id).c_str(), RunCommand("scontrol -o show job " + id).output.c_str());
+    }
+  }
+
   // The JobState of `job` ("COMPLETED", "CANCELLED"...).
   std::string State(const std::string& job) {
     const CommandResult r = RunCommand("scontrol -o show job " + job);
@@ -236,10 +266,10 @@ TEST_F(SlurmTest, CancelledTaskRequeuedResumes) {
   EXPECT_NE(ReadFile(Log(job, 2)).find("to record the rest, run:"), std::string::npos)
       << ReadFile(Log(job, 2));
   // requeued: Slurm holds it for a while (BeginTime); the test lets it start now
-  Shell("scontrol requeue " + job + "_2 && scontrol update JobId=" + job + "_2 StartTime=now");
-  WaitFor(job);
+  RequeueAndWait(job, 2, "attempt 2");
   EXPECT_EQ(State(job + "_2"), "COMPLETED") << ReadFile(Log(job, 2));
   EXPECT_NE(ReadFile(Log(job, 2)).find("attempt 2"), std::string::npos) << ReadFile(Log(job, 2));
+  WaitNodeIdle();
   const std::string merge = Submit(Adapted(
       std::regex_replace(guide_.merge, std::regex("--dependency=\\S+ "), ""), out.string(), false));
   WaitFor(merge);
@@ -271,6 +301,7 @@ TEST_F(SlurmTest, KilledTaskResubmittedAloneCompletesTheRun) {
   EXPECT_TRUE(fs::exists(out / "episode_001.mp4"));  // what the killed attempt left
   const std::string merge_line = Adapted(
       std::regex_replace(guide_.merge, std::regex("--dependency=\\S+ "), ""), out.string(), false);
+  WaitNodeIdle();  // the killed task's node cleans up first
   std::string merge = Submit(merge_line);
   WaitFor(merge);
   EXPECT_EQ(State(merge), "FAILED");
@@ -278,12 +309,14 @@ TEST_F(SlurmTest, KilledTaskResubmittedAloneCompletesTheRun) {
   EXPECT_NE(merge_log.find("shard 1/4 has no manifest"), std::string::npos) << merge_log;
   EXPECT_FALSE(fs::exists(out / "manifest.json"));
   // only index 1 again, with the same OUT and options
+  WaitNodeIdle();
   const std::string again = Submit(std::regex_replace(Adapted(guide_.record, out.string(), true),
                                                       std::regex("--array=0-3"), "--array=1"));
   WaitFor(again);
   EXPECT_EQ(State(again + "_1"), "COMPLETED") << ReadFile(Log(again, 1));
   EXPECT_NE(ReadFile(Log(again, 1)).find("records shard 1/4"), std::string::npos)
       << ReadFile(Log(again, 1));
+  WaitNodeIdle();
   merge = Submit(merge_line);
   WaitFor(merge);
   EXPECT_EQ(State(merge), "COMPLETED")
