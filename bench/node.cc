@@ -51,7 +51,7 @@ nlohmann::json NodeRenderRow(GlContext& gl, const AssetSource& assets, int w, in
   view.readback = readback;
   Renderer renderer(gl, env.model(), MakeRenderOptions(view, env.model()));
   PolicyContext context;
-  auto policy = MakePolicy("random", spec, context);
+  auto policy = MakePolicy(PolicySpec::Random(), spec, context);
   std::vector<std::vector<uint8_t>> frames(kReadbackDepth,
                                            std::vector<uint8_t>(static_cast<size_t>(w) * h * 3));
   long submitted = 0, frames_done = 0;

@@ -51,7 +51,7 @@ nlohmann::json RenderRow(GlContext& gl, const EnvSpec& spec, const AssetSource& 
   if (msaa == "auto" && renderer.msaa_samples() != 0 && msaa_values->size() == 2)
     msaa_values->push_back("0");
   PolicyContext context;
-  auto policy = MakePolicy("scripted", spec, context);
+  auto policy = MakePolicy(PolicySpec::Scripted(), spec, context);
   std::vector<uint8_t> rgb(static_cast<size_t>(w) * h * 3);
   long frames = 0;
   double busy = 0;

@@ -91,10 +91,12 @@ std::vector<int> FromEpisodes(const TrajectorySource& from) {
   return out;
 }
 
-int RunRecord(const RecordOptions& o, const std::string& command_line,
+int RunRecord(const RecordOptions& o, const PolicySpec& policy, const std::string& command_line,
               const TrajectorySource* from = nullptr);
 
-// record --from: the trajectory sets env, seed, policy, steps and episodes; then as record.
+// record --from: the trajectory sets env, seed, policy, steps and episodes; then as record. The
+// recording's actions are replayed: its policy is not run, only named (a zero spec under its
+// name, for the manifest and the trajectories).
 int RunRecordFrom(RecordOptions o, const CLI::App& sub, const std::string& command_line) {
   const TrajectorySource source =
       LoadFromSource(sub, {o.from, o.minari_root, sub.count("--episodes") ? o.episodes : 0,
@@ -102,25 +104,32 @@ int RunRecordFrom(RecordOptions o, const CLI::App& sub, const std::string& comma
                            sub.count("--assets") ? o.env.assets : "", o.quiet});
   ApplyFromSource(source, sub, &o.env.env_id, &o.env.seed, &o.policy, &o.steps, &o.episodes,
                   &o.env.assets);
-  return RunRecord(o, command_line, &source);
+  return RunRecord(o, PolicySpec::Zero(o.policy), command_line, &source);
+}
+
+// record: --policy parsed once (a replay file read here, never again); replay:FILE.json
+// brings its env and seed.
+int RunRecordPolicy(RecordOptions o, const std::string& command_line) {
+  const PolicySpec policy = ParsePolicySpec(o.policy, {o.exec_timeout, o.replay_dtype, ""});
+  ApplyReplayedEnv(policy, &o.env);
+  return RunRecord(o, policy, command_line);
 }
 
 // Starting an exec: child is the only full check of it, and the workers do that; every other
 // policy is built once here so that a bad one fails before anything is written.
-void ValidatePolicy(const std::string& policy, const EnvSpec& spec, const PolicyContext& context) {
-  if (policy.rfind("exec:", 0) == 0 && policy.size() > 5) return;
+void ValidatePolicy(const PolicySpec& policy, const EnvSpec& spec, const PolicyContext& context) {
+  if (policy.is_exec()) return;
   MakePolicy(policy, spec, context);
 }
 
 // The episodes this run records: those of its shard among 0 .. --episodes-1 or, replaying a
 // trajectory JSON, the file's episodes, each under its own index (and so with its own reset);
 // --episodes then becomes one past the last index.
-// A trajectory file is read here once: the policy checked below and every worker replay the
-// trajectory kept in the plan's policy context.
+// The replay file was read once, by ParsePolicySpec: the policy checked below and every worker
+// replay the trajectory the plan's PolicySpec holds.
 std::vector<int> RecordEpisodeList(RecordOptions* o, const Shard& shard, RecordPlan* plan) {
-  const std::optional<std::vector<int>> indices =
-      ReplayedEpisodes(o->policy, o->episodes_given ? o->episodes : 0, plan->spec->id, plan->seed,
-                       o->quiet, &plan->policy_context.replay_trajectory);
+  const std::optional<std::vector<int>> indices = ReplayedEpisodes(
+      plan->policy, o->episodes_given ? o->episodes : 0, plan->spec->id, plan->seed);
   if (!indices) return ShardEpisodes(shard, o->episodes);
   o->episodes = indices->back() + 1;
   std::vector<int> mine;
@@ -166,11 +175,9 @@ void ResolveRecordWorld(const RecordOptions& o, RecordJob* job) {
   plan.policy_context.seed = plan.seed;
   plan.policy_context.steps_per_episode = o.steps;
   plan.policy_context.episodes = o.episodes;
-  plan.policy_context.exec_timeout_s = o.exec_timeout;
   plan.policy_context.stop_requested = [] { return StopSignal() != 0; };
-  plan.policy_context.replay_dtype = o.replay_dtype;
   plan.policy_context.episode_indices = job->episodes;
-  if (!plan.from) ValidatePolicy(o.policy, *plan.spec, plan.policy_context);
+  if (!plan.from) ValidatePolicy(plan.policy, *plan.spec, plan.policy_context);
   Font::Default();  // the sheets' font: missing or unreadable, the run stops before any file
   plan.assets = ResolveAssets(o.env.assets);
   {
@@ -186,7 +193,8 @@ void ResolveRecordWorld(const RecordOptions& o, RecordJob* job) {
 
 // Parse and resolve: the options into the workers' plan and the run around it, each checked in
 // the order record has always reported them.
-RecordJob ResolveRecord(RecordOptions* options, const TrajectorySource* from) {
+RecordJob ResolveRecord(RecordOptions* options, const PolicySpec& policy,
+                        const TrajectorySource* from) {
   RecordOptions& o = *options;  // a trajectory replay sets the episodes
   RecordJob job;
   job.wall_start = Clock::now();
@@ -198,7 +206,7 @@ RecordJob ResolveRecord(RecordOptions* options, const TrajectorySource* from) {
   plan.spec = &FindEnvSpec(o.env.env_id);
   plan.seed = ParseSeed(o.env.seed);
   plan.seed_text = o.env.seed;
-  plan.policy = o.policy;
+  plan.policy = policy;
   plan.steps = o.steps;
   NotePastTimeLimit(*plan.spec, o.steps, o.quiet, "in the trajectory JSON and the HUD");
   plan.view = o.view;
@@ -225,15 +233,15 @@ RecordJob ResolveRecord(RecordOptions* options, const TrajectorySource* from) {
   plan.encoders = EncodersPerWorker(job.jobs);
   ResolveRecordWorld(o, &job);
   job.from_option = o.from;
-  if (o.policy.rfind("replay:", 0) == 0) job.replay_file = o.policy.substr(7);
+  if (const policy_spec::Replay* replay = plan.policy.replay()) job.replay_file = replay->path;
   return job;
 }
 
 // parse (AddRecord) -> resolve -> run -> print (the summary and report, from RecordRun).
-int RunRecord(const RecordOptions& options, const std::string& command_line,
-              const TrajectorySource* from) {
+int RunRecord(const RecordOptions& options, const PolicySpec& policy,
+              const std::string& command_line, const TrajectorySource* from) {
   RecordOptions o = options;
-  RecordJob job = ResolveRecord(&o, from);
+  RecordJob job = ResolveRecord(&o, policy, from);
   job.command_line = command_line;
   job.write_report = [quiet = o.quiet](const std::string& manifest_path) {
     WriteRunReportOrWarn(manifest_path, quiet);
@@ -338,8 +346,7 @@ Command AddRecord(CLI::App& app) {
   return {sub, [o, sub] {
             o->episodes_given = sub->count("--episodes") > 0;
             if (!o->from.empty()) return RunRecordFrom(*o, *sub, CommandLine());
-            ApplyReplayedEnv(o->policy, &o->env);  // replay:FILE.json brings its env and seed
-            return RunRecord(*o, CommandLine());
+            return RunRecordPolicy(*o, CommandLine());
           }};
 }
 

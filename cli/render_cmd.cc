@@ -49,7 +49,7 @@ int RunRender(const RenderCommandOptions& o) {
              want_seg = want(Layer::kSegmentation);
   ParseOverlays(o.view.overlay);  // reject a bad --overlay before any work
   EpisodeRequest request;
-  request.policy = o.policy_spec;
+  request.policy = ParsePolicySpec(o.policy_spec);
   request.steps = o.steps;
   request.past_limit_marks = "in the HUD";
   ResolvedRun run = ResolveRun(o.env, request);
@@ -61,7 +61,7 @@ int RunRender(const RenderCommandOptions& o) {
   const EnvSpec& spec = *run.env.spec;
   const uint64_t seed = run.env.seed;
   EpisodeSequence sequence(std::make_unique<FetchEnv>(spec, run.env.assets),
-                           MakePolicy(o.policy_spec, spec, run.policy_context), seed, o.steps);
+                           MakePolicy(request.policy, spec, run.policy_context), seed, o.steps);
   FetchEnv& fetch = sequence.env();
   const RenderOptions options = MakeRenderOptions(o.view, fetch.model());
   const EpisodeRecord episode = sequence.Play(k);

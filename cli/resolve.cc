@@ -7,9 +7,8 @@
 
 namespace fetchscope::cli {
 
-void ApplyReplayedEnv(const std::string& policy, EnvOptions* env) {
-  if (policy.rfind("replay:", 0) != 0) return;
-  const std::optional<Trajectory> file = ReadReplayTrajectory(policy.substr(7));
+void ApplyReplayedEnv(const PolicySpec& policy, EnvOptions* env) {
+  const Trajectory* file = policy.replay_trajectory();
   if (!file) return;  // a CSV, .npy or JSON-lines action file: no env of its own
   if (!env->env_id_option || env->env_id_option->count() == 0) env->env_id = file->env_id;
   if (!env->seed_option || env->seed_option->count() == 0) env->seed = std::to_string(file->seed);
@@ -37,9 +36,9 @@ ResolvedRun ResolveRun(const EnvOptions& options, const EpisodeRequest& request)
   ApplyReplayedEnv(request.policy, &env);
   ResolvedRun run;
   run.env = ResolveEnv(env);
-  if (auto replayed = ReplayedEpisodes(
-          request.policy, request.episodes_given ? request.episodes : 0, run.env.spec->id,
-          run.env.seed, request.quiet, &run.policy_context.replay_trajectory)) {
+  if (auto replayed =
+          ReplayedEpisodes(request.policy, request.episodes_given ? request.episodes : 0,
+                           run.env.spec->id, run.env.seed)) {
     run.episodes = *replayed;
   } else {
     for (int k = 0; k < request.episodes; ++k) run.episodes.push_back(k);
@@ -50,8 +49,6 @@ ResolvedRun ResolveRun(const EnvOptions& options, const EpisodeRequest& request)
   context.steps_per_episode = request.steps;
   context.episodes = run.episodes.empty() ? 0 : run.episodes.back() + 1;
   context.episode_indices = run.episodes;
-  context.exec_timeout_s = request.exec_timeout_s;
-  context.replay_dtype = request.replay_dtype;
   context.stop_requested = [] { return StopSignal() != 0; };
   return run;
 }

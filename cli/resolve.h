@@ -1,5 +1,6 @@
 // The one resolver of the options that env-driven commands share: --env-id, --seed, --assets,
-// --policy with its context, and the list of episodes a run plays.
+// --policy with its context, and the list of episodes a run plays. `--policy` is parsed here,
+// once (ParsePolicySpec, a replay file read with it); the layers below get the PolicySpec.
 #pragma once
 
 #include <cstdint>
@@ -17,7 +18,7 @@ namespace fetchscope::cli {
 /// was recorded with replace --env-id and --seed where the command line does not name them, so
 /// the replay reproduces the recording. Where it names others, ReplayedEpisodes refuses the run
 /// naming both. Any other policy leaves `env` as it is.
-void ApplyReplayedEnv(const std::string& policy, EnvOptions* env);
+void ApplyReplayedEnv(const PolicySpec& policy, EnvOptions* env);
 
 /// Says once on stderr (unless `quiet`) that `steps` run past `spec`'s TimeLimit and that those
 /// steps are marked `where` (e.g. "in the trajectory JSON"); nothing when steps <=
@@ -36,13 +37,11 @@ ResolvedEnv ResolveEnv(const EnvOptions& env, bool with_seed = true);
 
 /// What a run of episodes under a policy was asked for.
 struct EpisodeRequest {
-  std::string policy = "random";  ///< --policy
-  int episodes = 1;               ///< --episodes (or 1 for a one-frame command)
-  bool episodes_given = false;    ///< --episodes was on the command line
-  int steps = 50;                 ///< steps per episode
-  double exec_timeout_s = 10.0;   ///< --exec-timeout
-  std::string replay_dtype;       ///< --replay-dtype
-  bool quiet = false;             ///< no warnings on stderr
+  PolicySpec policy = PolicySpec::Random();  ///< --policy, parsed (ParsePolicySpec)
+  int episodes = 1;                          ///< --episodes (or 1 for a one-frame command)
+  bool episodes_given = false;               ///< --episodes was on the command line
+  int steps = 50;                            ///< steps per episode
+  bool quiet = false;                        ///< no warnings on stderr
   /// where this command marks steps past the TimeLimit (NotePastTimeLimit)
   std::string past_limit_marks = "in the trajectory JSON";
 };
@@ -57,7 +56,7 @@ struct ResolvedRun {
 };
 
 /// Resolves a run; the policy is not built (MakePolicy(request.policy, *env.spec,
-/// policy_context) builds one per worker).
+/// policy_context) builds one per worker, from the spec: no file is read again).
 ResolvedRun ResolveRun(const EnvOptions& env, const EpisodeRequest& request);
 
 }  // namespace fetchscope::cli

@@ -87,7 +87,7 @@ nlohmann::json CheckVariant(const EnvSpec& spec, const AssetSource& assets, uint
   FetchEnv fetch(spec, assets);
   PolicyContext context;
   context.seed = seed;
-  auto policy = MakePolicy("random", spec, context);
+  auto policy = MakePolicy(PolicySpec::Random(), spec, context);
   NumpyGenerator relabel_rng(seed + 1);
   long step_checks = 0, relabel_checks = 0, success_checks = 0;
   int done = 0, episode = 0;

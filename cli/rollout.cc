@@ -40,12 +40,10 @@ struct RolloutOptions {
 // parse (AddRollout) -> resolve -> run (RunRolloutJob) -> print.
 int RunRollout(const RolloutOptions& o) {
   EpisodeRequest request;
-  request.policy = o.policy;
+  request.policy = ParsePolicySpec(o.policy, {o.exec_timeout, o.replay_dtype, ""});
   request.episodes = o.episodes;
   request.episodes_given = o.episodes_given;
   request.steps = o.steps;
-  request.exec_timeout_s = o.exec_timeout;
-  request.replay_dtype = o.replay_dtype;
   const WorkerMode mode = ParseWorkerMode(o.worker_mode);
   // a trajectory JSON replays its own episodes, each under its own index (as record does)
   const ResolvedRun run = ResolveRun(o.env, request);
@@ -61,7 +59,7 @@ int RunRollout(const RolloutOptions& o) {
   job.assets = assets;
   job.seed = seed;
   job.seed_text = o.env.seed;
-  job.policy = o.policy;
+  job.policy = request.policy;
   job.policy_context = &run.policy_context;
   job.steps = o.steps;
   job.episodes = run.episodes;

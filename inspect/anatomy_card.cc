@@ -484,7 +484,7 @@ Panel RenderPanel(const std::string& env_id, const AnatomyCardOptions& o, GlCont
   FetchEnv fetch(spec, ResolveAssets(o.assets));
   PolicyContext context;
   context.seed = o.seed;
-  auto policy = MakePolicy("zero", spec, context);
+  auto policy = MakePolicy(PolicySpec::Zero(), spec, context);
   const EpisodeRecord episode = RunEpisode(fetch, *policy, 0, context.seed, 0);
   const StepRecord& reset = episode.steps.back();
   auto content_for = [&](const Vec3& view_up) { return PanelContentFor(fetch, reset, view_up); };

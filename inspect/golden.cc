@@ -151,7 +151,7 @@ CheckRow CheckScene(GlContext& gl, const GoldenManifest& m, const GoldenScene& s
                     const std::string& genuine, const std::string& out) {
   CheckRow row;
   row.scene = &s;
-  const SceneResult actual = RenderScene(gl, s, m.dir, SceneAssets(s, m.dir, genuine));
+  const SceneResult actual = RenderScene(gl, s, SceneAssets(s, m.dir, genuine));
 
   // the state first: it says whether the physics or model changed
   const nlohmann::json golden_state = ReadState(GoldenState(m, s));
@@ -286,8 +286,7 @@ int GoldenUpdate(const GoldenOptions& o) {
   InstallStopSignals();  // finish the scene in progress, then stop
   size_t done = 0;
   for (const GoldenScene* s : scenes) {
-    const SceneResult actual =
-        RenderScene(*gl, *s, manifest.dir, SceneAssets(*s, manifest.dir, genuine));
+    const SceneResult actual = RenderScene(*gl, *s, SceneAssets(*s, manifest.dir, genuine));
     const std::string png = GoldenPng(manifest, *s);
     std::string change = "new";
     if (fs::exists(png)) {

@@ -103,7 +103,7 @@ nlohmann::json StateJson(const GoldenScene& scene, const EpisodeRecord& episode)
   return {{"scene", scene.name},
           {"env_id", scene.env_id},
           {"seed", scene.seed},
-          {"policy", scene.policy},
+          {"policy", scene.policy.text},
           {"steps", std::move(steps)}};
 }
 
@@ -196,9 +196,11 @@ GoldenScene ReadDefaults(ManifestReader& r, const nlohmann::json& root) {
   return defaults;
 }
 
-// Scene `i` of the manifest, its name not in `names` (and then added to it).
+// Scene `i` of the manifest in the golden folder `dir`, its name not in `names` (and then
+// added to it).
 GoldenScene ReadScene(ManifestReader& r, const nlohmann::json& s, size_t i,
-                      const GoldenScene& defaults, std::set<std::string>* names) {
+                      const GoldenScene& defaults, const std::string& dir,
+                      std::set<std::string>* names) {
   static const std::set<std::string> kKnown = {
       "name",    "env_id", "assets", "seed", "policy",    "steps",      "camera",
       "overlay", "width",  "height", "msaa", "tolerance", "state_atol", "note"};
@@ -225,7 +227,12 @@ GoldenScene ReadScene(ManifestReader& r, const nlohmann::json& s, size_t i,
     r.Fail(where, "\"seed\" must be a non-negative integer");
   }
   scene.seed = s["seed"].get<uint64_t>();
-  scene.policy = r.String(s, "policy", where, &defaults.policy);
+  try {  // a replay file lives beside the manifest, and is read here
+    scene.policy =
+        ParsePolicySpec(r.String(s, "policy", where, &defaults.policy.text), {10.0, "", dir});
+  } catch (const UsageError& e) {
+    r.Fail(where, e.what());
+  }
   scene.steps = static_cast<int>(r.Integer(s, "steps", where, 0, 50));
   scene.camera = r.String(s, "camera", where, &defaults.camera);
   scene.overlay = r.String(s, "overlay", where, &defaults.overlay);
@@ -257,7 +264,7 @@ GoldenManifest ReadGoldenManifest(const std::string& dir) {
   manifest.dir = dir;
   std::set<std::string> names;
   for (size_t i = 0; i < root["scenes"].size(); ++i) {
-    manifest.scenes.push_back(ReadScene(r, root["scenes"][i], i, defaults, &names));
+    manifest.scenes.push_back(ReadScene(r, root["scenes"][i], i, defaults, dir, &names));
   }
   if (manifest.scenes.empty()) r.Fail("scenes", "lists no scene");
   return manifest;
@@ -299,18 +306,12 @@ std::string SceneAssets(const GoldenScene& scene, const std::string& golden_dir,
   return (fs::path(golden_dir) / scene.assets).string();
 }
 
-SceneResult RenderScene(GlContext& gl, const GoldenScene& scene, const std::string& golden_dir,
-                        const std::string& assets_root) {
+SceneResult RenderScene(GlContext& gl, const GoldenScene& scene, const std::string& assets_root) {
   const EnvSpec& spec = FindEnvSpec(scene.env_id);
-  std::string policy_spec = scene.policy;
-  if (policy_spec.rfind("replay:", 0) == 0) {
-    // replay files live beside the manifest
-    policy_spec = "replay:" + (fs::path(golden_dir) / policy_spec.substr(7)).string();
-  }
   PolicyContext context;
   context.seed = scene.seed;
   context.steps_per_episode = scene.steps;
-  auto policy = MakePolicy(policy_spec, spec, context);
+  auto policy = MakePolicy(scene.policy, spec, context);
   FetchEnv env(spec, ResolveAssets(assets_root));
   ViewOptions view;
   view.camera = scene.camera;

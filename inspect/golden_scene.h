@@ -21,6 +21,7 @@
 
 #include "inspect/image_diff.h"
 #include "render/gl_context.h"
+#include "src/policy.h"
 
 namespace fetchscope {
 
@@ -33,12 +34,14 @@ struct GoldenTolerance {
 
 /// One canonical scene.
 struct GoldenScene {
-  std::string name;             ///< file stem of its goldens; [A-Za-z0-9_-]+
-  std::string env_id;           ///< a v4 id
-  std::string assets;           ///< "bundled", "genuine" or a folder relative to the golden dir
-  uint64_t seed = 0;            ///< env.reset(seed=...)
-  std::string policy = "zero";  ///< zero | scripted | random | replay:FILE (FILE in the golden dir)
-  int steps = 0;                ///< policy steps before the frame (0 = the reset frame)
+  std::string name;    ///< file stem of its goldens; [A-Za-z0-9_-]+
+  std::string env_id;  ///< a v4 id
+  std::string assets;  ///< "bundled", "genuine" or a folder relative to the golden dir
+  uint64_t seed = 0;   ///< env.reset(seed=...)
+  /// zero | scripted | random | replay:FILE (FILE in the golden dir), parsed by
+  /// ReadGoldenManifest (a replay file read then); `text` is what the state golden names
+  PolicySpec policy = PolicySpec::Zero();
+  int steps = 0;                   ///< policy steps before the frame (0 = the reset frame)
   std::string camera = "default";  ///< as --camera
   std::string overlay = "none";    ///< as --overlay
   int width = 320;                 ///< pixels of each camera tile (the frame is FrameSize)
@@ -73,8 +76,7 @@ struct SceneResult {
 
 /// Runs the scene's episode and renders its last frame on `gl` (current on this thread).
 /// `assets_root` is what ResolveAssets accepts: "bundled" or a folder.
-SceneResult RenderScene(GlContext& gl, const GoldenScene& scene, const std::string& golden_dir,
-                        const std::string& assets_root);
+SceneResult RenderScene(GlContext& gl, const GoldenScene& scene, const std::string& assets_root);
 
 /// Where a scene's assets come from: "bundled", `genuine_dir` for "genuine", else the folder
 /// relative to `golden_dir`.

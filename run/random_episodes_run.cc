@@ -18,8 +18,9 @@ namespace {
 class RandomEpisodeRunner : public EpisodeRunner {
  public:
   RandomEpisodeRunner(const EnvSpec& spec, const AssetSource& assets, const PolicyContext& context)
-      : sequence_(std::make_unique<FetchEnv>(spec, assets), MakePolicy("random", spec, context),
-                  context.seed, spec.max_episode_steps) {}
+      : sequence_(std::make_unique<FetchEnv>(spec, assets),
+                  MakePolicy(PolicySpec::Random(), spec, context), context.seed,
+                  spec.max_episode_steps) {}
   void Run(int k, WorkerChannel& channel) override {
     const EpisodeRecord ep = sequence_.Play(
         k, [&](const StepRecord&, const StepResult*) { return !channel.StopRequested(); });

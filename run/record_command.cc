@@ -127,7 +127,7 @@ OutputRun RecordOutputRun(const RecordJob& job) {
   run.spec = plan.spec;
   run.seed = plan.seed;
   run.seed_text = plan.seed_text;
-  run.policy = plan.policy;
+  run.policy = plan.policy.text;
   run.episodes = job.episodes_requested;
   run.steps = plan.steps;
   return run;

@@ -92,8 +92,8 @@ RunParameters RecordParameters(const RecordJob& job) {
   RunParameters p;
   p.env_id = plan.spec->id;
   p.seed = plan.seed;
-  p.policy = plan.policy;
-  p.replay_dtype = plan.policy_context.replay_dtype;
+  p.policy = plan.policy.text;
+  p.replay_dtype = plan.policy.replay_dtype();
   p.episodes = job.episodes_requested;
   p.steps = plan.steps;
   p.sheet_every = plan.sheet_every;
@@ -146,7 +146,7 @@ Manifest BuildRecordManifest(const RecordJob& job, const NodeProbe& node,
   Manifest m;
   m.env_id = plan.spec->id;
   m.seed = plan.seed;
-  m.policy = plan.policy;
+  m.policy = plan.policy.text;
   if (plan.from) m.from = plan.from->path;
   m.episodes_requested = job.episodes_requested;
   m.steps_per_episode = plan.steps;

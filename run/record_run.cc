@@ -30,7 +30,7 @@ EpisodeSinkOptions MakeEpisodeSinkOptions(const RecordPlan& plan) {
   sink.env_id = plan.spec->id;
   sink.seed = plan.seed;
   sink.seed_text = plan.seed_text;
-  sink.policy = plan.policy;
+  sink.policy = plan.policy.text;
   sink.assets = plan.assets;
   sink.steps = plan.steps;
   sink.sheet_every = plan.sheet_every;
@@ -52,10 +52,11 @@ RecordRunner::RecordRunner(const RecordPlan& plan, int worker)
       worker_(worker),
       sink_(MakeEpisodeSinkOptions(plan)),
       gif_scale_(GifTextScale(sink_)),
-      sequence_(std::make_unique<FetchEnv>(*plan.spec, plan.assets),
-                // --from replays recorded actions: the policy that made them is not run
-                MakePolicy(plan.from ? "zero" : plan.policy, *plan.spec, plan.policy_context),
-                plan.seed, plan.steps) {}
+      sequence_(
+          std::make_unique<FetchEnv>(*plan.spec, plan.assets),
+          // --from replays recorded actions: the policy that made them is not run
+          MakePolicy(plan.from ? PolicySpec::Zero() : plan.policy, *plan.spec, plan.policy_context),
+          plan.seed, plan.steps) {}
 
 RecordRunner::~RecordRunner() {
   encoders_.clear();  // aborts and joins whatever is still running (a failure elsewhere)

@@ -37,7 +37,7 @@ struct RecordPlan {
   uint64_t seed = 0;                 ///< episode 0's reset seed
   std::string seed_text;             ///< the seed as given (sheet titles)
   AssetSource assets;                ///< resolved assets
-  std::string policy;                ///< the policy as given (--policy)
+  PolicySpec policy;                 ///< --policy, parsed (record --from: zero, named)
   PolicyContext policy_context;      ///< what the policy is made with
   int steps = 50;                    ///< steps per episode
   ViewOptions view;                  ///< cameras, overlays, size, backend

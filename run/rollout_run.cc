@@ -17,7 +17,7 @@ namespace {
 // Plays episodes and reports each as its trajectory JSON entry.
 class RolloutRunner : public EpisodeRunner {
  public:
-  RolloutRunner(const EnvSpec& spec, const AssetSource& assets, const std::string& policy,
+  RolloutRunner(const EnvSpec& spec, const AssetSource& assets, const PolicySpec& policy,
                 const PolicyContext& context, int steps)
       : sequence_(std::make_unique<FetchEnv>(spec, assets), MakePolicy(policy, spec, context),
                   context.seed, steps) {}
@@ -34,9 +34,10 @@ class RolloutRunner : public EpisodeRunner {
 
 // One episode's JSON entry as the trajectory reader reads it back: what the output receives.
 EpisodeRecord ReadBack(const RolloutJob& job, const nlohmann::json& episode) {
-  Trajectory one = ParseTrajectoryJson(
-      TrajectoryJson(*job.spec, job.assets, job.seed, job.policy, nlohmann::json::array({episode})),
-      "rollout");
+  Trajectory one =
+      ParseTrajectoryJson(TrajectoryJson(*job.spec, job.assets, job.seed, job.policy.text,
+                                         nlohmann::json::array({episode})),
+                          "rollout");
   return std::move(one.episodes.front());
 }
 
@@ -48,7 +49,7 @@ OutputRun RolloutOutputRun(const RolloutJob& job) {
   run.spec = job.spec;
   run.seed = job.seed;
   run.seed_text = job.seed_text;
-  run.policy = job.policy;
+  run.policy = job.policy.text;
   run.episodes = static_cast<int>(job.episodes.size());
   run.steps = job.steps;
   return run;

@@ -24,7 +24,7 @@ struct RolloutJob {
   AssetSource assets;                             ///< resolved assets
   uint64_t seed = 0;                              ///< episode 0's reset seed
   std::string seed_text;                          ///< the seed as given
-  std::string policy;                             ///< --policy as given
+  PolicySpec policy;                              ///< --policy, parsed
   const PolicyContext* policy_context = nullptr;  ///< each worker's policy is made with it
   int steps = 50;                                 ///< steps per episode
   std::vector<int> episodes;                      ///< the episodes to play, ascending

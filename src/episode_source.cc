@@ -347,24 +347,21 @@ void VerifyRecording(FetchEnv& env, const TrajectorySource& source) {
   }
 }
 
-std::optional<std::vector<int>> ReplayedEpisodes(const std::string& policy, int episodes,
-                                                 const std::string& env_id, uint64_t seed,
-                                                 bool quiet,
-                                                 std::shared_ptr<const Trajectory>* trajectory) {
-  if (policy.rfind("replay:", 0) != 0) return std::nullopt;
-  const std::string path = policy.substr(7);
-  std::optional<Trajectory> read = ReadReplayTrajectory(path);
+std::optional<std::vector<int>> ReplayedEpisodes(const PolicySpec& policy, int episodes,
+                                                 const std::string& env_id, uint64_t seed) {
+  const Trajectory* read = policy.replay_trajectory();
   if (!read) return std::nullopt;
+  const std::string& path = policy.replay()->path;
   if (read->episodes.empty()) throw RunError("replay file " + path + ": holds no episodes");
   std::vector<int> indices;
   for (const TrajectoryEpisode& e : read->episodes) indices.push_back(e.index);
   std::sort(indices.begin(), indices.end());
   if (episodes > 0 && episodes != static_cast<int>(indices.size())) {
-    throw UsageError("--episodes " + std::to_string(episodes) + " disagrees with " + policy +
+    throw UsageError("--episodes " + std::to_string(episodes) + " disagrees with " + policy.text +
                      ", which holds " + std::to_string(indices.size()) +
                      " episode(s): a trajectory JSON replays all its episodes; drop --episodes");
   }
-  (void)quiet;  // a different env or seed changes the result: refused, never a warning
+  // a different env or seed changes the result: refused, never a warning
   if (read->env_id != env_id || read->seed != seed) {
     throw UsageError(path + " was recorded on " + read->env_id + " with --seed " +
                      std::to_string(read->seed) + ", but this run names --env-id " + env_id +
@@ -372,7 +369,6 @@ std::optional<std::vector<int>> ReplayedEpisodes(const std::string& policy, int 
                      ": a trajectory JSON replays its own env and seed; drop --env-id and --seed "
                      "(or name the file's)");
   }
-  if (trajectory) *trajectory = std::make_shared<const Trajectory>(std::move(*read));
   return indices;
 }
 

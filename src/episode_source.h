@@ -174,16 +174,12 @@ void MeasureDivergence(FetchEnv& env, TrajectorySource* source);
 /// recording (it replays exactly) or a row the dataset does not have.
 std::optional<std::array<double, 3>> RecordedAchieved(const TrajectorySource& source, int k, int t);
 
-/// For `--policy replay:FILE.json` holding a trajectory: the file's episode indices, ascending,
-/// which a run replaying it plays (each under its own index, so with its own reset); nullopt
-/// for any other policy. `episodes` is --episodes when the user gave it (0: not given): a
-/// different count is a UsageError, and so is a file recorded on another env or seed than
-/// `env_id` / `seed` (it would not reproduce the recording; `quiet` hides nothing). With
-/// `trajectory`, the file as read goes
-/// there (for PolicyContext::replay_trajectory: one read of the file per run). Throws RunError
-/// naming the file and key for a malformed trajectory.
-std::optional<std::vector<int>> ReplayedEpisodes(
-    const std::string& policy, int episodes, const std::string& env_id, uint64_t seed, bool quiet,
-    std::shared_ptr<const Trajectory>* trajectory = nullptr);
+/// For `--policy replay:FILE.json` holding a trajectory (the spec holds it, read once): the
+/// file's episode indices, ascending, which a run replaying it plays (each under its own index,
+/// so with its own reset); nullopt for any other policy. `episodes` is --episodes when the
+/// user gave it (0: not given): a different count is a UsageError, and so is a file recorded on
+/// another env or seed than `env_id` / `seed` (it would not reproduce the recording).
+std::optional<std::vector<int>> ReplayedEpisodes(const PolicySpec& policy, int episodes,
+                                                 const std::string& env_id, uint64_t seed);
 
 }  // namespace fetchscope

@@ -1,5 +1,6 @@
 #include "src/policy.h"
 
+#include <filesystem>
 #include <map>
 
 #include "base/errors.h"
@@ -42,17 +43,17 @@ class ZeroPolicy : public Policy {
 // Rows are consumed in order across episodes: episode e step t uses row e * steps + t.
 class ReplayPolicy : public Policy {
  public:
-  ReplayPolicy(std::string spec, std::vector<Action> rows, int steps)
+  ReplayPolicy(std::string spec, std::shared_ptr<const std::vector<Action>> rows, int steps)
       : spec_(std::move(spec)), rows_(std::move(rows)), steps_(steps) {}
   void BeginEpisode(int episode, const Observation&) override { episode_ = episode; }
   Action Act(const Observation&, int t) override {
-    return rows_.at(static_cast<size_t>(episode_) * steps_ + t);
+    return rows_->at(static_cast<size_t>(episode_) * steps_ + t);
   }
   std::string name() const override { return spec_; }
 
  private:
   std::string spec_;
-  std::vector<Action> rows_;
+  std::shared_ptr<const std::vector<Action>> rows_;  // the spec's, shared by every worker
   int steps_;
   int episode_ = 0;
 };
@@ -87,6 +88,8 @@ std::string IndexList(const std::map<int, const TrajectoryEpisode*>& episodes) {
   return s;
 }
 
+// A trajectory JSON's episodes against the run: every episode it plays is there, with enough
+// actions for --steps.
 std::unique_ptr<Policy> MakeTrajectoryReplay(const std::string& spec, const std::string& path,
                                              std::shared_ptr<const Trajectory> trajectory,
                                              const PolicyContext& context) {
@@ -95,17 +98,6 @@ std::unique_ptr<Policy> MakeTrajectoryReplay(const std::string& spec, const std:
   }
   std::map<int, const TrajectoryEpisode*> episodes;
   for (const TrajectoryEpisode& e : trajectory->episodes) episodes[e.index] = &e;
-  if (!context.replay_dtype.empty()) {
-    for (const auto& [k, e] : episodes) {
-      const std::string dtype = ActionDtype(*e);
-      if (dtype != "none" && dtype != context.replay_dtype) {
-        throw UsageError("--replay-dtype " + context.replay_dtype + ": replay file " + path +
-                         " records episode " + std::to_string(k) + " in " + dtype +
-                         " (its action_dtype); drop --replay-dtype, a trajectory JSON carries its "
-                         "own precision");
-      }
-    }
-  }
   std::vector<int> wanted = context.episode_indices;
   if (wanted.empty()) {
     for (int k = 0; k < context.episodes; ++k) wanted.push_back(k);
@@ -132,17 +124,49 @@ std::unique_ptr<Policy> MakeTrajectoryReplay(const std::string& spec, const std:
   return std::make_unique<TrajectoryReplayPolicy>(spec, std::move(trajectory));
 }
 
+std::unique_ptr<Policy> MakeReplay(const std::string& spec, const policy_spec::Replay& replay,
+                                   const PolicyContext& context) {
+  if (replay.trajectory) {
+    return MakeTrajectoryReplay(spec, replay.path, replay.trajectory, context);
+  }
+  const size_t rows = replay.rows->size();
+  const size_t need = static_cast<size_t>(context.steps_per_episode) * context.episodes;
+  if (rows < need) {
+    throw RunError("replay file '" + replay.path + "' has " + std::to_string(rows) +
+                   " action rows but " + std::to_string(context.episodes) + " episode(s) of " +
+                   std::to_string(context.steps_per_episode) + " steps need " +
+                   std::to_string(need) + ": add rows, or pass --steps " +
+                   std::to_string(rows / std::max(1, context.episodes)));
+  }
+  return std::make_unique<ReplayPolicy>(spec, replay.rows, context.steps_per_episode);
+}
+
+// A trajectory JSON carries its precision: --replay-dtype must agree with every episode's.
+void CheckTrajectoryDtype(const Trajectory& trajectory, const std::string& dtype,
+                          const std::string& path) {
+  if (trajectory.episodes.empty()) {
+    throw RunError("replay file " + path + ": holds no episodes");
+  }
+  if (dtype.empty()) return;
+  std::map<int, const TrajectoryEpisode*> episodes;
+  for (const TrajectoryEpisode& e : trajectory.episodes) episodes[e.index] = &e;
+  for (const auto& [k, e] : episodes) {
+    const std::string own = ActionDtype(*e);
+    if (own != "none" && own != dtype) {
+      throw UsageError("--replay-dtype " + dtype + ": replay file " + path + " records episode " +
+                       std::to_string(k) + " in " + own +
+                       " (its action_dtype); drop --replay-dtype, a trajectory JSON carries its "
+                       "own precision");
+    }
+  }
+}
+
 // --replay-dtype on rows read from a file: float32 rounds CSV/JSON-lines values to float32;
 // a .npy carries its dtype.
 void ApplyReplayDtype(std::vector<Action>* rows, const std::string& dtype,
-                      const std::string& path) {
+                      const std::string& format, const std::string& path) {
   if (dtype.empty()) return;
-  if (dtype != "float32" && dtype != "float64") {
-    throw UsageError("--replay-dtype '" + dtype + "' is not known; accepted: float32, float64");
-  }
-  const bool npy = path.size() >= 4 && (path.compare(path.size() - 4, 4, ".npy") == 0 ||
-                                        path.compare(path.size() - 4, 4, ".NPY") == 0);
-  if (npy) {
+  if (format == "npy") {
     const bool f32 = !rows->empty() && rows->front().is_float32;
     if (f32 != (dtype == "float32")) {
       throw UsageError("--replay-dtype " + dtype + ": replay file " + path + " holds " +
@@ -158,58 +182,94 @@ void ApplyReplayDtype(std::vector<Action>* rows, const std::string& dtype,
   }
 }
 
+// replay:FILE: the file read once, whatever its format; a .json is a trajectory when it holds
+// one, else rows.
+policy_spec::Replay ReadReplay(const std::string& path, const std::string& dtype) {
+  policy_spec::Replay replay;
+  replay.path = path;
+  replay.dtype = dtype;
+  std::string format;
+  const std::string bytes = ReadReplayBytes(path, &format);
+  if (format == "json") {
+    if (std::optional<Trajectory> trajectory = ParseReplayTrajectory(bytes, path)) {
+      CheckTrajectoryDtype(*trajectory, dtype, path);
+      replay.trajectory = std::make_shared<const Trajectory>(std::move(*trajectory));
+      return replay;
+    }
+  }
+  std::vector<Action> rows = ParseReplayText(bytes, format, path);
+  ApplyReplayDtype(&rows, dtype, format, path);
+  replay.rows = std::make_shared<const std::vector<Action>>(std::move(rows));
+  return replay;
+}
+
+template <class... F>
+struct Overloaded : F... {
+  using F::operator()...;
+};
+template <class... F>
+Overloaded(F...) -> Overloaded<F...>;
+
 }  // namespace
 
-std::unique_ptr<Policy> MakePolicy(const std::string& spec, const EnvSpec& env,
-                                   const PolicyContext& context) {
-  if (!context.replay_dtype.empty()) {
-    if (context.replay_dtype != "float32" && context.replay_dtype != "float64") {
-      throw UsageError("--replay-dtype '" + context.replay_dtype +
-                       "' is not known; accepted: float32, float64");
+PolicySpec ParsePolicySpec(const std::string& text, const PolicyOptions& options) {
+  // the name, with its ':' for the policies that take an argument ("replay:", "exec:"): what
+  // gets mistyped ("scriptd", "replya:a.csv")
+  const size_t colon = text.find(':');
+  const std::string name = colon == std::string::npos ? text : text.substr(0, colon + 1);
+  const std::string argument = colon == std::string::npos ? "" : text.substr(colon + 1);
+  const bool replay = name == "replay:";  // the one place that tells a replay by its prefix
+  const std::string& dtype = options.replay_dtype;
+  if (!dtype.empty()) {
+    if (dtype != "float32" && dtype != "float64") {
+      throw UsageError("--replay-dtype '" + dtype + "' is not known; accepted: float32, float64");
     }
-    if (spec.rfind("replay:", 0) != 0) {
-      throw UsageError("--replay-dtype applies to --policy replay:FILE only, not to '" + spec +
+    if (!replay) {
+      throw UsageError("--replay-dtype applies to --policy replay:FILE only, not to '" + text +
                        "'");
     }
   }
-  if (spec == "random") return std::make_unique<RandomPolicy>(context.seed);
-  if (spec == "zero") return std::make_unique<ZeroPolicy>();
-  if (spec == "scripted") return MakeScriptedPolicy(env);
-  if (spec.rfind("replay:", 0) == 0) {
-    const std::string path = spec.substr(7);
-    if (path.empty()) throw UsageError("--policy replay: needs a file, e.g. replay:actions.csv");
-    if (context.replay_trajectory) {  // read once already (ReadReplayedEpisodes)
-      return MakeTrajectoryReplay(spec, path, context.replay_trajectory, context);
+  if (text == "random") return PolicySpec::Random();
+  if (text == "zero") return PolicySpec::Zero();
+  if (text == "scripted") return PolicySpec::Scripted();
+  if (replay) {
+    if (argument.empty()) {
+      throw UsageError("--policy replay: needs a file, e.g. replay:actions.csv");
     }
-    if (std::optional<Trajectory> trajectory = ReadReplayTrajectory(path)) {
-      return MakeTrajectoryReplay(
-          spec, path, std::make_shared<const Trajectory>(std::move(*trajectory)), context);
-    }
-    std::vector<Action> rows = ReadReplayFile(path);
-    ApplyReplayDtype(&rows, context.replay_dtype, path);
-    const size_t need = static_cast<size_t>(context.steps_per_episode) * context.episodes;
-    if (rows.size() < need) {
-      throw RunError("replay file '" + path + "' has " + std::to_string(rows.size()) +
-                     " action rows but " + std::to_string(context.episodes) + " episode(s) of " +
-                     std::to_string(context.steps_per_episode) + " steps need " +
-                     std::to_string(need) + ": add rows, or pass --steps " +
-                     std::to_string(rows.size() / std::max(1, context.episodes)));
-    }
-    return std::make_unique<ReplayPolicy>(spec, std::move(rows), context.steps_per_episode);
+    const std::string path = options.base_dir.empty()
+                                 ? argument
+                                 : (std::filesystem::path(options.base_dir) / argument).string();
+    return {ReadReplay(path, dtype), text};
   }
-  if (spec.rfind("exec:", 0) == 0) {
-    const std::string command = spec.substr(5);
-    if (command.empty())
+  if (name == "exec:") {
+    if (argument.empty()) {
       throw UsageError("--policy exec: needs a command, e.g. exec:'python3 my_policy.py'");
-    return MakeExecPolicy(command, context.exec_timeout_s, context.stop_requested);
+    }
+    return {policy_spec::Exec{argument, options.exec_timeout_s}, text};
   }
-
-  // the name before a ':' is what gets mistyped ("scriptd", "replya:a.csv")
-  const size_t colon = spec.find(':');
-  const std::string name = colon == std::string::npos ? spec : spec.substr(0, colon + 1);
-  throw UsageError("unknown policy '" + spec + "'" +
+  throw UsageError("unknown policy '" + text + "'" +
                    DidYouMean(name, {"random", "zero", "scripted", "replay:", "exec:"}) + ": use " +
                    kPolicyHelp);
+}
+
+std::unique_ptr<Policy> MakePolicy(const PolicySpec& spec, const EnvSpec& env,
+                                   const PolicyContext& context) {
+  using Made = std::unique_ptr<Policy>;
+  return std::visit(
+      Overloaded{
+          [&](const policy_spec::Random&) -> Made {
+            return std::make_unique<RandomPolicy>(context.seed);
+          },
+          [&](const policy_spec::Zero&) -> Made { return std::make_unique<ZeroPolicy>(); },
+          [&](const policy_spec::Scripted&) -> Made { return MakeScriptedPolicy(env); },
+          [&](const policy_spec::Replay& replay) -> Made {
+            return MakeReplay(spec.text, replay, context);
+          },
+          [&](const policy_spec::Exec& exec) -> Made {
+            return MakeExecPolicy(exec.command, exec.timeout_s, context.stop_requested);
+          },
+      },
+      spec.value);
 }
 
 }  // namespace fetchscope

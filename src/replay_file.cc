@@ -480,7 +480,7 @@ std::vector<Action> ParseReplayText(const std::string& text, const std::string& 
   throw RunError("unknown replay format " + Quote(format) + ": use csv, npy or jsonl");
 }
 
-std::vector<Action> ReadReplayFile(const std::string& path) {
+std::string ReadReplayBytes(const std::string& path, std::string* format) {
   const size_t slash = path.find_last_of('/');
   const size_t dot = path.find_last_of('.');
   const std::string extension =
@@ -503,7 +503,14 @@ std::vector<Action> ReadReplayFile(const std::string& path) {
   std::ostringstream contents;
   contents << in.rdbuf();
   if (in.bad()) throw RunError("cannot read replay file " + path + ": " + std::strerror(errno));
-  return ParseReplayText(contents.str(), extension.substr(1), path);
+  *format = extension.substr(1);
+  return contents.str();
+}
+
+std::vector<Action> ReadReplayFile(const std::string& path) {
+  std::string format;
+  const std::string bytes = ReadReplayBytes(path, &format);
+  return ParseReplayText(bytes, format, path);
 }
 
 }  // namespace fetchscope

@@ -22,6 +22,11 @@ namespace fetchscope {
 /// naming the file, the line or row, what was wrong and what is accepted.
 std::vector<Action> ReadReplayFile(const std::string& path);
 
+/// The bytes of replay file `path`, read once, and its format (`*format`: "csv", "npy",
+/// "jsonl" or "json", from the extension as above). Throws RunError as ReadReplayFile does for
+/// a file without a known extension, a folder, or one that cannot be read.
+std::string ReadReplayBytes(const std::string& path, std::string* format);
+
 /// Parses the bytes of a replay file. `format` is "csv", "npy", "jsonl" or "json" (as the
 /// extensions above); `name` is the file name used in error messages.
 std::vector<Action> ParseReplayText(const std::string& text, const std::string& format,

@@ -336,7 +336,11 @@ std::optional<Trajectory> ReadReplayTrajectory(const std::string& path) {
   if (!in) return std::nullopt;  // ReadReplayFile says why
   std::ostringstream text;
   text << in.rdbuf();
-  const json root = json::parse(text.str(), nullptr, /*allow_exceptions=*/false);
+  return ParseReplayTrajectory(text.str(), path);
+}
+
+std::optional<Trajectory> ParseReplayTrajectory(const std::string& text, const std::string& path) {
+  const json root = json::parse(text, nullptr, /*allow_exceptions=*/false);
   const bool versioned = root.is_object() && root.contains("schema_version");  // a newer one too
   if (!versioned &&
       (!root.is_object() || !root.contains("episodes") || !root["episodes"].is_array())) {

@@ -128,4 +128,7 @@ Trajectory ReadTrajectory(const std::string& path);
 /// PATH: KEY: ..." for a malformed trajectory.
 std::optional<Trajectory> ReadReplayTrajectory(const std::string& path);
 
+/// As ReadReplayTrajectory, on the bytes `text` of the .json file `path` already read.
+std::optional<Trajectory> ParseReplayTrajectory(const std::string& text, const std::string& path);
+
 }  // namespace fetchscope

@@ -263,7 +263,7 @@ RecordPlan SmallPlan(const fs::path& out, int encoders) {
   plan.seed = 3;
   plan.seed_text = "3";
   plan.assets = ResolveAssets("bundled");
-  plan.policy = "random";
+  plan.policy = PolicySpec::Random();
   plan.steps = 4;
   plan.policy_context.seed = plan.seed;
   plan.policy_context.steps_per_episode = plan.steps;

@@ -311,7 +311,7 @@ TEST(MinariTrajectory, PlayedEpisodesComeBackBitForBit) {
     FetchEnv env(spec, ResolveAssets("bundled"));
     PolicyContext context;
     context.seed = 5;
-    auto policy = MakePolicy(policy_name, spec, context);
+    auto policy = MakePolicy(ParsePolicySpec(policy_name), spec, context);
     std::vector<EpisodeRecord> played;
     for (int k = 0; k < 3; ++k) {
       played.push_back(RunEpisode(
@@ -364,7 +364,7 @@ TEST(MinariReplay, FindsTheFirstDivergence) {
     FetchEnv env(spec, ResolveAssets("bundled"));
     PolicyContext context;
     context.seed = 8;
-    auto policy = MakePolicy(policy_name, spec, context);
+    auto policy = MakePolicy(ParsePolicySpec(policy_name), spec, context);
     std::vector<MinariEpisode> episodes;
     for (int k = 0; k < 3; ++k) {
       const std::optional<uint64_t> seed = k == 0 ? std::optional<uint64_t>(8) : std::nullopt;
@@ -384,7 +384,7 @@ TEST(MinariReplay, FindsTheFirstDivergence) {
   }
   FetchEnv env(spec, ResolveAssets("bundled"));
   PolicyContext context;
-  auto policy = MakePolicy("random", spec, context);
+  auto policy = MakePolicy(PolicySpec::Random(), spec, context);
   MinariEpisode e = ToMinariEpisode(RunEpisode(env, *policy, 0, 3, 20), 3, 25);
   e.observation[7 * 25 + 3] += 1e-3;
   const MinariDivergence d = ReplayMinariEpisode(env, e, 1e-6);

@@ -837,7 +837,7 @@ EpisodeRecord RunPush(FetchEnv& env, const std::string& policy, uint64_t seed, i
   PolicyContext context;
   context.seed = seed;
   context.steps_per_episode = steps;
-  auto p = MakePolicy(policy, env.spec(), context);
+  auto p = MakePolicy(ParsePolicySpec(policy), env.spec(), context);
   return RunEpisode(env, *p, 0, seed, steps, on_step);
 }
 

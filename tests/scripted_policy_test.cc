@@ -55,7 +55,7 @@ TEST(ScriptedPolicy, PickAndPlaceCarriesTheBlockSmoothly) {
   const EnvSpec& spec = FindEnvSpec("FetchPickAndPlace-v4");
   FetchEnv env(spec, ResolveAssets("bundled"));
   PolicyContext context;
-  auto policy = MakePolicy("scripted", spec, context);
+  auto policy = MakePolicy(PolicySpec::Scripted(), spec, context);
   int successes = 0;
   for (uint64_t seed = 0; seed < 20; ++seed) {
     const EpisodeRecord e = Play50(env, *policy, seed);
@@ -73,7 +73,7 @@ TEST(ScriptedPolicy, PushStopsOnceItSucceeds) {
   const EnvSpec& spec = FindEnvSpec("FetchPush-v4");
   FetchEnv env(spec, ResolveAssets("bundled"));
   PolicyContext context;
-  auto policy = MakePolicy("scripted", spec, context);
+  auto policy = MakePolicy(PolicySpec::Scripted(), spec, context);
   int succeeded = 0;
   for (uint64_t seed = 0; seed < 20; ++seed) {
     const EpisodeRecord e = Play50(env, *policy, seed);

@@ -247,7 +247,7 @@ TEST(Trajectory, ARecordedEpisodeReadsBackExactly) {
   FetchEnv env(spec, ResolveAssets("bundled"));
   PolicyContext context;
   context.seed = 5;
-  auto policy = MakePolicy("random", spec, context);
+  auto policy = MakePolicy(PolicySpec::Random(), spec, context);
   Trajectory written;
   written.env_id = spec.id;
   written.seed = 5;
@@ -394,7 +394,7 @@ TEST(EpisodeSource, ARecordingReplaysExactlyAndAnEditIsCaught) {
   PolicyContext context;
   context.seed = 11;
   EpisodeSequence sequence(std::make_unique<FetchEnv>(spec, ResolveAssets("bundled")),
-                           MakePolicy("random", spec, context), 11, 5);
+                           MakePolicy(PolicySpec::Random(), spec, context), 11, 5);
   Trajectory written;
   written.env_id = spec.id;
   written.seed = 11;
