@@ -1,6 +1,7 @@
 // The one resolver of the options that env-driven commands share: --env-id, --seed, --assets,
-// --policy with its context, and the list of episodes a run plays. `--policy` is parsed here,
-// once (ParsePolicySpec, a replay file read with it); the layers below get the PolicySpec.
+// --policy with its context, and the list of episodes a run plays. Each command parses
+// `--policy` once (ParsePolicySpec, a replay file read with it) before resolving; the layers
+// below get the PolicySpec, never the text.
 #pragma once
 
 #include <cstdint>
