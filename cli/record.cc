@@ -104,6 +104,9 @@ int RunRecordFrom(RecordOptions o, const CLI::App& sub, const std::string& comma
                            sub.count("--assets") ? o.env.assets : "", o.quiet});
   ApplyFromSource(source, sub, &o.env.env_id, &o.env.seed, &o.policy, &o.steps, &o.episodes,
                   &o.env.assets);
+  // the recording's actions replay as recorded: --replay-dtype is refused as for any policy but
+  // replay:FILE (its message names the zero actions played)
+  if (!o.replay_dtype.empty()) ParsePolicySpec("zero", {o.exec_timeout, o.replay_dtype, ""});
   return RunRecord(o, PolicySpec::Zero(o.policy), command_line, &source);
 }
 

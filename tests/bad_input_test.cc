@@ -378,6 +378,14 @@ std::vector<Case> Matrix() {
        "no episode_NNN.json", kRecordOutputs},
       {"RecordFromWithSeed", "record --quiet --out {tmp}/out --seed 3 --from {tmp}/t.json", 2,
        "--seed cannot be used with --from", kRecordOutputs},
+      {"RecordFromWithReplayDtype",  // a recording's actions replay as recorded
+       "record --quiet --out {tmp}/out --replay-dtype float32 --from {tmp}/t.json", 2,
+       "--replay-dtype applies to --policy replay:FILE only", kRecordOutputs,
+       [](const fs::path& tmp) {
+         return testing::RunFetchscope("rollout --env-id FetchReach-v4 --steps 2 --json-out " +
+                                       (tmp / "t.json").string())
+                    .exit_code == 0;
+       }},
       {"RecordShardMalformed", record + "--shard half", 2, "half", kRecordOutputs},
       {"RecordShardZeroShards", record + "--shard 0/0", 2, "0/0", kRecordOutputs},
       {"RecordJobsNegative", record + "--jobs -1", 2, "-1", kRecordOutputs},
