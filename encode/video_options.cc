@@ -95,27 +95,6 @@ void ValidateVideoOptions(const VideoOptions& options) {
   }
 }
 
-std::vector<std::string> ParseVideoFormats(const std::string& list) {
-  static const std::vector<std::string> kKnown = [] {
-    std::vector<std::string> names;
-    for (const VideoFormat& format : VideoFormats()) names.emplace_back(format.name);
-    return names;
-  }();
-  std::vector<std::string> formats;
-  for (const std::string& entry : SplitCommaList(list)) {  // "mp4, gif" as "mp4,gif"
-    if (std::find(kKnown.begin(), kKnown.end(), entry) == kKnown.end()) {
-      throw UsageError("unknown --format " + Quoted(entry) + " in " + Quoted(list) +
-                       DidYouMean(entry, kKnown) + ": accepted a comma list of " + kVideoFormats);
-    }
-    if (std::find(formats.begin(), formats.end(), entry) != formats.end()) {
-      throw UsageError("--format " + Quoted(list) + " names " + entry +
-                       " twice: give each format once");
-    }
-    formats.push_back(entry);
-  }
-  return formats;
-}
-
 std::string VideoFormatExtension(const std::string& format) {
   const VideoFormat* row = FindVideoFormat(format);
   return std::string(row != nullptr ? row->extension : VideoFormats().front().extension);

@@ -231,7 +231,7 @@ bool VideoWriter::Impl::TryOpenEncoder(const std::string& name, std::string* fai
     *failure = "out of memory";
     return false;
   }
-  const bool is_gif = name == "gif";
+  const bool is_gif = Format().palette;  // palette frames at the GIF's own rate
   context->width = encoded_width;
   context->height = encoded_height;
   context->pix_fmt = is_gif ? AV_PIX_FMT_PAL8 : AV_PIX_FMT_YUV420P;

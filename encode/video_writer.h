@@ -46,10 +46,6 @@ struct VideoOptions {
 /// The formats VideoOptions::format accepts, in the order --format's help lists them.
 inline constexpr const char* kVideoFormats = "mp4, webm, gif";
 
-/// Parses a --format list ("mp4", "webm,gif", ...): each entry once, at least one. Throws
-/// UsageError naming a bad or repeated entry and what is accepted.
-std::vector<std::string> ParseVideoFormats(const std::string& list);
-
 /// The file extension of a format, without the dot: "mp4", "webm", "gif".
 std::string VideoFormatExtension(const std::string& format);
 

@@ -32,14 +32,21 @@ struct RecordJob {
   std::vector<int> episodes;               ///< this run's episodes, ascending
   int episodes_requested = 1;              ///< --episodes (a replay: one past its last)
   std::string formats_text;                ///< --format as given
-  std::string from_option;                 ///< --from as given ("" none)
-  std::string replay_file;                 ///< a replay: policy's file ("" none)
-  bool hud = false;                        ///< the HUD overlay is drawn
-  bool quiet = false;                      ///< -q
-  bool report = true;                      ///< write the run's index.html
-  bool overwrite = false;                  ///< --overwrite
-  bool resume = false;                     ///< --resume
-  std::string command_line;                ///< as typed (the manifest's)
+  /// The view options as given: the manifest's words, and what SameRun compares.
+  struct ViewText {
+    std::string camera;   ///< --camera
+    std::string overlay;  ///< --overlay
+    std::string msaa;     ///< --msaa
+    std::string gpu;      ///< --gpu ("" when not given)
+  } view_text;
+  std::string from_option;        ///< --from as given ("" none)
+  std::string replay_file;        ///< a replay: policy's file ("" none)
+  bool hud = false;               ///< the HUD overlay is drawn
+  bool quiet = false;             ///< -q
+  bool report = true;             ///< write the run's index.html
+  bool overwrite = false;         ///< --overwrite
+  bool resume = false;            ///< --resume
+  std::string command_line;       ///< as typed (the manifest's)
   std::string minari_root_given;  ///< --minari-root as given (empty: none), for the export advice
   std::optional<MinariWriteOptions> minari;          ///< --minari: the dataset written after
   std::string model_path;                            ///< the model file the env loaded

@@ -482,30 +482,6 @@ void EncodeBandsAs(const fs::path& path, const std::string& format, int width, i
   EXPECT_EQ(writer.frames_written(), frames);
 }
 
-TEST(VideoFormatsTest, ParsesCommaListsAndNamesBadEntries) {
-  EXPECT_EQ(ParseVideoFormats("mp4"), std::vector<std::string>{"mp4"});
-  EXPECT_EQ(ParseVideoFormats("webm,gif,mp4"), (std::vector<std::string>{"webm", "gif", "mp4"}));
-  // spaces after the commas, as every other list option takes them
-  EXPECT_EQ(ParseVideoFormats("mp4, gif"), (std::vector<std::string>{"mp4", "gif"}));
-  for (const auto& [list, expected] : std::vector<std::pair<std::string, std::string>>{
-           {"avi", "unknown --format 'avi' in 'avi': accepted a comma list of mp4, webm, gif"},
-           {"mp4,", "unknown --format '' in 'mp4,'"},
-           {"", "unknown --format ''"},
-           {"MP4", "unknown --format 'MP4'"},
-           {"gif,webm,gif", "names gif twice"},
-           {"mp4, gfi", "unknown --format 'gfi' in 'mp4, gfi' (did you mean 'gif'?)"},
-           {"mp4, mp4", "names mp4 twice"}}) {
-    try {
-      ParseVideoFormats(list);
-      ADD_FAILURE() << "no exception for '" << list << "'";
-    } catch (const UsageError& e) {
-      EXPECT_NE(std::string(e.what()).find(expected), std::string::npos) << e.what();
-    }
-  }
-  EXPECT_EQ(VideoFormatExtension("webm"), "webm");
-  EXPECT_EQ(VideoFormatExtension("gif"), "gif");
-}
-
 TEST(VideoWriterTest, Mp4CarriesTheTags) {
   TempDir dir;
   const fs::path path = dir.path() / "tagged.mp4";
