@@ -7,7 +7,6 @@
 
 #include "base/errors.h"
 #include "base/suggest.h"
-#include "encode/video_writer.h"
 #include "render/camera.h"
 #include "render/gl_context.h"
 #include "render/gpu_select.h"
@@ -68,7 +67,8 @@ std::vector<const VideoFormat*> ParseVideoFormats(const std::string& list) {
     const VideoFormat* row = FindVideoFormat(entry);
     if (row == nullptr) {
       throw UsageError("unknown --format '" + entry + "' in '" + list + "'" +
-                       DidYouMean(entry, known) + ": accepted a comma list of " + kVideoFormats);
+                       DidYouMean(entry, known) + ": accepted a comma list of " +
+                       VideoFormatList());
     }
     if (std::find(formats.begin(), formats.end(), row) != formats.end()) {
       throw UsageError("--format '" + list + "' names " + entry + " twice: give each format once");

@@ -54,6 +54,9 @@ bool HasPaletteFormat(const std::vector<Format>& formats) {
   return AnyVideoFormat(formats, [](const VideoFormat& f) { return f.palette; });
 }
 
+/// The table's names in its order, for messages: "mp4, webm, gif".
+std::string VideoFormatList();
+
 /// The names of `formats`, in order (the manifest's "formats").
 std::vector<std::string> VideoFormatNames(const std::vector<const VideoFormat*>& formats);
 

@@ -69,7 +69,7 @@ void ValidateVideoOptions(const VideoOptions& options) {
   }
   if (FindVideoFormat(options.format) == nullptr) {
     throw UsageError("unknown video format " + Quoted(options.format) + ": accepted " +
-                     kVideoFormats);
+                     VideoFormatList());
   }
   if (!in_range(options.gif_fps, 1, kMaxGifFps)) {
     throw UsageError("GIF fps " + std::to_string(options.gif_fps) +

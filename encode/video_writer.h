@@ -43,9 +43,6 @@ struct VideoOptions {
   std::vector<std::pair<std::string, std::string>> metadata;
 };
 
-/// The formats VideoOptions::format accepts, in the order --format's help lists them.
-inline constexpr const char* kVideoFormats = "mp4, webm, gif";
-
 /// The file extension of a format, without the dot: "mp4", "webm", "gif".
 std::string VideoFormatExtension(const std::string& format);
 

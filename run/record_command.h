@@ -32,6 +32,20 @@ struct RecordJob {
   std::vector<int> episodes;               ///< this run's episodes, ascending
   int episodes_requested = 1;              ///< --episodes (a replay: one past its last)
   std::string formats_text;                ///< --format as given
+  std::string from_option;                 ///< --from as given ("" none)
+  std::string replay_file;                 ///< a replay: policy's file ("" none)
+  bool hud = false;                        ///< the HUD overlay is drawn
+  bool quiet = false;                      ///< -q
+  bool report = true;                      ///< write the run's index.html
+  bool overwrite = false;                  ///< --overwrite
+  bool resume = false;                     ///< --resume
+  std::string command_line;                ///< as typed (the manifest's)
+  std::string minari_root_given;  ///< --minari-root as given (empty: none), for the export advice
+  std::optional<MinariWriteOptions> minari;          ///< --minari: the dataset written after
+  std::string model_path;                            ///< the model file the env loaded
+  std::chrono::steady_clock::time_point wall_start;  ///< when the command started
+  /// Writes the run's report (inspect/, above this layer) for the manifest at this path.
+  std::function<void(const std::string& manifest_path)> write_report;
   /// The view options as given: the manifest's words, and what SameRun compares.
   struct ViewText {
     std::string camera;   ///< --camera
@@ -39,20 +53,6 @@ struct RecordJob {
     std::string msaa;     ///< --msaa
     std::string gpu;      ///< --gpu ("" when not given)
   } view_text;
-  std::string from_option;        ///< --from as given ("" none)
-  std::string replay_file;        ///< a replay: policy's file ("" none)
-  bool hud = false;               ///< the HUD overlay is drawn
-  bool quiet = false;             ///< -q
-  bool report = true;             ///< write the run's index.html
-  bool overwrite = false;         ///< --overwrite
-  bool resume = false;            ///< --resume
-  std::string command_line;       ///< as typed (the manifest's)
-  std::string minari_root_given;  ///< --minari-root as given (empty: none), for the export advice
-  std::optional<MinariWriteOptions> minari;          ///< --minari: the dataset written after
-  std::string model_path;                            ///< the model file the env loaded
-  std::chrono::steady_clock::time_point wall_start;  ///< when the command started
-  /// Writes the run's report (inspect/, above this layer) for the manifest at this path.
-  std::function<void(const std::string& manifest_path)> write_report;
 };
 
 /// --minari ID for `job` (plan.spec, plan.policy, plan.seed_text, plan.steps, shard and

@@ -42,6 +42,7 @@ TEST(VideoFormatTest, FlagsAnswerForRowsAndForNamesReadBack) {
   EXPECT_FALSE(HasPaletteFormat(std::vector<std::string>{"mp4", "mkv"}));
   EXPECT_FALSE(EncodesH264(std::vector<std::string>{"webm"}));
   EXPECT_EQ(VideoFormatNames({gif, mp4}), (std::vector<std::string>{"gif", "mp4"}));
+  EXPECT_EQ(VideoFormatList(), "mp4, webm, gif");  // what the errors list, in the table's order
 }
 
 TEST(VideoFormatTest, FileNamesAndCodecsFollowTheRow) {
