@@ -41,7 +41,7 @@ std::string FormatCodec(const VideoFormat& format, const std::string& h264) {
 VideoOptions EpisodeVideoOptions(const EpisodeSinkOptions& options, int k,
                                  const VideoFormat& format) {
   VideoOptions video = options.video;
-  video.format = std::string(format.name);
+  video.format = &format;
   video.metadata = {{"title", options.env_id + " seed " + std::to_string(options.seed) +
                                   " episode " + std::to_string(k) + " (" + options.policy + ")"},
                     {"env_id", options.env_id},

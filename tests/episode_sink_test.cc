@@ -293,7 +293,7 @@ TEST(EpisodeFiles, NamesAndCodecs) {
   EpisodeSinkOptions options = SinkOptions("out", 5);
   options.video.fps = 12;
   const VideoOptions video = EpisodeVideoOptions(options, 4, *FindVideoFormat("webm"));
-  EXPECT_EQ(video.format, "webm");
+  EXPECT_EQ(video.format, FindVideoFormat("webm"));
   EXPECT_EQ(video.fps, 12);
   ASSERT_FALSE(video.metadata.empty());
   EXPECT_EQ(video.metadata[0].first, "title");

@@ -52,7 +52,7 @@ TEST(VideoFormatTest, FileNamesAndCodecsFollowTheRow) {
     const std::string codec = FormatCodec(row, "h264_nvenc");
     EXPECT_EQ(codec, row.codec.empty() ? "h264_nvenc" : std::string(row.codec)) << row.name;
     EpisodeSinkOptions sink;
-    EXPECT_EQ(EpisodeVideoOptions(sink, 0, row).format, row.name);
+    EXPECT_EQ(EpisodeVideoOptions(sink, 0, row).format, &row);
   }
 }
 
