@@ -1,4 +1,4 @@
-// A test hook for the kill-anywhere and Slurm tests (tests/kill_anywhere_test.cc,
+// A test hook for the kill-anywhere and Slurm tests (tests/cli_record_kill_anywhere_test.cc,
 // tests/slurm_test.cc): the places where record makes a file final (the encoder's flush, and
 // before and after each rename of a temporary onto its final name) are numbered per process as
 // they are reached.

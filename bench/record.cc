@@ -85,26 +85,12 @@ nlohmann::json StageAccount(const std::string& self, const AssetSource& assets,
           {"wall_s", run.child.wall_s}, {"lp_num_threads", 0}, {"cpu_ms_per_frame", ms}};
 }
 
-}  // namespace
-
-nlohmann::json BenchRecord(const AssetSource& assets, const std::string& backends, double budget_s,
-                           bool peers) {
-  (void)budget_s;
-  nlohmann::json result;
-  const std::string self = fs::read_symlink("/proc/self/exe").string();
-  const fs::path dir =
-      fs::temp_directory_path() / ("fetchscope_bench_record_" + std::to_string(getpid()));
-  const int episodes = 4, frames = episodes * 51;
-  const std::vector<std::string> common =
-      Concat({"--env-id", "FetchPush-v4", "--policy", "scripted", "--episodes",
-              std::to_string(episodes), "--width", "640", "--height", "480"},
-             AssetsArg(assets));
-  const std::vector<std::string> backend_list = Split(backends);
-  result["stages"] =
-      StageAccount(self, assets, backend_list.empty() ? "auto" : backend_list.front(), dir);
+// Whole-process record rows, per backend: the default (auto) msaa beside Gymnasium's 4, and 0
+// where auto did not already pick it. `first_backend` gets the first backend that recorded.
+nlohmann::json BackendRows(const std::string& self, const std::vector<std::string>& common,
+                           const std::string& backends, int episodes, int frames,
+                           const fs::path& dir, std::string* first_backend) {
   nlohmann::json rows = nlohmann::json::array();
-  std::string first_backend;
-  std::printf("%-30s %-10s %s\n", "record (whole process)", "size", "ms/frame   peak RSS");
   for (const std::string& backend : Split(backends)) {
     // the default (auto) beside Gymnasium's 4; 0 too where auto did not already pick it
     std::vector<std::string> msaa_values = {"auto", "4"};
@@ -121,7 +107,7 @@ nlohmann::json BenchRecord(const AssetSource& assets, const std::string& backend
                     run.child.exit_code);
         break;
       }
-      if (first_backend.empty()) first_backend = backend;
+      if (first_backend->empty()) *first_backend = backend;
       const int samples = ManifestMsaa(run.manifest, msaa);
       if (msaa == "auto" && samples != 0 && msaa_values.size() == 2) msaa_values.push_back("0");
       const std::string label = "fetchscope " + backend + " " + MsaaLabel(msaa, samples);
@@ -139,72 +125,126 @@ nlohmann::json BenchRecord(const AssetSource& assets, const std::string& backend
       rows.push_back(row);
     }
   }
-  result["fetchscope"] = rows;
+  return rows;
+}
 
-  // --jobs 1 against --jobs 2: the same episodes, whole process, the default msaa
+// --jobs 1 against --jobs 2: the same episodes, whole process, the default msaa
+nlohmann::json JobsRows(const std::string& self, const AssetSource& assets,
+                        const std::string& first_backend, const fs::path& dir) {
   nlohmann::json jobs_rows = nlohmann::json::array();
-  if (first_backend.empty()) {
-    result["jobs"] = {{"skipped", "no backend recorded"}};
-  } else if (!RecordHasJobs(self)) {
-    result["jobs"] = {{"skipped", "this build's record has no --jobs"}};
+  if (first_backend.empty()) return {{"skipped", "no backend recorded"}};
+  if (!RecordHasJobs(self)) {
     std::printf("record --jobs: skipped (this build's record has no --jobs)\n");
-  } else {
-    const int job_episodes = 8;
-    double base = 0;
-    for (int jobs : {1, 2}) {
-      const RecordRun run = RunRecordChild(
-          self,
-          Concat(Concat({"--env-id", "FetchPush-v4", "--policy", "scripted", "--episodes",
-                         std::to_string(job_episodes), "--width", "640", "--height", "480"},
-                        AssetsArg(assets)),
-                 {"--backend", first_backend, "--jobs", std::to_string(jobs)}),
-          dir);
-      if (run.child.exit_code != 0) {
-        jobs_rows.push_back(
-            {{"jobs", jobs},
-             {"skipped", "record failed (exit " + std::to_string(run.child.exit_code) + ")"}});
-        continue;
-      }
-      const double eps = job_episodes / run.child.wall_s;
-      if (jobs == 1) base = eps;
-      const std::string label = "fetchscope " + first_backend + " --jobs " + std::to_string(jobs);
-      std::printf("%-30s %4dx%-5d %7.2f episodes/s (x%.2f)   %.0f MiB\n", label.c_str(), 640, 480,
-                  eps, base > 0 ? eps / base : 0.0, run.child.peak_rss_mib);
+    return {{"skipped", "this build's record has no --jobs"}};
+  }
+  const int job_episodes = 8;
+  double base = 0;
+  for (int jobs : {1, 2}) {
+    const RecordRun run = RunRecordChild(
+        self,
+        Concat(Concat({"--env-id", "FetchPush-v4", "--policy", "scripted", "--episodes",
+                       std::to_string(job_episodes), "--width", "640", "--height", "480"},
+                      AssetsArg(assets)),
+               {"--backend", first_backend, "--jobs", std::to_string(jobs)}),
+        dir);
+    if (run.child.exit_code != 0) {
       jobs_rows.push_back(
-          {{"backend", first_backend},
-           {"jobs", jobs},
-           {"episodes", job_episodes},
-           {"frames", job_episodes * 51},
-           {"wall_s", run.child.wall_s},
-           {"episodes_per_s", eps},
-           {"speedup_vs_jobs_1", base > 0 ? nlohmann::json(eps / base) : nlohmann::json(nullptr)},
-           {"msaa", ManifestMsaa(run.manifest, "auto")},
-           {"peak_rss_mib", run.child.peak_rss_mib}});
+          {{"jobs", jobs},
+           {"skipped", "record failed (exit " + std::to_string(run.child.exit_code) + ")"}});
+      continue;
     }
-    result["jobs"] = jobs_rows;
+    const double eps = job_episodes / run.child.wall_s;
+    if (jobs == 1) base = eps;
+    const std::string label = "fetchscope " + first_backend + " --jobs " + std::to_string(jobs);
+    std::printf("%-30s %4dx%-5d %7.2f episodes/s (x%.2f)   %.0f MiB\n", label.c_str(), 640, 480,
+                eps, base > 0 ? eps / base : 0.0, run.child.peak_rss_mib);
+    jobs_rows.push_back(
+        {{"backend", first_backend},
+         {"jobs", jobs},
+         {"episodes", job_episodes},
+         {"frames", job_episodes * 51},
+         {"wall_s", run.child.wall_s},
+         {"episodes_per_s", eps},
+         {"speedup_vs_jobs_1", base > 0 ? nlohmann::json(eps / base) : nlohmann::json(nullptr)},
+         {"msaa", ManifestMsaa(run.manifest, "auto")},
+         {"peak_rss_mib", run.child.peak_rss_mib}});
   }
+  return jobs_rows;
+}
 
-  if (peers) {
-    const std::string rgb = dir.string() + ".rgb", mp4 = dir.string() + ".mp4";
-    nlohmann::json peer = PeerMujocoRecord(GenuineModel(assets, "push.xml"), frames, rgb);
-    if (peer.contains("frames") && HaveProgram("ffmpeg")) {
-      const ChildRun enc = RunChild({"ffmpeg", "-y", "-f", "rawvideo", "-pix_fmt", "rgb24", "-s",
-                                     "640x480", "-r", "25", "-i", rgb, "-vf", "vflip", mp4});
-      const double total = peer["wall_s"].get<double>() + enc.wall_s;
-      peer["ffmpeg_wall_s"] = enc.wall_s;
-      peer["ffmpeg_peak_rss_mib"] = enc.peak_rss_mib;
-      peer["s_per_frame"] = total / peer["frames"].get<double>();
-      std::printf("%-26s %4dx%-5d %7.2f   %.0f MiB (record) + %.0f MiB (ffmpeg)\n",
-                  "mujoco-record + ffmpeg", 640, 480, 1000 * peer["s_per_frame"].get<double>(),
-                  peer["peak_rss_mib"].get<double>(), enc.peak_rss_mib);
-    } else if (peer.contains("skipped")) {
-      std::printf("mujoco-record + ffmpeg: %s\n", peer["skipped"].get<std::string>().c_str());
-    }
-    std::error_code ec;
-    fs::remove(rgb, ec);
-    fs::remove(mp4, ec);
-    result["mujoco_record_plus_ffmpeg"] = peer;
+// The peer: MuJoCo's own recorder writing raw frames, then ffmpeg encoding them.
+nlohmann::json PeerRecordRow(const AssetSource& assets, int frames, const fs::path& dir) {
+  const std::string rgb = dir.string() + ".rgb", mp4 = dir.string() + ".mp4";
+  nlohmann::json peer = PeerMujocoRecord(GenuineModel(assets, "push.xml"), frames, rgb);
+  if (peer.contains("frames") && HaveProgram("ffmpeg")) {
+    const ChildRun enc = RunChild({"ffmpeg", "-y", "-f", "rawvideo", "-pix_fmt", "rgb24", "-s",
+                                   "640x480", "-r", "25", "-i", rgb, "-vf", "vflip", mp4});
+    const double total = peer["wall_s"].get<double>() + enc.wall_s;
+    peer["ffmpeg_wall_s"] = enc.wall_s;
+    peer["ffmpeg_peak_rss_mib"] = enc.peak_rss_mib;
+    peer["s_per_frame"] = total / peer["frames"].get<double>();
+    std::printf("%-26s %4dx%-5d %7.2f   %.0f MiB (record) + %.0f MiB (ffmpeg)\n",
+                "mujoco-record + ffmpeg", 640, 480, 1000 * peer["s_per_frame"].get<double>(),
+                peer["peak_rss_mib"].get<double>(), enc.peak_rss_mib);
+  } else if (peer.contains("skipped")) {
+    std::printf("mujoco-record + ffmpeg: %s\n", peer["skipped"].get<std::string>().c_str());
   }
+  std::error_code ec;
+  fs::remove(rgb, ec);
+  fs::remove(mp4, ec);
+  return peer;
+}
+
+// Samples the child's resident set every `interval_s` until it exits (sampled directly: it is
+// not a shell); `usage` and `status` get how it ended.
+nlohmann::json SampleRss(ChildProcess& child, Clock::time_point start, double interval_s,
+                         rusage* usage, std::optional<ChildExit>* status) {
+  nlohmann::json samples = nlohmann::json::array();
+  double next = 0;
+  while (!(*status = child.TryWait(usage))) {
+    const double t = Since(start);
+    if (t >= next) {
+      const double rss = ReadRssMiB(child.pid());
+      if (rss >= 0) samples.push_back({{"t_s", t}, {"rss_mib", rss}});
+      next += interval_s;
+    }
+    usleep(20000);
+  }
+  return samples;
+}
+
+// The samples as a table of about 20 rows.
+void PrintRssTable(const nlohmann::json& samples) {
+  std::printf("%-10s %s\n", "t (s)", "RSS (MiB)");
+  const size_t step = std::max<size_t>(1, samples.size() / 20);  // about 20 table rows
+  for (size_t i = 0; i < samples.size(); i += step) {
+    std::printf("%-10.1f %.1f\n", samples[i]["t_s"].get<double>(),
+                samples[i]["rss_mib"].get<double>());
+  }
+}
+
+}  // namespace
+
+nlohmann::json BenchRecord(const AssetSource& assets, const std::string& backends, double budget_s,
+                           bool peers) {
+  (void)budget_s;
+  nlohmann::json result;
+  const std::string self = fs::read_symlink("/proc/self/exe").string();
+  const fs::path dir =
+      fs::temp_directory_path() / ("fetchscope_bench_record_" + std::to_string(getpid()));
+  const int episodes = 4, frames = episodes * 51;
+  const std::vector<std::string> common =
+      Concat({"--env-id", "FetchPush-v4", "--policy", "scripted", "--episodes",
+              std::to_string(episodes), "--width", "640", "--height", "480"},
+             AssetsArg(assets));
+  const std::vector<std::string> backend_list = Split(backends);
+  result["stages"] =
+      StageAccount(self, assets, backend_list.empty() ? "auto" : backend_list.front(), dir);
+  std::string first_backend;
+  std::printf("%-30s %-10s %s\n", "record (whole process)", "size", "ms/frame   peak RSS");
+  result["fetchscope"] = BackendRows(self, common, backends, episodes, frames, dir, &first_backend);
+  result["jobs"] = JobsRows(self, assets, first_backend, dir);
+  if (peers) result["mujoco_record_plus_ffmpeg"] = PeerRecordRow(assets, frames, dir);
   return result;
 }
 
@@ -233,20 +273,9 @@ nlohmann::json BenchSoak(const AssetSource& assets, const std::string& backends,
   } catch (const RunError& e) {
     throw RunError(std::string("bench soak: cannot start record: ") + e.what());
   }
-  // sample the child's resident set until it exits (sampled directly: it is not a shell)
-  nlohmann::json samples = nlohmann::json::array();
   rusage usage{};
-  double next = 0;
   std::optional<ChildExit> status;
-  while (!(status = child.TryWait(&usage))) {
-    const double t = Since(start);
-    if (t >= next) {
-      const double rss = ReadRssMiB(child.pid());
-      if (rss >= 0) samples.push_back({{"t_s", t}, {"rss_mib", rss}});
-      next += interval_s;
-    }
-    usleep(20000);
-  }
+  const nlohmann::json samples = SampleRss(child, start, interval_s, &usage, &status);
   const double wall = Since(start);
   const int exit_code = status->ShellCode();
   const std::optional<Manifest> manifest = ReadManifestIn(dir);
@@ -268,12 +297,7 @@ nlohmann::json BenchSoak(const AssetSource& assets, const std::string& backends,
     last = rss;
   }
   const double peak = usage.ru_maxrss / 1024.0;
-  std::printf("%-10s %s\n", "t (s)", "RSS (MiB)");
-  const size_t step = std::max<size_t>(1, samples.size() / 20);  // about 20 table rows
-  for (size_t i = 0; i < samples.size(); i += step) {
-    std::printf("%-10.1f %.1f\n", samples[i]["t_s"].get<double>(),
-                samples[i]["rss_mib"].get<double>());
-  }
+  PrintRssTable(samples);
   std::printf(
       "soak: %ld frames in %.1f s; RSS %.1f MiB after a tenth of the run, at most %.1f later, %.1f "
       "at the "

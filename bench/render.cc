@@ -34,6 +34,74 @@ namespace fetchscope::bench {
 
 namespace fs = std::filesystem;
 
+namespace {
+
+// Render+readback frames/s of one size and msaa on `gl`, for a third of `budget_s`, with the
+// scripted policy's episodes: its row. Where auto picked samples, 0 joins `msaa_values`.
+nlohmann::json RenderRow(GlContext& gl, const EnvSpec& spec, const AssetSource& assets, int w,
+                         int h, const std::string& msaa, double budget_s,
+                         std::vector<std::string>* msaa_values) {
+  FetchEnv env(spec, assets);
+  RenderOptions options;  // render's defaults: the default camera and overlays
+  options.width = w;
+  options.height = h;
+  options.msaa_samples = msaa == "auto" ? kMsaaAuto : std::stoi(msaa);  // auto, 4 or 0
+  Renderer renderer(gl, env.model(), options);
+  if (msaa == "auto" && renderer.msaa_samples() != 0 && msaa_values->size() == 2)
+    msaa_values->push_back("0");
+  PolicyContext context;
+  auto policy = MakePolicy("scripted", spec, context);
+  std::vector<uint8_t> rgb(static_cast<size_t>(w) * h * 3);
+  long frames = 0;
+  double busy = 0;
+  int episode = 0;
+  // warm up once (shader compilation, first-touch allocations)
+  RunEpisode(env, *policy, 0, 0, 1, [&](const StepRecord& r, const StepResult*) {
+    renderer.Render(env.data(), MakeFrameInfo(env, r), rgb.data());
+    return true;
+  });
+  while (busy < budget_s / 3) {
+    RunEpisode(env, *policy, episode, episode, 50, [&](const StepRecord& r, const StepResult*) {
+      const auto t0 = Clock::now();
+      renderer.Render(env.data(), MakeFrameInfo(env, r), rgb.data());
+      busy += Since(t0);
+      ++frames;
+      return busy < budget_s / 3;
+    });
+    ++episode;
+  }
+  const int samples = renderer.msaa_samples();
+  std::printf("%-26s %4dx%-5d %.1f\n", (gl.info().backend + " " + MsaaLabel(msaa, samples)).c_str(),
+              w, h, frames / busy);
+  return {{"backend", gl.info().backend},
+          {"gl_renderer", gl.info().renderer},
+          {"msaa_requested", msaa},
+          {"msaa", samples},
+          {"msaa_reason", renderer.msaa_reason()},
+          {"width", w},
+          {"height", h},
+          {"frames", frames},
+          {"frames_per_s", frames / busy}};
+}
+
+// The peer: MuJoCo's own record sample (mujoco-record under xvfb-run).
+nlohmann::json PeerRenderRow(const AssetSource& assets) {
+  const std::string rgb =
+      (fs::temp_directory_path() / ("fetchscope_bench_" + std::to_string(getpid()) + ".rgb"))
+          .string();
+  nlohmann::json peer = PeerMujocoRecord(GenuineModel(assets, "pick_and_place.xml"), 250, rgb);
+  fs::remove(rgb);
+  if (peer.contains("frames_per_s")) {
+    std::printf("%-26s %4dx%-5d %.1f  (physics included, process start included)\n",
+                "mujoco-record (xvfb)", 640, 480, peer["frames_per_s"].get<double>());
+  } else {
+    std::printf("mujoco-record: %s\n", peer["skipped"].get<std::string>().c_str());
+  }
+  return peer;
+}
+
+}  // namespace
+
 nlohmann::json BenchRender(const AssetSource& assets, const std::string& backends, double budget_s,
                            bool peers) {
   nlohmann::json result;
@@ -55,68 +123,11 @@ nlohmann::json BenchRender(const AssetSource& assets, const std::string& backend
     for (size_t m = 0; m < msaa_values.size(); ++m)
       for (auto [w, h] : sizes) {
         const std::string msaa = msaa_values[m];  // a copy: the list may grow below
-        FetchEnv env(spec, assets);
-        RenderOptions options;  // render's defaults: the default camera and overlays
-        options.width = w;
-        options.height = h;
-        options.msaa_samples = msaa == "auto" ? kMsaaAuto : std::stoi(msaa);  // auto, 4 or 0
-        Renderer renderer(*gl, env.model(), options);
-        if (msaa == "auto" && renderer.msaa_samples() != 0 && msaa_values.size() == 2)
-          msaa_values.push_back("0");
-        PolicyContext context;
-        auto policy = MakePolicy("scripted", spec, context);
-        std::vector<uint8_t> rgb(static_cast<size_t>(w) * h * 3);
-        long frames = 0;
-        double busy = 0;
-        int episode = 0;
-        // warm up once (shader compilation, first-touch allocations)
-        RunEpisode(env, *policy, 0, 0, 1, [&](const StepRecord& r, const StepResult*) {
-          renderer.Render(env.data(), MakeFrameInfo(env, r), rgb.data());
-          return true;
-        });
-        while (busy < budget_s / 3) {
-          RunEpisode(env, *policy, episode, episode, 50,
-                     [&](const StepRecord& r, const StepResult*) {
-                       const auto t0 = Clock::now();
-                       renderer.Render(env.data(), MakeFrameInfo(env, r), rgb.data());
-                       busy += Since(t0);
-                       ++frames;
-                       return busy < budget_s / 3;
-                     });
-          ++episode;
-        }
-        const int samples = renderer.msaa_samples();
-        std::printf("%-26s %4dx%-5d %.1f\n",
-                    (gl->info().backend + " " + MsaaLabel(msaa, samples)).c_str(), w, h,
-                    frames / busy);
-        rows.push_back({{"backend", gl->info().backend},
-                        {"gl_renderer", gl->info().renderer},
-                        {"msaa_requested", msaa},
-                        {"msaa", samples},
-                        {"msaa_reason", renderer.msaa_reason()},
-                        {"width", w},
-                        {"height", h},
-                        {"frames", frames},
-                        {"frames_per_s", frames / busy}});
+        rows.push_back(RenderRow(*gl, spec, assets, w, h, msaa, budget_s, &msaa_values));
       }
   }
   result["fetchscope"] = rows;
-  if (peers) {
-    const std::string rgb =
-        (fs::temp_directory_path() / ("fetchscope_bench_" + std::to_string(getpid()) + ".rgb"))
-            .string();
-    result["mujoco_record"] =
-        PeerMujocoRecord(GenuineModel(assets, "pick_and_place.xml"), 250, rgb);
-    fs::remove(rgb);
-    if (result["mujoco_record"].contains("frames_per_s")) {
-      std::printf("%-26s %4dx%-5d %.1f  (physics included, process start included)\n",
-                  "mujoco-record (xvfb)", 640, 480,
-                  result["mujoco_record"]["frames_per_s"].get<double>());
-    } else {
-      std::printf("mujoco-record: %s\n",
-                  result["mujoco_record"]["skipped"].get<std::string>().c_str());
-    }
-  }
+  if (peers) result["mujoco_record"] = PeerRenderRow(assets);
   return result;
 }
 

@@ -100,13 +100,6 @@ std::string& CommandLine() {
   return line;
 }
 
-std::string DatasetPermalink(const std::string& subcommand, const std::string& env_id,
-                             const std::string& policy, uint64_t seed, int episodes, int steps) {
-  return "fetchscope " FETCHSCOPE_VERSION " " + subcommand + " --env-id " + env_id + " --policy " +
-         policy + " --seed " + std::to_string(seed) + " --episodes " + std::to_string(episodes) +
-         " --steps " + std::to_string(steps);
-}
-
 void AddDatasetAuthorOptions(CLI::App* sub, DatasetAuthor* author) {
   sub->add_option("--minari-author", author->name,
                   "The dataset's metadata `author` (default fetchscope)");

@@ -65,12 +65,6 @@ inline constexpr const char* kStepsHelp =
 /// The command line as typed (set by main), recorded in manifests.
 std::string& CommandLine();
 
-/// A dataset's `code_permalink` for rollout and record, one shape for both: "fetchscope
-/// VERSION SUBCOMMAND --env-id ID --policy P --seed S --episodes N --steps T" (the options that
-/// shape the data, resolved; not the binary's path, --jobs or output folders, which do not).
-std::string DatasetPermalink(const std::string& subcommand, const std::string& env_id,
-                             const std::string& policy, uint64_t seed, int episodes, int steps);
-
 /// The datasets options shared by rollout, record and export: --minari-author,
 /// --minari-author-email (metadata `author`, `author_email`).
 struct DatasetAuthor {

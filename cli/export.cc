@@ -13,8 +13,9 @@
 #include "base/stop_signal.h"
 #include "cli/command.h"
 #include "cli/common.h"
-#include "dataset/minari_trajectory.h"
-#include "dataset/minari_writer.h"
+#include "dataset/minari_format.h"
+#include "run/episode_output.h"
+#include "run/minari_output.h"
 #include "src/env_spec.h"
 #include "src/trajectory.h"
 
@@ -105,19 +106,19 @@ int RunExport(const ExportOptions& o) {
   const Trajectory t = ReadInput(o.input);
   const EnvSpec& spec = FindEnvSpec(t.env_id);
   CheckComplete(t, o);
-  MinariWriteOptions w;
-  w.dataset_id = o.minari;
-  w.root = MinariRoot(o.minari_root);
-  w.overwrite = o.overwrite;
-  w.algorithm_name = t.policy.empty() ? "unknown" : t.policy;
-  if (!o.author.name.empty()) w.author = o.author.name;
-  w.author_email = o.author.email;
-  w.code_permalink = "fetchscope " FETCHSCOPE_VERSION " export " + o.input;
-  w.description = spec.id + " episodes recorded by fetchscope (policy " + w.algorithm_name +
-                  ", seed " + std::to_string(t.seed) + ")";
-  fs::path path;
+  OutputRun run;
+  run.command = "export";
+  run.spec = &spec;
+  run.seed = t.seed;
+  run.seed_text = std::to_string(t.seed);
+  run.policy = t.policy;
+  run.steps = LongestEpisodeSteps(t);  // the TimeLimit they ran under
+  run.source = o.input;
+  MinariOutput output(
+      {o.minari, MinariRoot(o.minari_root), o.overwrite, o.author.name, o.author.email});
+  std::string path;
   try {
-    path = WriteMinariDataset(t, w);
+    path = WriteEpisodes(t, run, output);
   } catch (const MinariInterrupted& e) {
     std::fprintf(stderr, "export: %s; nothing written%s\n", e.what(),
                  o.overwrite ? ", the existing dataset is unchanged" : "");

@@ -228,12 +228,11 @@ std::string Join(const std::vector<std::string>& words) {
   return out;
 }
 
-std::string BashCompletion(const CLI::App& app) {
-  const CLI::Formatter& f = Formatter(app);
+// The values of the options that take one of a few words (the rest complete file names).
+std::vector<std::pair<std::string, std::string>> CompletionValues() {
   std::vector<std::string> env_ids = {"auto"};
   for (const EnvSpec& spec : AllEnvSpecs()) env_ids.push_back(spec.id);
-  // the values of the options that take one of a few words (the rest complete file names)
-  const std::vector<std::pair<std::string, std::string>> values = {
+  return {
       {"--env-id", Join(env_ids)},
       {"--camera", Join(CameraNames())},
       {"--policy", "random zero scripted replay: exec:"},
@@ -252,6 +251,42 @@ std::string BashCompletion(const CLI::App& app) {
       {"--gpu", "all cuda:0"},
       {"--what", "sim render encode record all node soak"},
   };
+}
+
+// Every other option that takes a value (a file or folder name), sorted.
+std::vector<std::string> FileOptions(
+    const CLI::Formatter& f, const std::vector<Entry>& entries,
+    const std::vector<std::pair<std::string, std::string>>& values) {
+  std::set<std::string> valued;
+  for (const Entry& e : entries) {
+    for (const CLI::Option* opt : e.app->get_options()) {
+      if (!opt->nonpositional() || !TakesValue(f, opt)) continue;
+      for (const std::string& n : opt->get_lnames()) valued.insert("--" + n);
+      for (const std::string& n : opt->get_snames()) valued.insert("-" + n);
+    }
+  }
+  for (const auto& [option, words] : values) valued.erase(option);
+  return std::vector<std::string>(valued.begin(), valued.end());
+}
+
+// The words after a command: its subcommands and options (help's: the commands too).
+std::vector<std::string> CommandWords(const Entry& e, const std::vector<std::string>& top) {
+  std::vector<std::string> words;
+  for (const CLI::App* sub : e.app->get_subcommands([](const CLI::App*) { return true; })) {
+    words.push_back(sub->get_name());
+  }
+  for (const CLI::Option* opt : e.app->get_options()) {
+    if (!opt->nonpositional()) continue;
+    for (const std::string& n : opt->get_lnames()) words.push_back("--" + n);
+    for (const std::string& n : opt->get_snames()) words.push_back("-" + n);
+  }
+  if (e.path == "help") words.insert(words.end(), top.begin(), top.end());
+  return words;
+}
+
+std::string BashCompletion(const CLI::App& app) {
+  const CLI::Formatter& f = Formatter(app);
+  const std::vector<std::pair<std::string, std::string>> values = CompletionValues();
   const std::vector<Entry> entries = AllCommands(app);
   std::vector<std::string> top;
   for (const CLI::App* sub : app.get_subcommands([](const CLI::App*) { return true; })) {
@@ -280,17 +315,8 @@ std::string BashCompletion(const CLI::App& app) {
        << "' -- \"$cur\")); return ;;\n";
   }
   // every other option that takes a value: a file or folder name
-  std::set<std::string> valued;
-  for (const Entry& e : entries) {
-    for (const CLI::Option* opt : e.app->get_options()) {
-      if (!opt->nonpositional() || !TakesValue(f, opt)) continue;
-      for (const std::string& n : opt->get_lnames()) valued.insert("--" + n);
-      for (const std::string& n : opt->get_snames()) valued.insert("-" + n);
-    }
-  }
-  for (const auto& [option, words] : values) valued.erase(option);
-  if (!valued.empty()) {
-    std::vector<std::string> names(valued.begin(), valued.end());
+  const std::vector<std::string> names = FileOptions(f, entries, values);
+  if (!names.empty()) {
     sh << "    " << Replace(Join(names), " ", "|") << ")\n"
        << "      COMPREPLY=($(compgen -f -- \"$cur\")); return ;;\n";
   }
@@ -299,17 +325,7 @@ std::string BashCompletion(const CLI::App& app) {
      << "  case $cmd in\n"
      << "    '') words='" << Join(top) << " --help --version' ;;\n";
   for (const Entry& e : entries) {
-    std::vector<std::string> words;
-    for (const CLI::App* sub : e.app->get_subcommands([](const CLI::App*) { return true; })) {
-      words.push_back(sub->get_name());
-    }
-    for (const CLI::Option* opt : e.app->get_options()) {
-      if (!opt->nonpositional()) continue;
-      for (const std::string& n : opt->get_lnames()) words.push_back("--" + n);
-      for (const std::string& n : opt->get_snames()) words.push_back("-" + n);
-    }
-    if (e.path == "help") words.insert(words.end(), top.begin(), top.end());
-    sh << "    '" << e.path << "') words='" << Join(words) << "' ;;\n";
+    sh << "    '" << e.path << "') words='" << Join(CommandWords(e, top)) << "' ;;\n";
   }
   sh << "  esac\n"
      << "  if [[ $cur == -* || -n $words && $cmd == '' ]]; then\n"

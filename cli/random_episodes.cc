@@ -2,7 +2,6 @@
 // episodes on the episode scheduler's worker processes; the JSON is byte-identical to --jobs 1.
 #include <signal.h>
 
-#include <cmath>
 #include <cstdio>
 
 #include "base/errors.h"
@@ -13,33 +12,11 @@
 #include "cli/jobs_options.h"
 #include "cli/resolve.h"
 #include "run/episode_scheduler.h"
-#include "src/episode.h"
+#include "run/random_episodes_run.h"
 #include "src/fetch_env.h"
 
 namespace fetchscope::cli {
 namespace {
-
-// Plays random episodes and reports each one's row of the metrics.
-class RandomEpisodeRunner : public EpisodeRunner {
- public:
-  RandomEpisodeRunner(const EnvSpec& spec, const AssetSource& assets, const PolicyContext& context)
-      : sequence_(std::make_unique<FetchEnv>(spec, assets), MakePolicy("random", spec, context),
-                  context.seed, spec.max_episode_steps) {}
-  void Run(int k, WorkerChannel& channel) override {
-    const EpisodeRecord ep = sequence_.Play(
-        k, [&](const StepRecord&, const StepResult*) { return !channel.StopRequested(); });
-    const StepRecord& last = ep.steps.back();
-    channel.Done(k,
-                 {{"index", k},
-                  {"return", JsonDouble(ep.episode_return)},
-                  {"length", static_cast<int>(ep.steps.size()) - 1},
-                  {"is_success", last.is_success},
-                  {"final_distance", GoalDistance(last.obs.achieved_goal, last.obs.desired_goal)}});
-  }
-
- private:
-  EpisodeSequence sequence_;
-};
 
 // The chapter's D3 expects a dense mean return of -15 to -25 on FetchReachDense-v4; a line
 // saying what this run measured when it lies outside that ("" inside it, or for another env).
@@ -57,63 +34,30 @@ std::string MeanReturnVersusChapter(const EnvSpec& spec, double mean, int episod
 
 }  // namespace
 
+// parse (AddRandomEpisodes) -> resolve -> run (RunRandomEpisodesJob) -> print.
 int RunRandomEpisodes(const RandomEpisodesOptions& o) {
   const ResolvedEnv env = ResolveEnv(o.env);
   const EnvSpec& spec = *env.spec;
   const uint64_t seed = env.seed;
-  const AssetSource& assets = env.assets;
   const WorkerMode mode = ParseWorkerMode(o.worker_mode);
   const std::string path = JsonOutPath(o.json_out, "random_metrics");
   CheckJsonOutReplaces(path, {{"env_id", spec.id}, {"seed", seed}}, o.overwrite);
-  FetchEnv fetch(spec, assets);  // bad assets fail here, before any worker starts
-  PolicyContext context;
-  context.seed = seed;
-  ScheduleOptions schedule;
-  for (int k = 0; k < o.n_episodes; ++k) schedule.episodes.push_back(k);
-  schedule.jobs = ResolveJobs(o.jobs, o.n_episodes);
-  schedule.mode = mode;
-  const ScheduleResult result = RunEpisodes(
-      schedule, [&](int) { return std::make_unique<RandomEpisodeRunner>(spec, assets, context); });
-  if (!result.failures.empty()) {
-    if (result.failures.front().usage) throw UsageError(result.failures.front().message);
-    throw RunError(DescribeFailures(result));
-  }
-  if (result.signal) {
+  FetchEnv fetch(spec, env.assets);  // bad assets fail here, before any worker starts
+  RandomEpisodesJob job;
+  job.spec = &spec;
+  job.assets = env.assets;
+  job.seed = seed;
+  job.episodes = o.n_episodes;
+  job.jobs = ResolveJobs(o.jobs, o.n_episodes);
+  job.mode = mode;
+  const RandomMetrics m = RunRandomEpisodesJob(job);
+  if (m.signal) {
     std::fprintf(stderr, "random-episodes: interrupted (%s); nothing written\n",
-                 result.signal == SIGINT ? "SIGINT" : "SIGTERM");
-    return 128 + result.signal;
+                 m.signal == SIGINT ? "SIGINT" : "SIGTERM");
+    return 128 + m.signal;
   }
-  nlohmann::json rows = nlohmann::json::array();
-  std::vector<double> returns, finals;
-  double successes = 0, total_length = 0;
-  for (const auto& [k, row] : result.results) {  // in episode order, whichever worker ran it
-    returns.push_back(row.at("return").get<double>());
-    finals.push_back(row.at("final_distance").get<double>());
-    successes += row.at("is_success").get<bool>();
-    total_length += row.at("length").get<int>();
-    rows.push_back(row);
-  }
-  const double n = o.n_episodes;
-  double mean = 0, var = 0, mean_final = 0;
-  for (double r : returns) mean += r / n;
-  for (double r : returns) var += (r - mean) * (r - mean) / n;
-  for (double f : finals) mean_final += f / n;
-  nlohmann::json j = {{"env_id", spec.id},
-                      {"seed", seed},
-                      {"policy", "random"},
-                      {"n_episodes", o.n_episodes},
-                      {"success_rate", successes / n},
-                      {"mean_return", mean},
-                      // the population standard deviation (numpy's np.std default, ddof=0)
-                      {"std_return", std::sqrt(var)},
-                      {"std_return_ddof", 0},
-                      {"mean_episode_length", total_length / n},
-                      {"mean_final_distance", mean_final},
-                      {"final_distances", finals},
-                      {"episodes", rows},
-                      {"assets", AssetsJson(fetch.assets())},
-                      {"versions", VersionsJson()}};
-  const std::string chapter = MeanReturnVersusChapter(spec, mean, o.n_episodes, seed);
+  nlohmann::json j = RandomMetricsJson(job, m, fetch.assets());
+  const std::string chapter = MeanReturnVersusChapter(spec, m.mean_return, o.n_episodes, seed);
   if (!chapter.empty()) j["chapter_differences"] = {chapter};
   if (o.json_out.empty()) {
     std::printf("%s\n", DumpJson(j).c_str());
@@ -123,8 +67,8 @@ int RunRandomEpisodes(const RandomEpisodesOptions& o) {
   std::printf(
       "%s, %d random episodes (seed %s): success rate %.3f, mean return %.3f (std %.3f), "
       "mean length %.1f, mean final distance %.4f m\nwrote %s\n",
-      spec.id.c_str(), o.n_episodes, o.env.seed.c_str(), successes / n, mean, std::sqrt(var),
-      total_length / n, mean_final, path.c_str());
+      spec.id.c_str(), o.n_episodes, o.env.seed.c_str(), m.success_rate, m.mean_return,
+      m.std_return, m.mean_length, m.mean_final_distance, path.c_str());
   if (!chapter.empty()) std::printf("differs from the chapter: %s\n", chapter.c_str());
   return 0;
 }

@@ -215,8 +215,9 @@ RecordJob ResolveRecord(RecordOptions* options, const TrajectorySource* from) {
   job.resume = o.resume;
   if (!o.minari.empty()) {
     job.minari_root_given = o.minari_root;
-    job.minari = RecordMinariOptions(job, o.minari, MinariRoot(o.minari_root), o.author.name,
-                                     o.author.email);
+    job.minari = MinariRequest{o.minari, MinariRoot(o.minari_root), o.overwrite, o.author.name,
+                               o.author.email};
+    CheckRecordMinari(job);
   }
   ResolveRecordVideo(o, &plan);
   job.formats_text = o.formats;
@@ -227,10 +228,6 @@ RecordJob ResolveRecord(RecordOptions* options, const TrajectorySource* from) {
   ResolveRecordWorld(o, &job);
   job.from_option = o.from;
   if (o.policy.rfind("replay:", 0) == 0) job.replay_file = o.policy.substr(7);
-  if (job.minari) {
-    job.minari->code_permalink =
-        DatasetPermalink("record", plan.spec->id, o.policy, plan.seed, o.episodes, o.steps);
-  }
   return job;
 }
 

@@ -1,8 +1,7 @@
 // fetchscope rollout: episodes without rendering, written as trajectory JSON. --jobs runs them
 // on the episode scheduler's worker processes; the JSON is byte-identical to --jobs 1.
-#include <signal.h>
-
 #include <cstdio>
+#include <optional>
 
 #include "base/errors.h"
 #include "base/json_util.h"
@@ -10,12 +9,11 @@
 #include "cli/common.h"
 #include "cli/jobs_options.h"
 #include "cli/resolve.h"
-#include "dataset/minari_trajectory.h"
-#include "dataset/minari_writer.h"
+#include "dataset/minari_format.h"
 #include "run/episode_scheduler.h"
-#include "src/episode.h"
+#include "run/minari_output.h"
+#include "run/rollout_run.h"
 #include "src/fetch_env.h"
-#include "src/observation_layout.h"
 #include "src/trajectory.h"
 
 namespace fetchscope::cli {
@@ -39,76 +37,7 @@ struct RolloutOptions {
   DatasetAuthor author;  // --minari-author, --minari-author-email
 };
 
-// The played episodes as a Minari dataset, added as they arrive (in index order: the scheduler
-// reports them as workers finish), so that writing overlaps the simulation instead of following
-// it. Each goes through the trajectory reader on its own. Nothing is left behind unless Commit.
-class MinariSink {
- public:
-  MinariSink(const RolloutOptions& o, const MinariWriteOptions& options, const AssetSource& assets,
-             uint64_t seed, std::vector<int> indices)
-      : o_(o), assets_(assets), seed_(seed), writer_(options), indices_(std::move(indices)) {
-    width_ = ObservationSize(options.spec->has_object);
-    spec_ = options.spec;
-  }
-
-  void Done(int k, const nlohmann::json& episode) {
-    if (stopped_) return;  // SIGINT/SIGTERM: the run ends as interrupted, the dataset unwritten
-    pending_.emplace(k, episode);
-    while (next_ < indices_.size()) {
-      const auto it = pending_.find(indices_[next_]);
-      if (it == pending_.end()) break;
-      const Trajectory one = ParseTrajectoryJson(
-          TrajectoryJson(*spec_, assets_, seed_, o_.policy, nlohmann::json::array({it->second})),
-          "rollout");
-      // episode 0 was reset with the run's seed; the others continued its generator
-      try {
-        writer_.Add(ToMinariEpisode(one.episodes.front(),
-                                    it->first == 0 ? std::optional<uint64_t>(seed_) : std::nullopt,
-                                    width_));
-      } catch (const MinariInterrupted&) {  // the scheduler reports the signal when it returns
-        stopped_ = true;
-        pending_.clear();
-        return;
-      }
-      pending_.erase(it);
-      ++next_;
-    }
-  }
-
-  /// Every episode added: renames the dataset into place and returns its folder.
-  std::string Commit() { return writer_.Commit().string(); }
-
- private:
-  const RolloutOptions& o_;
-  const AssetSource& assets_;
-  uint64_t seed_;
-  MinariWriter writer_;
-  const EnvSpec* spec_ = nullptr;
-  int width_ = 10;
-  std::vector<int> indices_;
-  size_t next_ = 0;  // indices_[next_] is the next episode to add
-  std::map<int, nlohmann::json> pending_;
-  bool stopped_ = false;  // a stop signal arrived while adding: add nothing more
-};
-
-// Plays episodes and reports each as its trajectory JSON entry.
-class RolloutRunner : public EpisodeRunner {
- public:
-  RolloutRunner(const EnvSpec& spec, const AssetSource& assets, const std::string& policy,
-                const PolicyContext& context, int steps)
-      : sequence_(std::make_unique<FetchEnv>(spec, assets), MakePolicy(policy, spec, context),
-                  context.seed, steps) {}
-  void Run(int k, WorkerChannel& channel) override {
-    const EpisodeRecord episode = sequence_.Play(
-        k, [&](const StepRecord&, const StepResult*) { return !channel.StopRequested(); });
-    channel.Progress(static_cast<int>(episode.steps.size()) - 1);
-    channel.Done(k, EpisodeJson(episode));
-  }
-
- private:
-  EpisodeSequence sequence_;
-};
-
+// parse (AddRollout) -> resolve -> run (RunRolloutJob) -> print.
 int RunRollout(const RolloutOptions& o) {
   EpisodeRequest request;
   request.policy = o.policy;
@@ -123,72 +52,47 @@ int RunRollout(const RolloutOptions& o) {
   const EnvSpec& spec = *run.env.spec;
   const uint64_t seed = run.env.seed;
   const AssetSource& assets = run.env.assets;
-  const std::vector<int>& indices = run.episodes;
-  const PolicyContext& context = run.policy_context;
   const std::string path = JsonOutPath(o.json_out, "rollout");
   CheckJsonOutReplaces(path, {{"env_id", spec.id}, {"seed", seed}}, o.overwrite);
   { FetchEnv check(spec, assets); }  // bad assets fail here, before any worker starts
-  const int count = static_cast<int>(indices.size());
-  MinariWriteOptions minari;
+  const int count = static_cast<int>(run.episodes.size());
+  RolloutJob job;
+  job.spec = &spec;
+  job.assets = assets;
+  job.seed = seed;
+  job.seed_text = o.env.seed;
+  job.policy = o.policy;
+  job.policy_context = &run.policy_context;
+  job.steps = o.steps;
+  job.episodes = run.episodes;
+  job.jobs = ResolveJobs(o.jobs, count);
+  job.mode = mode;
+  std::optional<MinariOutput> minari;
   if (!o.minari.empty()) {
-    minari.dataset_id = o.minari;
-    minari.root = MinariRoot(o.minari_root);
-    minari.overwrite = o.overwrite;
-    minari.spec = &spec;
-    minari.algorithm_name = o.policy;
-    minari.code_permalink = DatasetPermalink("rollout", spec.id, o.policy, seed, count, o.steps);
-    minari.max_episode_steps = o.steps;  // gym.make(id, max_episode_steps=--steps)
-    if (!o.author.name.empty()) minari.author = o.author.name;
-    minari.author_email = o.author.email;
-    minari.description = spec.id + " episodes played by fetchscope's " + o.policy + " policy";
-    CheckMinariDestination(minari);  // an existing id fails now, not after the run
+    minari.emplace(MinariRequest{o.minari, MinariRoot(o.minari_root), o.overwrite, o.author.name,
+                                 o.author.email});
+    job.output = &*minari;
   }
-  std::unique_ptr<MinariSink> sink;
-  if (!o.minari.empty()) sink = std::make_unique<MinariSink>(o, minari, assets, seed, indices);
-  ScheduleOptions schedule;
-  schedule.episodes = indices;
-  if (sink) schedule.on_done = [&](int k, const nlohmann::json& e) { sink->Done(k, e); };
-  schedule.jobs = ResolveJobs(o.jobs, count);
-  schedule.mode = mode;
-  const ScheduleResult result = RunEpisodes(schedule, [&](int) {
-    return std::make_unique<RolloutRunner>(spec, assets, o.policy, context, o.steps);
-  });
-  if (!result.failures.empty()) {
-    if (result.failures.front().usage) throw UsageError(result.failures.front().message);
-    throw RunError(DescribeFailures(result));
-  }
+  RolloutResult result = RunRolloutJob(job);
   if (result.signal) {
-    std::fprintf(stderr, "rollout: interrupted (%s); nothing written\n",
-                 result.signal == SIGINT ? "SIGINT" : "SIGTERM");
+    std::fprintf(stderr, "rollout: %s; nothing written\n", result.stopped.c_str());
     return 128 + result.signal;
   }
-  std::string dataset;
-  try {
-    if (sink) dataset = sink->Commit();
-  } catch (const MinariInterrupted& e) {  // a signal after the last episode: still nothing
-    std::fprintf(stderr, "rollout: %s; nothing written\n", e.what());
-    return 128 + e.signal;
-  }
-  nlohmann::json episodes = nlohmann::json::array();
-  int successes = 0;
-  for (const auto& [k, episode] : result.results) {
-    successes += episode.at("is_success").get<bool>();
-    episodes.push_back(episode);
-  }
-  if (o.json_out.empty() && dataset.empty()) {
-    const nlohmann::json j = TrajectoryJson(spec, assets, seed, o.policy, std::move(episodes));
+  if (o.json_out.empty() && result.output.empty()) {
+    const nlohmann::json j =
+        TrajectoryJson(spec, assets, seed, o.policy, std::move(result.episodes));
     std::printf("%s\n", DumpJson(j).c_str());
     return 0;
   }
   std::string wrote;
   if (!o.json_out.empty()) {
-    WriteJson(path, TrajectoryJson(spec, assets, seed, o.policy, std::move(episodes)));
+    WriteJson(path, TrajectoryJson(spec, assets, seed, o.policy, std::move(result.episodes)));
     wrote += "wrote " + path + "\n";
   }
-  if (!dataset.empty()) wrote += "wrote Minari dataset " + o.minari + " at " + dataset + "\n";
+  if (minari) wrote += "wrote Minari dataset " + o.minari + " at " + result.output + "\n";
   std::printf("%s: %d episode(s) of %d steps, policy %s, seed %s: success %d/%d (%.0f%%)\n%s",
-              spec.id.c_str(), count, o.steps, o.policy.c_str(), o.env.seed.c_str(), successes,
-              count, 100.0 * successes / count, wrote.c_str());
+              spec.id.c_str(), count, o.steps, o.policy.c_str(), o.env.seed.c_str(),
+              result.successes, count, 100.0 * result.successes / count, wrote.c_str());
   return 0;
 }
 

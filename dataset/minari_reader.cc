@@ -303,6 +303,65 @@ std::vector<std::string> ListLocalMinariIds(const fs::path& root) {
   return ids;
 }
 
+namespace {
+
+// The env_spec of a dataset's metadata (none: null), its id a Fetch env's, into `m`.
+const EnvSpec* ReadEnvSpec(const std::string& label, const json& j, MinariMetadata* m) {
+  const EnvSpec* env = nullptr;
+  if (j.contains("env_spec") && !j["env_spec"].is_null()) {
+    const json spec = SpaceJson(label, j["env_spec"], "env_spec");
+    if (!spec.is_object() || !spec.contains("id") || !spec["id"].is_string()) {
+      Fail(label, "missing key 'id' in env_spec");
+    }
+    const std::string id = spec["id"];
+    std::string ids;
+    for (const EnvSpec& s : AllEnvSpecs()) {
+      if (s.id == id) env = &s;
+      ids += (ids.empty() ? "" : ", ") + s.id;
+    }
+    if (!env) Fail(label, "env_spec id '" + id + "' is not a Fetch environment (" + ids + ")");
+    m->env_id = id;
+    if (spec.value("entry_point", json()).is_string()) m->entry_point = spec["entry_point"];
+    if (spec.value("max_episode_steps", json()).is_number_integer()) {
+      m->max_episode_steps = spec["max_episode_steps"].get<int>();
+    }
+    const json kwargs = spec.value("kwargs", json());
+    if (kwargs.is_object() && kwargs.value("reward_type", json()).is_string()) {
+      m->reward_type = kwargs["reward_type"].get<std::string>();
+    }
+  }
+  return env;
+}
+
+// The observation and action spaces: a Fetch env's (of `env`, when given), from the metadata
+// or, without them, from the env; `m` gets the observation's width.
+void CheckSpaces(const std::string& label, const json& j, const EnvSpec* env, MinariMetadata* m) {
+  const int env_width = env ? ObservationSize(env->has_object) : 0;
+  if (j.contains("observation_space")) {
+    m->obs_dim =
+        CheckObservationSpace(label, SpaceJson(label, j["observation_space"], "observation_space"));
+    if (env && m->obs_dim != env_width) {
+      Fail(label, "observation_space has " + std::to_string(m->obs_dim) +
+                      " observation values but " + *m->env_id + " has " +
+                      std::to_string(env_width));
+    }
+  } else if (env) {
+    m->obs_dim = env_width;  // Minari then takes the spaces from the env, as we do
+  } else {
+    Fail(label, "missing key 'observation_space' (and no env_spec to take it from)");
+  }
+  if (j.contains("action_space")) {
+    const json action = SpaceJson(label, j["action_space"], "action_space");
+    if (BoxWidth(action, "float32") != 4) {
+      Fail(label, "action_space is not a Fetch space: expected a float32 Box of shape [4]");
+    }
+  } else if (!env) {
+    Fail(label, "missing key 'action_space' (and no env_spec to take it from)");
+  }
+}
+
+}  // namespace
+
 MinariMetadata ParseMinariMetadata(const std::string& text, const std::string& label) {
   json j;
   try {
@@ -342,50 +401,8 @@ MinariMetadata ParseMinariMetadata(const std::string& text, const std::string& l
   if (j.contains("algorithm_name") && j["algorithm_name"].is_string()) {
     m.algorithm_name = j["algorithm_name"];
   }
-  const EnvSpec* env = nullptr;
-  if (j.contains("env_spec") && !j["env_spec"].is_null()) {
-    const json spec = SpaceJson(label, j["env_spec"], "env_spec");
-    if (!spec.is_object() || !spec.contains("id") || !spec["id"].is_string()) {
-      Fail(label, "missing key 'id' in env_spec");
-    }
-    const std::string id = spec["id"];
-    std::string ids;
-    for (const EnvSpec& s : AllEnvSpecs()) {
-      if (s.id == id) env = &s;
-      ids += (ids.empty() ? "" : ", ") + s.id;
-    }
-    if (!env) Fail(label, "env_spec id '" + id + "' is not a Fetch environment (" + ids + ")");
-    m.env_id = id;
-    if (spec.value("entry_point", json()).is_string()) m.entry_point = spec["entry_point"];
-    if (spec.value("max_episode_steps", json()).is_number_integer()) {
-      m.max_episode_steps = spec["max_episode_steps"].get<int>();
-    }
-    const json kwargs = spec.value("kwargs", json());
-    if (kwargs.is_object() && kwargs.value("reward_type", json()).is_string()) {
-      m.reward_type = kwargs["reward_type"].get<std::string>();
-    }
-  }
-  const int env_width = env ? ObservationSize(env->has_object) : 0;
-  if (j.contains("observation_space")) {
-    m.obs_dim =
-        CheckObservationSpace(label, SpaceJson(label, j["observation_space"], "observation_space"));
-    if (env && m.obs_dim != env_width) {
-      Fail(label, "observation_space has " + std::to_string(m.obs_dim) +
-                      " observation values but " + *m.env_id + " has " + std::to_string(env_width));
-    }
-  } else if (env) {
-    m.obs_dim = env_width;  // Minari then takes the spaces from the env, as we do
-  } else {
-    Fail(label, "missing key 'observation_space' (and no env_spec to take it from)");
-  }
-  if (j.contains("action_space")) {
-    const json action = SpaceJson(label, j["action_space"], "action_space");
-    if (BoxWidth(action, "float32") != 4) {
-      Fail(label, "action_space is not a Fetch space: expected a float32 Box of shape [4]");
-    }
-  } else if (!env) {
-    Fail(label, "missing key 'action_space' (and no env_spec to take it from)");
-  }
+  const EnvSpec* env = ReadEnvSpec(label, j, &m);
+  CheckSpaces(label, j, env, &m);
   return m;
 }
 

@@ -97,27 +97,4 @@ EpisodeStart MinariEpisodeStart(const MinariEpisode& m, const EnvSpec& spec) {
   return start;
 }
 
-std::filesystem::path WriteMinariDataset(const Trajectory& trajectory, MinariWriteOptions options) {
-  options.spec = &FindEnvSpec(trajectory.env_id);
-  std::vector<const TrajectoryEpisode*> episodes;
-  for (const TrajectoryEpisode& e : trajectory.episodes) episodes.push_back(&e);
-  std::sort(
-      episodes.begin(), episodes.end(),
-      [](const TrajectoryEpisode* a, const TrajectoryEpisode* b) { return a->index < b->index; });
-  if (options.max_episode_steps <= 0) {  // the TimeLimit they ran under: the longest episode
-    for (const TrajectoryEpisode* e : episodes) {
-      options.max_episode_steps =
-          std::max(options.max_episode_steps, static_cast<int>(e->steps.size()) - 1);
-    }
-  }
-  MinariWriter writer(options);
-  const int width = ObservationSize(options.spec->has_object);
-  for (const TrajectoryEpisode* e : episodes) {
-    const std::optional<uint64_t> seed =
-        e->index == 0 ? std::optional<uint64_t>(trajectory.seed) : std::nullopt;
-    writer.Add(ToMinariEpisode(*e, seed, width));
-  }
-  return writer.Commit();
-}
-
 }  // namespace fetchscope

@@ -32,11 +32,4 @@ TrajectoryEpisode FromMinariEpisode(const MinariEpisode& episode, const EnvSpec&
 /// object's position and rotation from observation[0] for object tasks).
 EpisodeStart MinariEpisodeStart(const MinariEpisode& episode, const EnvSpec& spec);
 
-/// Writes the episodes of `trajectory` (a run: episode 0 reset with its seed, the others
-/// continuing the generator), in index order, as the dataset `options` names (its spec is the
-/// trajectory's env). `options.max_episode_steps` 0 means the longest episode's steps (the
-/// TimeLimit of a run whose episodes were all played to their end). Returns the dataset folder;
-/// throws MinariInterrupted where SIGINT/SIGTERM asked to stop (nothing left behind).
-std::filesystem::path WriteMinariDataset(const Trajectory& trajectory, MinariWriteOptions options);
-
 }  // namespace fetchscope

@@ -343,6 +343,142 @@ Ring RingAround(const std::vector<Vec3>& points, const View& view, const CardSty
   return ring;
 }
 
+// What a panel's labels are placed among: the markers, the ring, the anchor dots and (as far as
+// they can) the translucent spheres, and the labels' requests and anchors.
+struct PanelLayout {
+  std::vector<ProjectedMarker> markers;
+  Ring ring;
+  std::vector<LabelObstacle> obstacles;
+  std::vector<RectF> soft;
+  std::vector<LabelRequest> requests;
+  std::vector<std::vector<Pixel>> anchors;
+  std::vector<Pixel> dots;
+};
+
+PanelLayout LayOut(const CardContent& content, const View& main, const CameraAxes& axes,
+                   const CardStyle& st) {
+  PanelLayout in;
+  in.markers = ProjectMarkers(content.markers, main, st);
+  in.ring = RingAround(content.detail_keep, main, st);
+  in.obstacles = Obstacles(in.markers);
+  for (const LabelObstacle& o : Obstacles(in.ring.segments)) in.obstacles.push_back(o);
+  for (const CardSphere& g : content.spheres) {
+    const auto c = main.Project(g.at), edge = main.Project(Add(g.at, axes.up, g.radius));
+    if (!c || !edge) continue;
+    const double r = Distance(*c, *edge);
+    in.soft.push_back({c->x - r, c->y - r, c->x + r, c->y + r});
+  }
+  in.requests = Requests(content.labels);
+  in.anchors = Anchors(content.labels, main);
+  for (size_t i = 0; i < in.anchors.size(); ++i) {
+    if (content.labels[i].dot) {
+      in.dots.insert(in.dots.end(), in.anchors[i].begin(), in.anchors[i].end());
+    }
+  }
+  return in;
+}
+
+// The detail view is a label without text that points at the ring's centre: the few best
+// places for it alone are tried, each with the labels placed around it, and the cheapest whole
+// wins. Returns its place; `placed` gets the labels'.
+PlacedLabel PlaceDetail(const PanelLayout& in, const std::vector<PlacedLabel>& captions,
+                        const CardStyle& st, int dw, int dh, int w, int h, const std::string& where,
+                        std::vector<std::optional<PlacedLabel>>* placed) {
+  LabelRequest detail_request;
+  detail_request.color = kCardWhite;
+  detail_request.dot = false;
+  detail_request.name = "the fingers' detail view";
+  detail_request.box_size = {dw + 4.0, dh + 4.0};  // with its rim
+  detail_request.clear = in.ring.radius;
+  const std::vector<std::vector<Pixel>> detail_anchor = {
+      in.ring.segments.empty() ? std::vector<Pixel>{} : std::vector<Pixel>{in.ring.centre}};
+  std::optional<PlacedLabel> detail_place;
+  double best_total = 0;
+  for (const auto& [place, cost] : LabelPlacer({detail_request}, detail_anchor, captions, in.dots,
+                                               in.obstacles, in.soft, st, w, h, where)
+                                       .Alternatives(0, 12)) {
+    std::vector<PlacedLabel> fixed = captions;
+    fixed.push_back(place);
+    LabelPlacer placer(in.requests, in.anchors, fixed, {}, in.obstacles, in.soft, st, w, h, where);
+    std::vector<std::optional<PlacedLabel>> labels;
+    try {
+      labels = placer.Place();
+    } catch (const RunError&) {
+      continue;  // no room for the labels around this one
+    }
+    const double total = cost + placer.TotalCost();
+    if (!detail_place || total < best_total) {
+      best_total = total;
+      detail_place = place;
+      *placed = std::move(labels);
+    }
+  }
+  if (!detail_place) {
+    // say which label lacks room when even without the detail view there is none
+    try {
+      LabelPlacer(in.requests, in.anchors, captions, {}, in.obstacles, in.soft, st, w, h, where)
+          .Place();
+    } catch (const RunError& e) {
+      ThrowNoRoom(e);
+    }
+    throw RunError("anatomy card: no room for the fingers' detail view in " + where +
+                   "; give a larger --width/--height");
+  }
+  return *detail_place;
+}
+
+// Draws the ring and the line from it to the detail view, the markers, the detail view with a
+// rim and the labels on the main view; the panel with what was drawn where, in its pixels.
+Panel DrawPanel(const std::string& env_id, View& main, const Detail& detail, PanelLayout in,
+                const std::vector<PlacedLabel>& captions, const PlacedLabel& detail_place,
+                const std::vector<std::optional<PlacedLabel>>& placed, const CardStyle& st, int dw,
+                int dh) {
+  Canvas canvas(main.rgb().data(), main.width(), main.height());
+  DrawMarkers(in.ring.segments, st, &canvas);
+  const Pixel a = *detail_place.anchor, b = detail_place.attach;
+  const double leave = std::min(1.0, in.ring.radius / std::max(1e-9, Distance(a, b)));
+  DrawMarkers({{{"detail link", CardMarkerKind::kLine, {}, {}, kCardWhite, true},
+                {a.x + leave * (b.x - a.x), a.y + leave * (b.y - a.y)},
+                b,
+                0}},
+              st, &canvas);
+  DrawMarkers(in.markers, st, &canvas);
+  const int x0 = static_cast<int>(detail_place.box.x0) + 2;
+  const int y0 = static_cast<int>(detail_place.box.y0) + 2;
+  canvas.FillRect(x0 - 2, y0 - 2, dw + 4, dh + 4, kCardDark, 1.0);
+  canvas.FillRect(x0 - 1, y0 - 1, dw + 2, dh + 2, kCardWhite, 1.0);
+  canvas.Paste(detail.view->rgb().data(), dw, dh, x0, y0);
+  std::vector<PlacedLabel> labels = captions;
+  for (const auto& l : placed) {
+    if (l) labels.push_back(*l);
+  }
+  DrawLabels(labels, st, kCardDark, kBoxAlpha, &canvas);
+
+  Panel panel;
+  panel.env_id = env_id;
+  panel.camera = main.camera();
+  panel.detail_camera = detail.view->camera();
+  panel.detail_box = {double(x0), double(y0), double(x0 + dw), double(y0 + dh)};
+  panel.markers = std::move(in.markers);
+  panel.labels = std::move(labels);
+  // the detail's markers (as far as it shows them) and labels, in the panel's pixels
+  auto shift = [&](Pixel p) { return Pixel{p.x + x0, p.y + y0}; };
+  for (ProjectedMarker m : detail.markers) {
+    const auto shown = ClipSegment(m.a, m.b, {0, 0, double(dw), double(dh)});
+    if (!shown) continue;
+    m.a = shift(shown->first), m.b = shift(shown->second);
+    panel.markers.push_back(m);
+  }
+  for (PlacedLabel l : detail.labels) {
+    l.box = {l.box.x0 + x0, l.box.y0 + y0, l.box.x1 + x0, l.box.y1 + y0};
+    if (l.anchor) l.anchor = shift(*l.anchor);
+    l.attach = shift(l.attach);
+    panel.labels.push_back(l);
+  }
+  panel.rgb = std::move(main.rgb());
+  return panel;
+}
+
 Panel RenderPanel(const std::string& env_id, const AnatomyCardOptions& o, GlContext& gl) {
   const EnvSpec& spec = FindEnvSpec(env_id);
   FetchEnv fetch(spec, ResolveAssets(o.assets));
@@ -369,116 +505,10 @@ Panel RenderPanel(const std::string& env_id, const AnatomyCardOptions& o, GlCont
   const Detail detail = MakeDetail(gl, fetch, reset, o.msaa_samples, content, st, dw, dh,
                                    "the fingers' detail view of " + where);
 
-  // what the labels keep off: the markers, the ring, the anchor dots and (as far as they can)
-  // the translucent spheres
-  std::vector<ProjectedMarker> markers = ProjectMarkers(content.markers, main, st);
-  const Ring ring = RingAround(content.detail_keep, main, st);
-  std::vector<LabelObstacle> obstacles = Obstacles(markers);
-  for (const LabelObstacle& o : Obstacles(ring.segments)) obstacles.push_back(o);
-  std::vector<RectF> soft;
-  for (const CardSphere& g : content.spheres) {
-    const auto c = main.Project(g.at), edge = main.Project(Add(g.at, axes.up, g.radius));
-    if (!c || !edge) continue;
-    const double r = Distance(*c, *edge);
-    soft.push_back({c->x - r, c->y - r, c->x + r, c->y + r});
-  }
-  const std::vector<LabelRequest> requests = Requests(content.labels);
-  const std::vector<std::vector<Pixel>> anchors = Anchors(content.labels, main);
-  std::vector<Pixel> dots;
-  for (size_t i = 0; i < anchors.size(); ++i) {
-    if (content.labels[i].dot) dots.insert(dots.end(), anchors[i].begin(), anchors[i].end());
-  }
-
-  // the detail view is a label without text that points at the ring's centre: the few best
-  // places for it alone are tried, each with the labels placed around it, and the cheapest
-  // whole wins
-  LabelRequest detail_request;
-  detail_request.color = kCardWhite;
-  detail_request.dot = false;
-  detail_request.name = "the fingers' detail view";
-  detail_request.box_size = {dw + 4.0, dh + 4.0};  // with its rim
-  detail_request.clear = ring.radius;
-  const std::vector<std::vector<Pixel>> detail_anchor = {
-      ring.segments.empty() ? std::vector<Pixel>{} : std::vector<Pixel>{ring.centre}};
-  std::optional<PlacedLabel> detail_place;
+  PanelLayout in = LayOut(content, main, axes, st);
   std::vector<std::optional<PlacedLabel>> placed;
-  double best_total = 0;
-  for (const auto& [place, cost] : LabelPlacer({detail_request}, detail_anchor, captions, dots,
-                                               obstacles, soft, st, w, h, where)
-                                       .Alternatives(0, 12)) {
-    std::vector<PlacedLabel> fixed = captions;
-    fixed.push_back(place);
-    LabelPlacer placer(requests, anchors, fixed, {}, obstacles, soft, st, w, h, where);
-    std::vector<std::optional<PlacedLabel>> labels;
-    try {
-      labels = placer.Place();
-    } catch (const RunError&) {
-      continue;  // no room for the labels around this one
-    }
-    const double total = cost + placer.TotalCost();
-    if (!detail_place || total < best_total) {
-      best_total = total;
-      detail_place = place;
-      placed = std::move(labels);
-    }
-  }
-  if (!detail_place) {
-    // say which label lacks room when even without the detail view there is none
-    try {
-      LabelPlacer(requests, anchors, captions, {}, obstacles, soft, st, w, h, where).Place();
-    } catch (const RunError& e) {
-      ThrowNoRoom(e);
-    }
-    throw RunError("anatomy card: no room for the fingers' detail view in " + where +
-                   "; give a larger --width/--height");
-  }
-
-  // draw: the ring and the line from it to the detail view, the markers, the detail view with
-  // a rim, the labels
-  Canvas canvas(main.rgb().data(), w, h);
-  DrawMarkers(ring.segments, st, &canvas);
-  const Pixel a = *detail_place->anchor, b = detail_place->attach;
-  const double leave = std::min(1.0, ring.radius / std::max(1e-9, Distance(a, b)));
-  DrawMarkers({{{"detail link", CardMarkerKind::kLine, {}, {}, kCardWhite, true},
-                {a.x + leave * (b.x - a.x), a.y + leave * (b.y - a.y)},
-                b,
-                0}},
-              st, &canvas);
-  DrawMarkers(markers, st, &canvas);
-  const int x0 = static_cast<int>(detail_place->box.x0) + 2;
-  const int y0 = static_cast<int>(detail_place->box.y0) + 2;
-  canvas.FillRect(x0 - 2, y0 - 2, dw + 4, dh + 4, kCardDark, 1.0);
-  canvas.FillRect(x0 - 1, y0 - 1, dw + 2, dh + 2, kCardWhite, 1.0);
-  canvas.Paste(detail.view->rgb().data(), dw, dh, x0, y0);
-  std::vector<PlacedLabel> labels = captions;
-  for (const auto& l : placed) {
-    if (l) labels.push_back(*l);
-  }
-  DrawLabels(labels, st, kCardDark, kBoxAlpha, &canvas);
-
-  Panel panel;
-  panel.env_id = env_id;
-  panel.camera = main.camera();
-  panel.detail_camera = detail.view->camera();
-  panel.detail_box = {double(x0), double(y0), double(x0 + dw), double(y0 + dh)};
-  panel.markers = std::move(markers);
-  panel.labels = std::move(labels);
-  // the detail's markers (as far as it shows them) and labels, in the panel's pixels
-  auto shift = [&](Pixel p) { return Pixel{p.x + x0, p.y + y0}; };
-  for (ProjectedMarker m : detail.markers) {
-    const auto shown = ClipSegment(m.a, m.b, {0, 0, double(dw), double(dh)});
-    if (!shown) continue;
-    m.a = shift(shown->first), m.b = shift(shown->second);
-    panel.markers.push_back(m);
-  }
-  for (PlacedLabel l : detail.labels) {
-    l.box = {l.box.x0 + x0, l.box.y0 + y0, l.box.x1 + x0, l.box.y1 + y0};
-    if (l.anchor) l.anchor = shift(*l.anchor);
-    l.attach = shift(l.attach);
-    panel.labels.push_back(l);
-  }
-  panel.rgb = std::move(main.rgb());
-  return panel;
+  const PlacedLabel detail_place = PlaceDetail(in, captions, st, dw, dh, w, h, where, &placed);
+  return DrawPanel(env_id, main, detail, std::move(in), captions, detail_place, placed, st, dw, dh);
 }
 
 nlohmann::json RgbJson(Rgb c) { return {c.r, c.g, c.b}; }

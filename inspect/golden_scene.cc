@@ -163,31 +163,29 @@ void Compare(const nlohmann::json& g, const nlohmann::json& a, double atol, cons
   if (g != a) differ("golden " + Describe(g) + ", actual " + Describe(a));
 }
 
-}  // namespace
-
-GoldenManifest ReadGoldenManifest(const std::string& dir) {
+// The manifest.json of the golden folder `dir`, parsed; `path` gets its path.
+nlohmann::json ReadManifestJson(const std::string& dir, std::string* path) {
   std::error_code ec;
   if (!fs::is_directory(dir, ec)) {
     throw UsageError("golden folder '" + dir +
                      "' does not exist: pass --golden-dir with the folder holding manifest.json");
   }
-  const std::string path = (fs::path(dir) / "manifest.json").string();
-  std::ifstream in(path, std::ios::binary);
+  *path = (fs::path(dir) / "manifest.json").string();
+  std::ifstream in(*path, std::ios::binary);
   if (!in) {
     throw UsageError("golden folder '" + dir + "' has no manifest.json");
   }
   std::stringstream text;
   text << in.rdbuf();
-  nlohmann::json root;
   try {
-    root = nlohmann::json::parse(text.str());
+    return nlohmann::json::parse(text.str());
   } catch (const nlohmann::json::parse_error& e) {
-    throw RunError("golden manifest '" + path + "' is not valid JSON: " + e.what());
+    throw RunError("golden manifest '" + *path + "' is not valid JSON: " + e.what());
   }
-  ManifestReader r(path);
-  if (!root.is_object() || !root.contains("scenes") || !root["scenes"].is_array()) {
-    r.Fail("top level", "expected an object with a \"scenes\" array");
-  }
+}
+
+// The manifest's "defaults", over the built-in ones.
+GoldenScene ReadDefaults(ManifestReader& r, const nlohmann::json& root) {
   GoldenScene defaults;
   if (root.contains("defaults")) {
     const nlohmann::json& d = root["defaults"];
@@ -197,53 +195,71 @@ GoldenManifest ReadGoldenManifest(const std::string& dir) {
     defaults.state_atol = r.Number(d, "state_atol", "defaults", defaults.state_atol);
     defaults.tolerance = r.Tolerance(d, "defaults", defaults.tolerance);
   }
+  return defaults;
+}
+
+// Scene `i` of the manifest, its name not in `names` (and then added to it).
+GoldenScene ReadScene(ManifestReader& r, const nlohmann::json& s, size_t i,
+                      const GoldenScene& defaults, std::set<std::string>* names) {
   static const std::set<std::string> kKnown = {
       "name",    "env_id", "assets", "seed", "policy",    "steps",      "camera",
       "overlay", "width",  "height", "msaa", "tolerance", "state_atol", "note"};
+  std::string where = "scenes[" + std::to_string(i) + "]";
+  if (!s.is_object()) r.Fail(where, "must be an object");
+  GoldenScene scene;
+  scene.name = r.String(s, "name", where);
+  if (!ValidName(scene.name))
+    r.Fail(where, "name '" + scene.name + "' must be letters, digits, _ or -");
+  where = "scene '" + scene.name + "'";
+  if (!names->insert(scene.name).second) r.Fail(where, "the name is used twice");
+  for (const auto& item : s.items()) {
+    if (!kKnown.count(item.key())) r.Fail(where, "unknown member \"" + item.key() + "\"");
+  }
+  scene.env_id = r.String(s, "env_id", where);
+  try {
+    FindEnvSpec(scene.env_id);
+  } catch (const UsageError& e) {
+    r.Fail(where, e.what());
+  }
+  const std::string bundled = "bundled";
+  scene.assets = r.String(s, "assets", where, &bundled);
+  if (!s.contains("seed") || !s["seed"].is_number_unsigned()) {
+    r.Fail(where, "\"seed\" must be a non-negative integer");
+  }
+  scene.seed = s["seed"].get<uint64_t>();
+  scene.policy = r.String(s, "policy", where, &defaults.policy);
+  scene.steps = static_cast<int>(r.Integer(s, "steps", where, 0, 50));
+  scene.camera = r.String(s, "camera", where, &defaults.camera);
+  scene.overlay = r.String(s, "overlay", where, &defaults.overlay);
+  scene.width = static_cast<int>(r.Integer(s, "width", where, 16, 2048));
+  scene.height = static_cast<int>(r.Integer(s, "height", where, 16, 2048));
+  const int64_t msaa = defaults.msaa;
+  scene.msaa = static_cast<int>(r.Integer(s, "msaa", where, 0, 16, &msaa));
+  scene.tolerance = r.Tolerance(s, where, defaults.tolerance);
+  scene.state_atol = r.Number(s, "state_atol", where, defaults.state_atol);
+  try {
+    ParseOverlays(scene.overlay);
+  } catch (const UsageError& e) {
+    r.Fail(where, e.what());
+  }
+  return scene;
+}
+
+}  // namespace
+
+GoldenManifest ReadGoldenManifest(const std::string& dir) {
+  std::string path;
+  const nlohmann::json root = ReadManifestJson(dir, &path);
+  ManifestReader r(path);
+  if (!root.is_object() || !root.contains("scenes") || !root["scenes"].is_array()) {
+    r.Fail("top level", "expected an object with a \"scenes\" array");
+  }
+  const GoldenScene defaults = ReadDefaults(r, root);
   GoldenManifest manifest;
   manifest.dir = dir;
   std::set<std::string> names;
   for (size_t i = 0; i < root["scenes"].size(); ++i) {
-    const nlohmann::json& s = root["scenes"][i];
-    std::string where = "scenes[" + std::to_string(i) + "]";
-    if (!s.is_object()) r.Fail(where, "must be an object");
-    GoldenScene scene;
-    scene.name = r.String(s, "name", where);
-    if (!ValidName(scene.name))
-      r.Fail(where, "name '" + scene.name + "' must be letters, digits, _ or -");
-    where = "scene '" + scene.name + "'";
-    if (!names.insert(scene.name).second) r.Fail(where, "the name is used twice");
-    for (const auto& item : s.items()) {
-      if (!kKnown.count(item.key())) r.Fail(where, "unknown member \"" + item.key() + "\"");
-    }
-    scene.env_id = r.String(s, "env_id", where);
-    try {
-      FindEnvSpec(scene.env_id);
-    } catch (const UsageError& e) {
-      r.Fail(where, e.what());
-    }
-    const std::string bundled = "bundled";
-    scene.assets = r.String(s, "assets", where, &bundled);
-    if (!s.contains("seed") || !s["seed"].is_number_unsigned()) {
-      r.Fail(where, "\"seed\" must be a non-negative integer");
-    }
-    scene.seed = s["seed"].get<uint64_t>();
-    scene.policy = r.String(s, "policy", where, &defaults.policy);
-    scene.steps = static_cast<int>(r.Integer(s, "steps", where, 0, 50));
-    scene.camera = r.String(s, "camera", where, &defaults.camera);
-    scene.overlay = r.String(s, "overlay", where, &defaults.overlay);
-    scene.width = static_cast<int>(r.Integer(s, "width", where, 16, 2048));
-    scene.height = static_cast<int>(r.Integer(s, "height", where, 16, 2048));
-    const int64_t msaa = defaults.msaa;
-    scene.msaa = static_cast<int>(r.Integer(s, "msaa", where, 0, 16, &msaa));
-    scene.tolerance = r.Tolerance(s, where, defaults.tolerance);
-    scene.state_atol = r.Number(s, "state_atol", where, defaults.state_atol);
-    try {
-      ParseOverlays(scene.overlay);
-    } catch (const UsageError& e) {
-      r.Fail(where, e.what());
-    }
-    manifest.scenes.push_back(std::move(scene));
+    manifest.scenes.push_back(ReadScene(r, root["scenes"][i], i, defaults, &names));
   }
   if (manifest.scenes.empty()) r.Fail("scenes", "lists no scene");
   return manifest;

@@ -369,6 +369,72 @@ EglDeviceList ListEglDevices() {
   return list;
 }
 
+namespace {
+
+// Without an explicit index (`gpu` < 0), MUJOCO_EGL_DEVICE_ID or CUDA_VISIBLE_DEVICES may name
+// one: the index to use (-1: none named); `source` says who named it.
+int ChosenGpu(int gpu, bool enumerable, const std::string& why_not_enumerable,
+              const std::vector<EGLDeviceEXT>& devices, std::string* source) {
+  *source = "--gpu " + std::to_string(gpu);
+  if (gpu >= 0) return gpu;
+  EglDeviceList list;
+  list.enumerable = enumerable;
+  list.why_not = why_not_enumerable;
+  for (size_t i = 0; i < devices.size(); ++i) {
+    list.devices.push_back(DescribeDevice(devices[i], static_cast<int>(i)));
+  }
+  const GpuChoice choice = ChooseGpus(EffectiveGpuSpec(""), list);
+  if (!choice.devices.empty()) {
+    *source = choice.reason;
+    return choice.devices.front();
+  }
+  return gpu;
+}
+
+// A context on `platform`'s display, or null with why not added to `failures`.
+std::unique_ptr<GlContext> TryDisplay(EGLenum platform, void* native,
+                                      const std::string& description,
+                                      std::vector<std::string>* failures) {
+  std::string why;
+  EGLDisplay display = GetDisplay(platform, native, &why);
+  if (display == EGL_NO_DISPLAY) {
+    failures->push_back(description + ": " + why);
+    return nullptr;
+  }
+  try {
+    return std::make_unique<EglContext>(display, description);
+  } catch (const RunError& e) {
+    failures->push_back(WithoutPrefix(e.what()));
+    return nullptr;
+  }
+}
+
+std::unique_ptr<GlContext> TryDevice(const std::vector<EGLDeviceEXT>& devices, int index,
+                                     std::vector<std::string>* failures) {
+  return TryDisplay(EGL_PLATFORM_DEVICE_EXT, devices[index],
+                    DescribeDevice(devices[index], index).Describe(), failures);
+}
+
+// An explicit index names one device and nothing else will do.
+std::unique_ptr<GlContext> NamedDevice(int gpu, const std::string& source, bool enumerable,
+                                       const std::string& why_not_enumerable,
+                                       const std::vector<EGLDeviceEXT>& devices) {
+  if (!enumerable || devices.empty()) {
+    throw RunError("egl: " + source + " asks for an EGL device, but this EGL enumerates none (" +
+                   (enumerable ? std::string("it lists no devices") : why_not_enumerable) + ")");
+  }
+  if (gpu >= static_cast<int>(devices.size())) {
+    throw UsageError(source + " is out of range; accepted: 0.." +
+                     std::to_string(devices.size() - 1) +
+                     " (EGL devices on this machine: " + std::to_string(devices.size()) + ")");
+  }
+  std::vector<std::string> failures;
+  if (auto context = TryDevice(devices, gpu, &failures)) return context;
+  throw RunError("egl: " + failures.back());
+}
+
+}  // namespace
+
 std::unique_ptr<GlContext> CreateEglContext(int gpu) {
   const EglApi& egl = Egl();
   if (!egl.load_error.empty()) throw RunError(egl.load_error);
@@ -380,76 +446,29 @@ std::unique_ptr<GlContext> CreateEglContext(int gpu) {
   const bool enumerable = CanEnumerate(client_extensions, &why_not_enumerable);
   const std::vector<EGLDeviceEXT> devices =
       enumerable ? QueryDeviceHandles() : std::vector<EGLDeviceEXT>{};
-
-  // Without an explicit index, MUJOCO_EGL_DEVICE_ID or CUDA_VISIBLE_DEVICES may name one.
-  std::string source = "--gpu " + std::to_string(gpu);
-  if (gpu < 0) {
-    EglDeviceList list;
-    list.enumerable = enumerable;
-    list.why_not = why_not_enumerable;
-    for (size_t i = 0; i < devices.size(); ++i) {
-      list.devices.push_back(DescribeDevice(devices[i], static_cast<int>(i)));
-    }
-    const GpuChoice choice = ChooseGpus(EffectiveGpuSpec(""), list);
-    if (!choice.devices.empty()) {
-      gpu = choice.devices.front();
-      source = choice.reason;
-    }
-  }
-
-  std::vector<std::string> failures;
-  auto try_display = [&](EGLenum platform, void* native,
-                         const std::string& description) -> std::unique_ptr<GlContext> {
-    std::string why;
-    EGLDisplay display = GetDisplay(platform, native, &why);
-    if (display == EGL_NO_DISPLAY) {
-      failures.push_back(description + ": " + why);
-      return nullptr;
-    }
-    try {
-      return std::make_unique<EglContext>(display, description);
-    } catch (const RunError& e) {
-      failures.push_back(WithoutPrefix(e.what()));
-      return nullptr;
-    }
-  };
-  auto try_device = [&](int index) {
-    return try_display(EGL_PLATFORM_DEVICE_EXT, devices[index],
-                       DescribeDevice(devices[index], index).Describe());
-  };
-
-  // An explicit index names one device and nothing else will do.
-  if (gpu >= 0) {
-    if (!enumerable || devices.empty()) {
-      throw RunError("egl: " + source + " asks for an EGL device, but this EGL enumerates none (" +
-                     (enumerable ? std::string("it lists no devices") : why_not_enumerable) + ")");
-    }
-    if (gpu >= static_cast<int>(devices.size())) {
-      throw UsageError(source + " is out of range; accepted: 0.." +
-                       std::to_string(devices.size() - 1) +
-                       " (EGL devices on this machine: " + std::to_string(devices.size()) + ")");
-    }
-    if (auto context = try_device(gpu)) return context;
-    throw RunError("egl: " + failures.back());
-  }
+  std::string source;
+  gpu = ChosenGpu(gpu, enumerable, why_not_enumerable, devices, &source);
+  if (gpu >= 0) return NamedDevice(gpu, source, enumerable, why_not_enumerable, devices);
 
   // Hardware devices first, then Mesa's surfaceless platform, then a software device.
+  std::vector<std::string> failures;
   std::vector<int> software_devices;
   for (int i = 0; i < static_cast<int>(devices.size()); ++i) {
     if (IsSoftwareDevice(devices[i])) {
       software_devices.push_back(i);
       continue;
     }
-    if (auto context = try_device(i)) return context;
+    if (auto context = TryDevice(devices, i, &failures)) return context;
   }
   if (HasExtension(client_extensions, "EGL_MESA_platform_surfaceless")) {
-    auto context = try_display(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY, "surfaceless");
+    auto context =
+        TryDisplay(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY, "surfaceless", &failures);
     if (context) return context;
   } else {
     failures.push_back("no EGL_MESA_platform_surfaceless");
   }
   for (int i : software_devices) {
-    if (auto context = try_device(i)) return context;
+    if (auto context = TryDevice(devices, i, &failures)) return context;
   }
   if (!enumerable) {
     failures.push_back("no device enumeration (" + why_not_enumerable + ")");

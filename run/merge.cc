@@ -169,31 +169,20 @@ Manifest Merged(const Manifest& first, const std::map<int, const ShardManifest*>
   return merged;
 }
 
-}  // namespace
-
-MergeResult MergeShardManifests(const MergeRequest& request) {
-  std::vector<ShardManifest> manifests;
-  for (const std::string& dir : request.dirs) {
-    for (ShardManifest& m : ReadManifests(dir)) manifests.push_back(std::move(m));
-  }
-  if (manifests.empty()) {
-    throw RunError("no record manifests (manifest.json or manifest_shard_*.json) in " +
-                   request.dirs.front() +
-                   (request.dirs.size() > 1 ? " and the other folders given" : ""));
-  }
-  CheckOneRun(manifests);
+// Where each episode is: its shard's manifest and entry, or nulls where it is missing or
+// incomplete (a missing file goes into `problems`). Throws on a shard or episode listed twice
+// and on an episode of another shard.
+std::vector<std::pair<const ShardManifest*, const ManifestEpisode*>> EpisodesOfShards(
+    const std::vector<ShardManifest>& manifests, std::map<int, const ShardManifest*>* by_shard,
+    std::vector<std::string>* problems) {
   const ShardManifest& first = manifests.front();
   const int count = first.count;
   const int episodes = first.data.episodes_requested;
   const int steps = first.data.steps_per_episode;
-
-  // every episode once, complete, with its files
-  std::map<int, const ShardManifest*> by_shard;
-  std::vector<std::string> problems;
   std::vector<std::pair<const ShardManifest*, const ManifestEpisode*>> episode_at(
       episodes, {nullptr, nullptr});
   for (const ShardManifest& m : manifests) {
-    auto [it, fresh] = by_shard.emplace(m.index, &m);
+    auto [it, fresh] = by_shard->emplace(m.index, &m);
     if (!fresh) {
       throw RunError("shard " + Label(m.index, count) + " appears twice: '" +
                      it->second->path.string() + "' and '" + m.path.string() + "'");
@@ -211,14 +200,23 @@ MergeResult MergeShardManifests(const MergeRequest& request) {
       }
       // cut short by a signal: counted as missing
       if (!e.IsComplete(steps)) continue;
-      if (HasFiles(e, m.path.parent_path(), &problems)) episode_at[k] = {&m, &e};
+      if (HasFiles(e, m.path.parent_path(), problems)) episode_at[k] = {&m, &e};
     }
   }
+  return episode_at;
+}
+
+// Throws naming every shard that lacks episodes (and how to record them again), and the
+// `problems` found before.
+void CheckComplete(const std::vector<std::pair<const ShardManifest*, const ManifestEpisode*>>& at,
+                   const std::map<int, const ShardManifest*>& by_shard, int count,
+                   std::vector<std::string> problems) {
+  const int episodes = static_cast<int>(at.size());
   std::vector<int> redo;  // the shards to record again
   for (int s = 0; s < count; ++s) {
     std::vector<int> missing;
     for (int k = s; k < episodes; k += count) {
-      if (!episode_at[k].first) missing.push_back(k);
+      if (!at[k].first) missing.push_back(k);
     }
     if (missing.empty()) continue;
     redo.push_back(s);
@@ -235,19 +233,43 @@ MergeResult MergeShardManifests(const MergeRequest& request) {
       problems.push_back("shard " + label + " lacks episodes " + EpisodeList(missing));
     }
   }
-  if (!problems.empty()) {
-    std::string message = "the run is incomplete: ";
-    for (size_t i = 0; i < problems.size(); ++i) message += (i ? "; " : "") + problems[i];
-    if (!redo.empty() && count > 1) {
-      std::string indices;
-      for (int s : redo) indices += (indices.empty() ? "" : ",") + std::to_string(s);
-      message += ". To record them, run their shards again with the run's options and --resume (" +
-                 std::string(redo.size() == 1 ? "--shard " + Label(redo.front(), count)
-                                              : "--shard I/" + std::to_string(count)) +
-                 "; a Slurm array: requeue those tasks, or resubmit --array=" + indices + ")";
-    }
-    throw RunError(message);
+  if (problems.empty()) return;
+  std::string message = "the run is incomplete: ";
+  for (size_t i = 0; i < problems.size(); ++i) message += (i ? "; " : "") + problems[i];
+  if (!redo.empty() && count > 1) {
+    std::string indices;
+    for (int s : redo) indices += (indices.empty() ? "" : ",") + std::to_string(s);
+    message += ". To record them, run their shards again with the run's options and --resume (" +
+               std::string(redo.size() == 1 ? "--shard " + Label(redo.front(), count)
+                                            : "--shard I/" + std::to_string(count)) +
+               "; a Slurm array: requeue those tasks, or resubmit --array=" + indices + ")";
   }
+  throw RunError(message);
+}
+
+}  // namespace
+
+MergeResult MergeShardManifests(const MergeRequest& request) {
+  std::vector<ShardManifest> manifests;
+  for (const std::string& dir : request.dirs) {
+    for (ShardManifest& m : ReadManifests(dir)) manifests.push_back(std::move(m));
+  }
+  if (manifests.empty()) {
+    throw RunError("no record manifests (manifest.json or manifest_shard_*.json) in " +
+                   request.dirs.front() +
+                   (request.dirs.size() > 1 ? " and the other folders given" : ""));
+  }
+  CheckOneRun(manifests);
+  const ShardManifest& first = manifests.front();
+  const int count = first.count;
+  const int episodes = first.data.episodes_requested;
+
+  // every episode once, complete, with its files
+  std::map<int, const ShardManifest*> by_shard;
+  std::vector<std::string> problems;
+  const std::vector<std::pair<const ShardManifest*, const ManifestEpisode*>> episode_at =
+      EpisodesOfShards(manifests, &by_shard, &problems);
+  CheckComplete(episode_at, by_shard, count, problems);
 
   MergeResult result;
   result.manifest = request.out.empty() ? fs::path(request.dirs.front()) / kManifestFileName

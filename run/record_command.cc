@@ -8,10 +8,10 @@
 
 #include "base/errors.h"
 #include "base/stop_signal.h"
-#include "dataset/minari_trajectory.h"
 #include "encode/episode_sink.h"
 #include "encode/video_format.h"
 #include "render/layers.h"
+#include "run/minari_output.h"
 #include "run/progress.h"
 #include "run/run_files.h"
 #include "run/run_folder.h"
@@ -92,21 +92,22 @@ ScheduleResult ScheduleRecord(const RecordJob& job, const RunFolder& folder,
 // The run folder's episode files, read back as export reads them, written as the dataset.
 int WriteRecordMinari(const RecordJob& job) {
   const std::string& out = job.plan.out;
-  const MinariWriteOptions& minari = *job.minari;
+  const MinariRequest& minari = *job.minari;
   const TrajectorySource run = LoadTrajectorySource(out);
   Trajectory t;
   t.env_id = run.env_id;
   t.seed = run.seed;
   t.policy = run.policy;
   for (const auto& [k, episode] : run.episodes) t.episodes.push_back(episode);
-  fs::path path;
+  std::string path;
   const std::string advice =
       "; the run is kept in " + out + ": `fetchscope export " + out + " --minari " +
       minari.dataset_id +
       (job.minari_root_given.empty() ? "" : " --minari-root " + job.minari_root_given) +
       (job.overwrite ? " --overwrite" : "") + "` writes the dataset from it";
   try {
-    path = WriteMinariDataset(t, minari);
+    MinariOutput output(minari);
+    path = WriteEpisodes(t, RecordOutputRun(job), output);
   } catch (const MinariInterrupted& e) {
     std::fprintf(stderr, "record --minari: %s%s\n", e.what(), advice.c_str());
     return 128 + e.signal;
@@ -119,30 +120,29 @@ int WriteRecordMinari(const RecordJob& job) {
 
 }  // namespace
 
-MinariWriteOptions RecordMinariOptions(const RecordJob& job, const std::string& dataset_id,
-                                       const fs::path& root, const std::string& author,
-                                       const std::string& email) {
+OutputRun RecordOutputRun(const RecordJob& job) {
   const RecordPlan& plan = job.plan;
+  OutputRun run;
+  run.command = "record";
+  run.spec = plan.spec;
+  run.seed = plan.seed;
+  run.seed_text = plan.seed_text;
+  run.policy = plan.policy;
+  run.episodes = job.episodes_requested;
+  run.steps = plan.steps;
+  return run;
+}
+
+void CheckRecordMinari(const RecordJob& job) {
   if (job.shard.sharded()) {
     throw UsageError(
         "record --minari: a shard records part of the run; once every shard is "
         "done, `fetchscope export " +
-        plan.out + " --minari " + dataset_id + "`");
+        job.plan.out + " --minari " + job.minari->dataset_id + "`");
   }
-  MinariWriteOptions minari;
-  minari.dataset_id = dataset_id;
-  minari.root = root;
-  minari.spec = plan.spec;
-  minari.algorithm_name = plan.policy;
-  minari.overwrite = job.overwrite;       // replaced after the run, atomically
-  minari.max_episode_steps = plan.steps;  // gym.make(id, max_episode_steps=--steps)
-  if (!author.empty()) minari.author = author;
-  minari.author_email = email;
-  minari.description = plan.spec->id + " episodes recorded by fetchscope (policy " + plan.policy +
-                       ", seed " + plan.seed_text + ")";
-  // an existing id or an unwritable datasets folder fails now, not after the run
-  CheckMinariDestination(minari);
-  return minari;
+  // an existing id or an unwritable datasets folder fails now, not after the run (an existing
+  // one is replaced after the run, atomically, with --overwrite)
+  CheckMinariOutput(*job.minari, RecordOutputRun(job));
 }
 
 int RecordRun(RecordJob job) {

@@ -12,9 +12,10 @@
 #include <string>
 #include <vector>
 
-#include "dataset/minari_writer.h"
+#include "run/episode_output.h"
 #include "run/episode_scheduler.h"
 #include "run/manifest.h"
+#include "run/minari_output.h"
 #include "run/node_probe.h"
 #include "run/record_run.h"
 #include "run/shard.h"
@@ -41,7 +42,7 @@ struct RecordJob {
   bool resume = false;                     ///< --resume
   std::string command_line;                ///< as typed (the manifest's)
   std::string minari_root_given;  ///< --minari-root as given (empty: none), for the export advice
-  std::optional<MinariWriteOptions> minari;          ///< --minari: the dataset written after
+  std::optional<MinariRequest> minari;               ///< --minari: the dataset written after
   std::string model_path;                            ///< the model file the env loaded
   std::chrono::steady_clock::time_point wall_start;  ///< when the command started
   /// Writes the run's report (inspect/, above this layer) for the manifest at this path.
@@ -55,12 +56,13 @@ struct RecordJob {
   } view_text;
 };
 
-/// --minari ID for `job` (plan.spec, plan.policy, plan.seed_text, plan.steps, shard and
-/// overwrite set): the dataset's options, its destination checked now (UsageError for a shard:
-/// export writes a sharded run's dataset; as CheckMinariDestination otherwise).
-MinariWriteOptions RecordMinariOptions(const RecordJob& job, const std::string& dataset_id,
-                                       const std::filesystem::path& root, const std::string& author,
-                                       const std::string& email);
+/// The run a record job's dataset describes (plan.spec, seed, seed_text, policy and steps,
+/// episodes_requested).
+OutputRun RecordOutputRun(const RecordJob& job);
+
+/// Checks `job.minari` (set, with plan, shard and overwrite) now, before the run: UsageError for
+/// a shard (export writes a sharded run's dataset), else as CheckMinariOutput.
+void CheckRecordMinari(const RecordJob& job);
 
 /// Runs `job` after cli/record.cc resolved it: probes the node, opens the run folder, records,
 /// writes the manifest, the summary, the report and the Minari dataset. Returns the exit status

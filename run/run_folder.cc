@@ -199,32 +199,45 @@ RunFolder::RunFolder(const RunFolderRequest& request) : request_(request) {
     created_dirs_.push_back(p);
     if (p == p.parent_path()) break;
   }
-  std::vector<std::string> run_files;  // this run's (or, unsharded, any run's) visible files
-  std::vector<std::string> hidden;     // leftover temporaries of those
-  std::vector<std::string> manifests;  // other manifests
-  if (created_dirs_.empty()) {
-    if (!fs::is_directory(out, ec)) {
-      throw RunError("cannot create output folder '" + request.out + "': a file is in the way");
-    }
-    for (const auto& entry : fs::directory_iterator(out, ec)) {
-      const std::string name = entry.path().filename().string();
-      const std::optional<RunFileName> parsed = ParseRunFileName(name);
-      if (!parsed || entry.is_directory(ec)) continue;  // record writes files only
-      if (parsed->manifest && !parsed->hidden && name != request.manifest_name) {
-        manifests.push_back(name);
-      } else if (Ours(name)) {
-        (parsed->hidden ? hidden : run_files).push_back(name);
-      }
-    }
-    if (ec) throw RunError("cannot list " + quoted + ": " + ec.message());
-    std::sort(run_files.begin(), run_files.end());
-    std::sort(manifests.begin(), manifests.end());
-    CheckWritable(out, quoted);
-    RefuseForeignFiles(out, quoted, &run_files, manifests);
+  Listing listing;
+  if (created_dirs_.empty()) listing = ListFolder(out, quoted);
+  FindAside(out, quoted);
+  CheckOtherManifests(out, quoted, listing.manifests, &listing.run_files);
+  std::vector<std::string> remove;
+  todo_ = request.episodes;
+  if (!PlanRemovals(out, quoted, listing, &remove)) return;  // --resume of a whole run
+  PrepareFolder(out, quoted, remove);
+}
+
+RunFolder::Listing RunFolder::ListFolder(const fs::path& out, const std::string& quoted) const {
+  Listing listing;
+  std::error_code ec;
+  if (!fs::is_directory(out, ec)) {
+    throw RunError("cannot create output folder '" + request_.out + "': a file is in the way");
   }
+  for (const auto& entry : fs::directory_iterator(out, ec)) {
+    const std::string name = entry.path().filename().string();
+    const std::optional<RunFileName> parsed = ParseRunFileName(name);
+    if (!parsed || entry.is_directory(ec)) continue;  // record writes files only
+    if (parsed->manifest && !parsed->hidden && name != request_.manifest_name) {
+      listing.manifests.push_back(name);
+    } else if (Ours(name)) {
+      (parsed->hidden ? listing.hidden : listing.run_files).push_back(name);
+    }
+  }
+  if (ec) throw RunError("cannot list " + quoted + ": " + ec.message());
+  std::sort(listing.run_files.begin(), listing.run_files.end());
+  std::sort(listing.manifests.begin(), listing.manifests.end());
+  CheckWritable(out, quoted);
+  RefuseForeignFiles(out, quoted, &listing.run_files, listing.manifests);
+  return listing;
+}
+
+void RunFolder::FindAside(const fs::path& out, const std::string& quoted) {
   // --overwrite sets the earlier run aside in a hidden folder; one still there is from an
   // --overwrite that was killed outright (SIGKILL): never lost silently
-  const std::string aside_prefix = AsideFolderPrefix(request.manifest_name);
+  std::error_code ec;
+  const std::string aside_prefix = AsideFolderPrefix(request_.manifest_name);
   aside_ = out / (aside_prefix + std::to_string(::getpid()));
   if (created_dirs_.empty()) {
     for (const auto& entry : fs::directory_iterator(out, ec)) {
@@ -237,7 +250,7 @@ RunFolder::RunFolder(const RunFolderRequest& request) : request_(request) {
   for (int n = 1; fs::exists(aside_, ec); ++n) {  // a killed run had this process id
     aside_ = out / (aside_prefix + std::to_string(::getpid()) + "-" + std::to_string(n));
   }
-  if (!stale_aside_.empty() && request.mode != ReuseMode::kOverwrite) {
+  if (!stale_aside_.empty() && request_.mode != ReuseMode::kOverwrite) {
     throw UsageError(quoted + " holds " + stale_aside_.front().filename().string() +
                      ", an earlier run that --overwrite set aside before it was killed: move its "
                      "files back into " +
@@ -245,129 +258,148 @@ RunFolder::RunFolder(const RunFolderRequest& request) : request_(request) {
                      " to keep that run, or pass --overwrite to "
                      "replace both");
   }
+}
 
+void RunFolder::CheckOtherManifests(const fs::path& out, const std::string& quoted,
+                                    const std::vector<std::string>& manifests,
+                                    std::vector<std::string>* run_files) const {
   // Other manifests: a sharded run shares the folder with the other shards of the same run;
   // anything else is another run.
   for (const std::string& name : manifests) {
     const std::optional<Manifest> m = ReadManifestOrNull(out / name);
     const bool recorded = m && m->parameters.recorded;
     const bool same_run =
-        request.sharded && recorded &&
-        Difference(m->parameters, request.parameters, SameRunScope::kShards).empty();
+        request_.sharded && recorded &&
+        Difference(m->parameters, request_.parameters, SameRunScope::kShards).empty();
     if (same_run) continue;
-    if (!request.sharded && request.mode == ReuseMode::kOverwrite) {
-      run_files.push_back(name);  // replaced with the rest of the earlier run
+    if (!request_.sharded && request_.mode == ReuseMode::kOverwrite) {
+      run_files->push_back(name);  // replaced with the rest of the earlier run
       continue;
     }
     std::string why;
-    if (recorded) why = Difference(m->parameters, request.parameters, SameRunScope::kRun);
+    if (recorded) why = Difference(m->parameters, request_.parameters, SameRunScope::kRun);
     throw UsageError(quoted + " holds another record run (" + name +
                      (why.empty() ? "" : ": " + why) + "): choose another --out" +
-                     (request.sharded ? "" : ", or pass --overwrite to replace it"));
+                     (request_.sharded ? "" : ", or pass --overwrite to replace it"));
   }
+}
 
+bool RunFolder::PlanRemovals(const fs::path& out, const std::string& quoted, const Listing& listing,
+                             std::vector<std::string>* remove) {
+  const std::vector<std::string>& run_files = listing.run_files;
+  const std::vector<std::string>& hidden = listing.hidden;
   const bool has_manifest =
-      std::find(run_files.begin(), run_files.end(), request.manifest_name) != run_files.end();
-  std::vector<std::string> remove;
-  todo_ = request.episodes;
-  switch (request.mode) {
+      std::find(run_files.begin(), run_files.end(), request_.manifest_name) != run_files.end();
+  switch (request_.mode) {
     case ReuseMode::kRefuse:
       if (has_manifest) {
-        throw UsageError(quoted + " already holds a record run (" + request.manifest_name +
+        throw UsageError(quoted + " already holds a record run (" + request_.manifest_name +
                          " and " + std::to_string(run_files.size() - 1) +
                          " episode files): pass --resume to continue it, --overwrite to replace "
                          "it, or choose another --out");
       }
       // a sharded run's own episodes without its manifest: an attempt that was killed (a
       // retried pod), recorded again; unsharded, they could be any run's
-      if (!run_files.empty() && !request.sharded) {
+      if (!run_files.empty() && !request_.sharded) {
         throw UsageError(quoted + " holds files of a record run (" + Listed(run_files) +
                          ") without its manifest (killed before writing it): pass --resume to "
                          "record that run again, --overwrite to replace them, or choose another "
                          "--out");
       }
-      remove = run_files;
-      remove.insert(remove.end(), hidden.begin(), hidden.end());
+      *remove = run_files;
+      remove->insert(remove->end(), hidden.begin(), hidden.end());
       break;
     case ReuseMode::kOverwrite:
-      remove = run_files;
-      remove.insert(remove.end(), hidden.begin(), hidden.end());
+      *remove = run_files;
+      remove->insert(remove->end(), hidden.begin(), hidden.end());
       break;
-    case ReuseMode::kResume: {
+    case ReuseMode::kResume:
       if (!has_manifest) {
         // nothing to resume (a requeued job that never started, say), or only the files of an
         // attempt killed before its manifest (fetchscope's, checked above): a fresh run
         CheckSameRunWithoutManifest(out, quoted, run_files);
-        notice_ = "--resume: " + quoted + " holds no " + request.manifest_name +
+        notice_ = "--resume: " + quoted + " holds no " + request_.manifest_name +
                   (run_files.empty() ? ": nothing to resume, recording the whole run"
                                      : " (an attempt killed before writing it left " +
                                            Listed(run_files) + "): recording the whole run");
-        remove = run_files;
-        remove.insert(remove.end(), hidden.begin(), hidden.end());
+        *remove = run_files;
+        remove->insert(remove->end(), hidden.begin(), hidden.end());
         break;
       }
-      const std::optional<Manifest> m = ReadManifestOrNull(out / request.manifest_name);
-      if (!m || !m->parameters.recorded) {
-        throw UsageError("cannot --resume " + quoted + ": its " + request.manifest_name +
-                         " does not record the run's parameters (written by an older fetchscope, "
-                         "or not a record manifest): pass --overwrite instead");
-      }
-      RunParameters theirs = m->parameters;
-      if (theirs.episodes > request.parameters.episodes) {
-        throw UsageError("cannot --resume " + quoted + " with --episodes " +
-                         std::to_string(request.parameters.episodes) + ": the run there has " +
-                         std::to_string(theirs.episodes) + "; pass --episodes " +
-                         std::to_string(theirs.episodes) + ", or more to extend it");
-      }
-      theirs.episodes = request.parameters.episodes;  // --resume may extend the run
-      const std::string why = Difference(theirs, request.parameters, SameRunScope::kRun);
-      if (!why.empty()) {
-        throw UsageError(
-            "cannot --resume " + quoted + " with other parameters: " + why +
-            "; pass the options of the run being resumed, or --overwrite to replace it");
-      }
-      std::set<int> done;
-      for (const ManifestEpisode& e : m->episodes) {
-        const int k = e.index;
-        if (!e.complete.value_or(false) ||
-            !std::binary_search(request.episodes.begin(), request.episodes.end(), k))
-          continue;
-        // its video, sheet and trajectory, and every other file it names, all there
-        bool files = !e.video.empty() && !e.sheet.empty() && !e.trajectory.empty();
-        for (const std::string& file : e.FileNames()) {
-          files = files && fs::is_regular_file(out / file, ec);
-        }
-        if (!files) continue;
-        kept_.push_back(e);
-        done.insert(k);
-      }
-      todo_.clear();
-      for (int k : request.episodes) {
-        if (!done.count(k)) todo_.push_back(k);
-      }
-      already_complete_ = todo_.empty() && !m->interrupted && m->missing.empty() &&
-                          m->failures.empty() &&
-                          m->episodes_requested == request.parameters.episodes;
-      if (already_complete_) {  // nothing to record, nothing to change
-        // but the temporaries of an attempt killed after its manifest (writing its report)
-        for (const std::string& name : hidden) fs::remove(out / name, ec);
-        committed_ = true;
-        return;
-      }
-      // the files of the episodes to redo go first (an incomplete one's); the manifest stays
-      // until the new one replaces it, so that a failed --resume leaves the run resumable
-      // (the report stays too: the new manifest's report replaces it)
-      for (const std::string& name : run_files) {
-        const std::optional<RunFileName> parsed = ParseRunFileName(name);
-        if (!parsed->manifest && !parsed->report && !done.count(parsed->episode)) {
-          remove.push_back(name);
-        }
-      }
-      remove.insert(remove.end(), hidden.begin(), hidden.end());
-      break;
+      return PlanResume(out, quoted, listing, remove);
+  }
+  return true;
+}
+
+bool RunFolder::PlanResume(const fs::path& out, const std::string& quoted, const Listing& listing,
+                           std::vector<std::string>* remove) {
+  std::error_code ec;
+  const std::optional<Manifest> m = ReadManifestOrNull(out / request_.manifest_name);
+  if (!m || !m->parameters.recorded) {
+    throw UsageError("cannot --resume " + quoted + ": its " + request_.manifest_name +
+                     " does not record the run's parameters (written by an older fetchscope, "
+                     "or not a record manifest): pass --overwrite instead");
+  }
+  CheckResumable(quoted, m->parameters);
+  std::set<int> done;
+  for (const ManifestEpisode& e : m->episodes) {
+    const int k = e.index;
+    if (!e.complete.value_or(false) ||
+        !std::binary_search(request_.episodes.begin(), request_.episodes.end(), k))
+      continue;
+    // its video, sheet and trajectory, and every other file it names, all there
+    bool files = !e.video.empty() && !e.sheet.empty() && !e.trajectory.empty();
+    for (const std::string& file : e.FileNames()) {
+      files = files && fs::is_regular_file(out / file, ec);
+    }
+    if (!files) continue;
+    kept_.push_back(e);
+    done.insert(k);
+  }
+  todo_.clear();
+  for (int k : request_.episodes) {
+    if (!done.count(k)) todo_.push_back(k);
+  }
+  already_complete_ = todo_.empty() && !m->interrupted && m->missing.empty() &&
+                      m->failures.empty() && m->episodes_requested == request_.parameters.episodes;
+  if (already_complete_) {  // nothing to record, nothing to change
+    // but the temporaries of an attempt killed after its manifest (writing its report)
+    for (const std::string& name : listing.hidden) fs::remove(out / name, ec);
+    committed_ = true;
+    return false;
+  }
+  // the files of the episodes to redo go first (an incomplete one's); the manifest stays
+  // until the new one replaces it, so that a failed --resume leaves the run resumable
+  // (the report stays too: the new manifest's report replaces it)
+  for (const std::string& name : listing.run_files) {
+    const std::optional<RunFileName> parsed = ParseRunFileName(name);
+    if (!parsed->manifest && !parsed->report && !done.count(parsed->episode)) {
+      remove->push_back(name);
     }
   }
-  if (request.mode == ReuseMode::kOverwrite) {
+  remove->insert(remove->end(), listing.hidden.begin(), listing.hidden.end());
+  return true;
+}
+
+void RunFolder::CheckResumable(const std::string& quoted, RunParameters theirs) const {
+  if (theirs.episodes > request_.parameters.episodes) {
+    throw UsageError("cannot --resume " + quoted + " with --episodes " +
+                     std::to_string(request_.parameters.episodes) + ": the run there has " +
+                     std::to_string(theirs.episodes) + "; pass --episodes " +
+                     std::to_string(theirs.episodes) + ", or more to extend it");
+  }
+  theirs.episodes = request_.parameters.episodes;  // --resume may extend the run
+  const std::string why = Difference(theirs, request_.parameters, SameRunScope::kRun);
+  if (!why.empty()) {
+    throw UsageError("cannot --resume " + quoted + " with other parameters: " + why +
+                     "; pass the options of the run being resumed, or --overwrite to replace it");
+  }
+}
+
+void RunFolder::PrepareFolder(const fs::path& out, const std::string& quoted,
+                              const std::vector<std::string>& remove) {
+  std::error_code ec;
+  if (request_.mode == ReuseMode::kOverwrite) {
     SetAside(out, remove);
   } else {
     for (const std::string& name : remove) {
@@ -378,7 +410,7 @@ RunFolder::RunFolder(const RunFolderRequest& request) : request_(request) {
 
   fs::create_directories(out, ec);
   if (!fs::is_directory(out)) {
-    throw RunError("cannot create output folder '" + request.out +
+    throw RunError("cannot create output folder '" + request_.out +
                    "': " + (ec ? ec.message() : std::string("a file is in the way")));
   }
   if (!created_dirs_.empty()) {

@@ -92,7 +92,33 @@ class RunFolder {
   bool already_complete() const { return already_complete_; }
 
  private:
+  // The files of --out that matter to this run, by name, each list sorted where it is read
+  struct Listing {
+    std::vector<std::string> run_files;  // this run's (or, unsharded, any run's) visible files
+    std::vector<std::string> hidden;     // leftover temporaries of those
+    std::vector<std::string> manifests;  // other manifests
+  };
   bool Ours(const std::string& name) const;
+  // Lists an existing --out, refusing a file in the way, a folder that cannot be listed or
+  // written, and files under a run's names that fetchscope did not write.
+  Listing ListFolder(const std::filesystem::path& out, const std::string& quoted) const;
+  // Picks aside_ and notes (and, without --overwrite, refuses) a killed --overwrite's folder.
+  void FindAside(const std::filesystem::path& out, const std::string& quoted);
+  // Refuses the manifests of other runs (--overwrite: adds them to `run_files`).
+  void CheckOtherManifests(const std::filesystem::path& out, const std::string& quoted,
+                           const std::vector<std::string>& manifests,
+                           std::vector<std::string>* run_files) const;
+  // What --refuse, --overwrite or --resume does with the listing: the names to remove. False
+  // when --resume found the run already whole (nothing to record, nothing to change).
+  bool PlanRemovals(const std::filesystem::path& out, const std::string& quoted,
+                    const Listing& listing, std::vector<std::string>* remove);
+  bool PlanResume(const std::filesystem::path& out, const std::string& quoted,
+                  const Listing& listing, std::vector<std::string>* remove);
+  // Refuses --resume of a run with more episodes or other parameters.
+  void CheckResumable(const std::string& quoted, RunParameters theirs) const;
+  // Removes (or, --overwrite, sets aside) `remove`, makes --out and notes what is in it.
+  void PrepareFolder(const std::filesystem::path& out, const std::string& quoted,
+                     const std::vector<std::string>& remove);
   // Refuses files under a run's names that fetchscope did not write; drops from `run_files` a
   // user's index.html that a run without a report leaves alone.
   void RefuseForeignFiles(const std::filesystem::path& out, const std::string& quoted,

@@ -362,7 +362,8 @@ uint32_t ReadLittleEndian(const std::string& bytes, size_t offset, size_t size) 
   return v;
 }
 
-std::vector<Action> ParseNpy(const std::string& bytes, const std::string& name) {
+// The header of a .npy file (versions 1.0-3.0); `data_start` gets where its data begins.
+NpyHeader ReadNpyHeader(const std::string& bytes, const std::string& name, size_t* data_start) {
   if (bytes.size() < kNpyMagicSize + 2 ||
       bytes.compare(0, kNpyMagicSize, kNpyMagic, kNpyMagicSize) != 0) {
     Fail(name, "", "not a .npy file (no \\x93NUMPY magic): write it with numpy.save");
@@ -380,8 +381,13 @@ std::vector<Action> ParseNpy(const std::string& bytes, const std::string& name) 
     Fail(name, "", ".npy file is truncated inside its header");
 
   const std::string header_text = bytes.substr(header_start, header_length);
-  const NpyHeader header = NpyHeaderParser(header_text, name).Parse();
+  *data_start = header_start + header_length;
+  return NpyHeaderParser(header_text, name).Parse();
+}
 
+// Refuses what a replay cannot take: big-endian or non-float dtypes, Fortran order, a shape
+// other than (T, 4).
+void CheckNpyHeader(const NpyHeader& header, const std::string& name) {
   if (header.descr == ">f4" || header.descr == ">f8") {
     Fail(name, "",
          ".npy dtype " + Quote(header.descr) +
@@ -400,25 +406,14 @@ std::vector<Action> ParseNpy(const std::string& bytes, const std::string& name) 
     Fail(name, "",
          ".npy shape " + ShapeString(header.shape) + " is not supported: expected (T, 4)");
   }
+}
 
-  const bool is_float32 = header.descr == "<f4";
+// `rows` actions of little-endian float32 or float64 values at `data`, each finite.
+std::vector<Action> NpyActions(const char* data, uint64_t rows, bool is_float32,
+                               const std::string& name) {
   const size_t item_size = is_float32 ? 4 : 8;
-  const size_t row_bytes = kActionSize * item_size;
-  const size_t data_start = header_start + header_length;
-  const size_t available = bytes.size() - data_start;
-  const uint64_t rows = header.shape[0];
-  // 128 bits: a corrupt header may claim up to 10^18 rows
-  const unsigned __int128 needed = static_cast<unsigned __int128>(rows) * row_bytes;
-  if (needed != available) {
-    Fail(name, "",
-         ".npy shape " + ShapeString(header.shape) + " needs " + Decimal(needed) +
-             " bytes of data but the file has " + std::to_string(available) +
-             ": it is truncated or corrupt");
-  }
-
   std::vector<Action> actions;
   actions.reserve(rows);
-  const char* data = bytes.data() + data_start;
   for (uint64_t r = 0; r < rows; ++r) {
     Action action;
     action.is_float32 = is_float32;
@@ -443,6 +438,29 @@ std::vector<Action> ParseNpy(const std::string& bytes, const std::string& name) 
     }
     actions.push_back(action);
   }
+  return actions;
+}
+
+std::vector<Action> ParseNpy(const std::string& bytes, const std::string& name) {
+  size_t data_start = 0;
+  const NpyHeader header = ReadNpyHeader(bytes, name, &data_start);
+  CheckNpyHeader(header, name);
+
+  const bool is_float32 = header.descr == "<f4";
+  const size_t item_size = is_float32 ? 4 : 8;
+  const size_t row_bytes = kActionSize * item_size;
+  const size_t available = bytes.size() - data_start;
+  const uint64_t rows = header.shape[0];
+  // 128 bits: a corrupt header may claim up to 10^18 rows
+  const unsigned __int128 needed = static_cast<unsigned __int128>(rows) * row_bytes;
+  if (needed != available) {
+    Fail(name, "",
+         ".npy shape " + ShapeString(header.shape) + " needs " + Decimal(needed) +
+             " bytes of data but the file has " + std::to_string(available) +
+             ": it is truncated or corrupt");
+  }
+
+  std::vector<Action> actions = NpyActions(bytes.data() + data_start, rows, is_float32, name);
   CheckNotEmpty(actions, name);
   return actions;
 }

@@ -2,19 +2,37 @@
 // sizes, seeds Gymnasium rejects, broken assets and replay files, misbehaving exec policies and
 // outputs that cannot be written. Each row runs the real binary and checks the promise to users:
 // exit 2 (usage) or 1 (run time), a short message that names the bad value, no crash or abort
-// text, and no file under a final output name (nor a leftover temporary).
+// text, and no file under a final output name (nor a leftover temporary). Also: mistyped flags
+// and policies, and the anatomy commands' bad input.
 #include <gtest/gtest.h>
+#include <mujoco/mujoco.h>
+#include <time.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <iomanip>
+#include <map>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <regex>
 #include <string>
 #include <vector>
 
+#include "encode/png_io.h"
+#include "encode/video_options.h"
+#include "encode/video_writer.h"
+#include "render/gl_context.h"
+#include "render/renderer.h"
+#include "src/assets.h"
+#include "src/env_spec.h"
+#include "src/fetch_env.h"
 #include "tests/test_util.h"
 
 namespace fetchscope {
@@ -25,6 +43,8 @@ using testing::GenuineAssetsDir;
 using testing::RunCommand;
 using testing::TempDir;
 namespace fs = std::filesystem;
+using testing::LinesWith;
+using testing::RunFetchscope;
 
 void WriteBytes(const fs::path& path, const std::string& bytes) {
   fs::create_directories(path.parent_path());
@@ -750,6 +770,111 @@ INSTANTIATE_TEST_SUITE_P(
     [](const ::testing::TestParamInfo<FullDiskCase>& info) {
       return std::string(info.param.name);
     });
+
+struct Mistake {
+  std::string args;
+  std::vector<std::string> needles;  // all in the one error line
+};
+
+TEST(RoughEdges, MistypedFlagsGetOneLineNamingTheOptionAndTheSubcommandsHelp) {
+  const std::vector<Mistake> mistakes = {
+      {"record --episode 3",
+       {"--episode", "did you mean '--episodes'?", "fetchscope record --help"}},
+      {"record --overlay=", {"--overlay", "needs a value", "fetchscope record --help"}},
+      {"record --episodes 2 --episodes 3",
+       {"--episodes", "given 2 times", "fetchscope record --help"}},
+      {"record --hud-opacity abc",
+       {"--hud-opacity", "'abc'", "number", "fetchscope record --help"}},
+      {"render --widht 4 -o x.png",
+       {"--widht", "did you mean '--width'?", "fetchscope render --help"}},
+      {"rollout --episodes x", {"--episodes", "'x'", "whole number", "fetchscope rollout --help"}},
+      {"record --policy scriptd", {"'scriptd'", "did you mean 'scripted'?"}},
+  };
+  for (const Mistake& m : mistakes) {
+    SCOPED_TRACE(m.args);
+    const CommandResult r = RunFetchscope(m.args);
+    EXPECT_EQ(r.exit_code, 2) << r.output;
+    const std::vector<std::string> lines = LinesWith(r.output, "error:");
+    ASSERT_EQ(lines.size(), 1u) << r.output;
+    EXPECT_EQ(r.output, lines[0] + "\n");
+    for (const std::string& needle : m.needles) {
+      EXPECT_NE(lines[0].find(needle), std::string::npos) << needle << " in " << lines[0];
+    }
+    for (const char* raw : {"not expected", "At Most", "Could not convert", "required TEXT",
+                            "see fetchscope --help"}) {
+      EXPECT_EQ(lines[0].find(raw), std::string::npos) << raw << " in " << lines[0];
+    }
+  }
+}
+
+struct AnatomyBadInput {
+  std::string args;
+  int exit_code;
+  std::string message;  // substring of the one-line error
+};
+
+// gtest prints the command line instead of the bytes of the struct
+void PrintTo(const AnatomyBadInput& c, std::ostream* os) { *os << c.args; }
+
+class BadInputTest : public ::testing::TestWithParam<AnatomyBadInput> {};
+
+TEST_P(BadInputTest, OneClearLineAndNoOutputFile) {
+  TempDir tmp;
+  const fs::path bad = tmp.path() / "bad";
+  fs::create_directories(bad / "fetch");
+  std::ofstream(bad / "fetch" / "reach.xml") << "<mujoco><worldbody><body name='x'></mujoco>";
+  std::ofstream(bad / "fetch" / "push.xml") << "<mujoco/>";
+  std::ofstream(tmp.path() / "nan.csv") << "0,0,0,0\nnan,0,0,0\n";
+  std::ofstream(tmp.path() / "three.csv") << "0,0,0\n";
+  std::ofstream(tmp.path() / "empty.csv") << "";
+  std::ofstream(tmp.path() / "text.csv") << "hello,world\nfoo,bar\n";
+  std::string args = GetParam().args;
+  for (auto [key, value] : {std::pair<std::string, std::string>{"TMP", tmp.path().string()}}) {
+    size_t pos;
+    while ((pos = args.find(key)) != std::string::npos) args.replace(pos, key.size(), value);
+  }
+  const std::string out = (tmp.path() / "out.json").string();
+  auto r = RunFetchscope(args + " --json-out " + out);
+  EXPECT_EQ(r.exit_code, GetParam().exit_code) << r.output;
+  EXPECT_NE(r.output.find(GetParam().message), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("fetchscope: error: "), std::string::npos) << r.output;
+  EXPECT_LE(std::count(r.output.begin(), r.output.end(), '\n'), 2) << r.output;
+  EXPECT_EQ(r.output.find("terminate"), std::string::npos);
+  EXPECT_EQ(r.output.find("Abort"), std::string::npos);
+  EXPECT_FALSE(fs::exists(out));
+  for (const auto& entry : fs::directory_iterator(tmp.path())) {
+    EXPECT_EQ(entry.path().filename().string().find(".tmp"), std::string::npos) << entry.path();
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Anatomy, BadInputTest,
+    ::testing::Values(
+        AnatomyBadInput{
+            "describe --env-id FetchReach-v9", 2,
+            "unknown env id 'FetchReach-v9' (did you mean 'FetchReach-v4'?): use one of "
+            "FetchReach-v4"},
+        AnatomyBadInput{"describe --assets TMP/missing", 2,
+                        "missing' does not exist: use bundled, auto"},
+        AnatomyBadInput{"describe --assets TMP", 2, "has no fetch/reach.xml"},
+        AnatomyBadInput{"describe --env-id FetchReach-v4 --assets TMP/bad", 1,
+                        "bad/fetch/reach.xml': XML parse error"},
+        AnatomyBadInput{"random-episodes --seed -3", 2, "--seed '-3' is not valid"},
+        AnatomyBadInput{"random-episodes --seed 99999999999999999999999", 2, "is too large"},
+        AnatomyBadInput{"random-episodes --n-episodes 0", 2, "--n-episodes"},
+        AnatomyBadInput{"rollout --policy greedy", 2, "unknown policy 'greedy'"},
+        AnatomyBadInput{"rollout --steps 5 --policy replay:TMP/nan.csv", 1, "not a finite number"},
+        AnatomyBadInput{"rollout --steps 1 --policy replay:TMP/three.csv", 1, "three.csv"},
+        AnatomyBadInput{"rollout --steps 1 --policy replay:TMP/empty.csv", 1, "empty"},
+        AnatomyBadInput{"rollout --steps 1 --policy replay:TMP/text.csv", 1, "text.csv"},
+        AnatomyBadInput{"rollout --steps 5 --policy replay:TMP/missing.csv", 1, "missing.csv"},
+        AnatomyBadInput{"rollout --steps 50 --policy replay:TMP/nan.csv", 1, "nan.csv"},
+        AnatomyBadInput{"rollout --steps 3 --policy 'exec:exit 3'", 1, "exited with status 3"},
+        AnatomyBadInput{"rollout --steps 3 --policy 'exec:echo hello; cat >/dev/null'", 1,
+                        "answer 'hello'"},
+        AnatomyBadInput{"rollout --steps 3 --exec-timeout 0.5 --policy 'exec:sleep 5'", 1,
+                        "no answer for step 0 within 0.5 s"},
+        AnatomyBadInput{"rollout --steps 10001", 2, "--steps"}));
 
 }  // namespace
 }  // namespace fetchscope

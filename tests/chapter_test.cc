@@ -1,15 +1,32 @@
 // The course chapter's path, black box: its three commands verbatim in an empty folder, the
-// D1 layout it prints, and `anatomy`, which makes D1-D3, the D4 answers and the anatomy card.
+// D1 layout it prints, and `anatomy`, which makes D1-D3, the D4 answers and the anatomy card
+// (and refuses to replace another env's results without --overwrite).
 #include <gtest/gtest.h>
+#include <mujoco/mujoco.h>
+#include <time.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
+#include <map>
+#include <memory>
 #include <nlohmann/json.hpp>
+#include <regex>
 #include <string>
+#include <vector>
 
 #include "encode/png_io.h"
+#include "encode/video_options.h"
+#include "encode/video_writer.h"
+#include "render/gl_context.h"
+#include "render/renderer.h"
+#include "src/assets.h"
+#include "src/env_spec.h"
+#include "src/fetch_env.h"
 #include "tests/test_util.h"
 
 namespace fetchscope {
@@ -18,6 +35,7 @@ namespace {
 namespace fs = std::filesystem;
 using testing::ReadFile;
 using testing::RunCommand;
+using testing::RunFetchscope;
 using testing::TempDir;
 
 // Runs `fetchscope ARGS` with `dir` as the working folder.
@@ -530,6 +548,30 @@ TEST(Anatomy, RefusesACardTooSmallToRead) {
     EXPECT_NE(r.output.find(args[2] == 'w' ? "480" : "360"), std::string::npos) << r.output;
     EXPECT_FALSE(fs::exists(tmp.path() / "results")) << args;
   }
+}
+
+// anatomy writes D1-D3 under the chapter's names whatever the env: a second run for another env
+// in the same --out is refused before it writes anything (the first run's three files stay as
+// they were), and --overwrite replaces them.
+TEST(AnatomyOverwrite, AnotherEnvInTheSameOutIsRefusedWholeUnlessOverwrite) {
+  testing::TempDir tmp;
+  const std::string out = (tmp.path() / "results").string();
+  auto first = RunFetchscope("anatomy --no-card --out '" + out + "'");
+  ASSERT_EQ(first.exit_code, 0) << first.output;
+  const std::string names[] = {"ch01_env_describe.json", "ch01_reward_check.json",
+                               "ch01_random_metrics.json"};
+  std::map<std::string, std::string> before;
+  for (const std::string& n : names) before[n] = ReadFile(tmp.path() / "results" / n);
+  auto refused = RunFetchscope("anatomy --no-card --env-id FetchPush-v4 --out '" + out + "'");
+  EXPECT_EQ(refused.exit_code, 2) << refused.output;
+  EXPECT_NE(refused.output.find("--overwrite"), std::string::npos) << refused.output;
+  for (const std::string& n : names)
+    EXPECT_EQ(ReadFile(tmp.path() / "results" / n), before[n]) << n;
+  auto replaced =
+      RunFetchscope("anatomy --no-card --env-id FetchPush-v4 --overwrite --out '" + out + "'");
+  ASSERT_EQ(replaced.exit_code, 0) << replaced.output;
+  EXPECT_NE(ReadFile(tmp.path() / "results" / "ch01_env_describe.json").find("FetchPush-v4"),
+            std::string::npos);
 }
 
 }  // namespace

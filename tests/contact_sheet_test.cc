@@ -1,15 +1,30 @@
-// Contact sheet layout, tile scaling and labels (the text itself: text_test.cc).
+// Contact sheet layout, tile scaling and labels (the text itself: text_test.cc), and captions
+// without "-0".
 #include "encode/contact_sheet.h"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "base/errors.h"
+#include "base/number_format.h"
+#include "base/text_table.h"
+#include "encode/png_io.h"
+#include "encode/video_reader.h"
+#include "encode/video_writer.h"
+#include "inspect/image_diff.h"
+#include "render/overlay.h"
 #include "render/text.h"
+#include "tests/test_util.h"
 
 namespace fetchscope {
 namespace {
@@ -306,6 +321,31 @@ TEST(ScaleSheetTileTest, PreScaledTilesGiveTheSameSheet) {
   EXPECT_THROW(ScaleSheetTile(nullptr, 0, 10, "", kSheetTileWidth, &scratch), RunError);
   std::vector<uint8_t> pixel(3);
   EXPECT_THROW(ScaleSheetTile(pixel.data(), 1, 1, "", 8, &scratch), UsageError);
+}
+
+// A Reach step on success: the sparse reward is -0.0 (Gymnasium's -(d > threshold)), and an
+// action component of -0.001.
+FrameInfo ReachSuccessStep() {
+  FrameInfo info;
+  info.title = "FetchReach-v4";
+  info.step = 7;
+  info.reward = -0.0;
+  info.distance = 0.012;
+  info.success = true;
+  info.has_action = true;
+  info.action = {-0.001, 0.5, -0.25, -0.0};
+  return info;
+}
+
+TEST(PictureNumber, SheetCaptionShowsRZero) {
+  const std::string caption = SheetCaption(ReachSuccessStep());
+  EXPECT_EQ(caption, "t=7 r=0\nd=0.012 SUCCESS") << caption;
+  FrameInfo miss = ReachSuccessStep();
+  miss.reward = -1;
+  miss.success = false;
+  EXPECT_EQ(SheetCaption(miss), "t=7 r=-1\nd=0.012 ");
+  FrameInfo reset;
+  EXPECT_EQ(SheetCaption(reset), "t=0 reset\nd=0.000 ");
 }
 
 }  // namespace

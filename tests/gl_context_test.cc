@@ -1,19 +1,47 @@
-// GL context backends: real EGL and OSMesa contexts, no display server.
+// GL context backends: real EGL and OSMesa contexts, no display server; a windowed MUJOCO_GL
+// (one warning, then auto) and a mistyped one (an error with a suggestion).
 #include "render/gl_context.h"
 
 #include <GL/gl.h>
 #include <gtest/gtest.h>
+#include <mujoco/mujoco.h>
+#include <time.h>
 
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdio>
 #include <cstdlib>
+#include <filesystem>
+#include <fstream>
 #include <iostream>
+#include <map>
 #include <memory>
+#include <nlohmann/json.hpp>
+#include <regex>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include "base/errors.h"
+#include "encode/png_io.h"
+#include "encode/video_options.h"
+#include "encode/video_writer.h"
+#include "render/renderer.h"
+#include "src/assets.h"
+#include "src/env_spec.h"
+#include "src/fetch_env.h"
+#include "tests/test_util.h"
 
 namespace fetchscope {
 namespace {
+
+using testing::CommandResult;
+using testing::Count;
+using testing::RunCommand;
+using testing::RunFetchscope;
+using testing::TempDir;
+namespace fs = std::filesystem;
 
 constexpr unsigned kGlMaxRenderbufferSize = 0x84E8;
 
@@ -165,6 +193,49 @@ TEST_F(GlContextTest, EglDeviceZeroIsSelectable) {
   }
   EXPECT_NE(gl->info().device.find("EGL device 0"), std::string::npos) << gl->info().device;
   EXPECT_FALSE(RendererString(*gl).empty());
+}
+
+// A value that means "a windowed GL" (many laptops set MUJOCO_GL=glfw globally): one warning,
+// then auto, in threads and in worker processes alike.
+TEST(RoughEdges, WindowedMujocoGlWarnsOnceThenRendersWithAuto) {
+  TempDir tmp;
+  for (const char* value : {"glfw", "glx"}) {
+    for (const char* mode : {"thread", "process"}) {
+      SCOPED_TRACE(std::string(value) + " " + mode);
+      const fs::path out = tmp.path() / (std::string(value) + mode);
+      const CommandResult r =
+          RunCommand(std::string("MUJOCO_GL=") + value + " " + FETCHSCOPE_BIN +
+                     " record --no-report --env-id FetchReach-v4 --episodes 2 --steps 2 --width 32 "
+                     "--height 32 --jobs 2 --worker-mode " +
+                     mode + " --out " + out.string());
+      ASSERT_EQ(r.exit_code, 0) << r.output;
+      EXPECT_EQ(Count(r.output, std::string("warning: MUJOCO_GL=") + value), 1) << r.output;
+      EXPECT_NE(r.output.find("off-screen"), std::string::npos) << r.output;
+      EXPECT_TRUE(fs::exists(out / "episode_001.mp4"));
+    }
+  }
+  // render makes one context: one warning too
+  const CommandResult r =
+      RunCommand(std::string("MUJOCO_GL=glfw ") + FETCHSCOPE_BIN +
+                 " render --width 32 --height 32 -o " + (tmp.path() / "f.png").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(Count(r.output, "warning: MUJOCO_GL=glfw"), 1) << r.output;
+}
+
+// A plain mistake keeps its error, now with a suggestion; so does --backend.
+TEST(RoughEdges, MistypedMujocoGlIsStillAnErrorWithASuggestion) {
+  TempDir tmp;
+  const std::string png = (tmp.path() / "f.png").string();
+  CommandResult r = RunCommand(std::string("MUJOCO_GL=eglx ") + FETCHSCOPE_BIN +
+                               " render --width 32 --height 32 -o " + png);
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("MUJOCO_GL 'eglx' is not known (did you mean 'egl'?)"), std::string::npos)
+      << r.output;
+  r = RunFetchscope("render --backend osmesaa --width 32 --height 32 -o " + png);
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("'osmesaa' is not known (did you mean 'osmesa'?)"), std::string::npos)
+      << r.output;
+  EXPECT_FALSE(fs::exists(png));
 }
 
 }  // namespace

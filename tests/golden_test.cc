@@ -1,21 +1,30 @@
 // golden check|update: the image comparison, the state comparison, the committed goldens on
 // both backends, and the sensitivity tests: a camera turned by 2 degrees, the block recoloured,
-// the goal moved by 1 cm and a black box drawn on a golden each fail, naming the right layer.
+// the goal moved by 1 cm and a black box drawn on a golden each fail, naming the right layer;
+// check's labelled side-by-side and its table.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <regex>
 #include <set>
+#include <sstream>
 #include <string>
 #include <vector>
 
 #include "base/errors.h"
+#include "base/number_format.h"
+#include "base/text_table.h"
+#include "encode/contact_sheet.h"
 #include "encode/png_io.h"
+#include "encode/video_reader.h"
+#include "encode/video_writer.h"
 #include "inspect/golden_scene.h"
 #include "inspect/image_diff.h"
+#include "render/overlay.h"
 #include "tests/test_util.h"
 
 namespace fs = std::filesystem;
@@ -28,6 +37,7 @@ using testing::ReadFile;
 using testing::RunCommand;
 using testing::RunFetchscope;
 using testing::SourceDir;
+using testing::SplitLines;
 using testing::TempDir;
 
 constexpr char kStateLayer[] = "state differs (physics or model)";
@@ -362,6 +372,68 @@ TEST(GoldenUpdate, SigtermStopsAfterTheSceneInProgressLeavingWholeFiles) {
   }
   EXPECT_GE(pngs, 1);
   EXPECT_LT(pngs, 9);
+}
+
+TEST(GoldenSide, PanelsAreLabelledAndTheTableNamesEveryColumn) {
+  TempDir tmp;
+  const fs::path dir = tmp.path() / "golden";
+  fs::copy(SourceDir() / "golden", dir, fs::copy_options::recursive);
+  nlohmann::json manifest = nlohmann::json::parse(ReadFile(dir / "manifest.json"));
+  for (auto& s : manifest["scenes"]) {
+    if (s["name"] == "reach_reset") s["camera"] = "free:azimuth=134";  // fails in pixels
+  }
+  std::ofstream(dir / "manifest.json") << manifest.dump(2);
+  const fs::path out = tmp.path() / "out";
+  const CommandResult r =
+      RunCommand("FETCHSCOPE_SHARED_DIR=" + tmp.path().string() + "/none " + FETCHSCOPE_BIN +
+                 " golden check --backend osmesa --only reach_reset --golden-dir " + dir.string() +
+                 " --out " + out.string());
+  ASSERT_EQ(r.exit_code, 1) << r.output;
+
+  // the table: a header naming every column, each value under its name
+  const std::vector<std::string> lines = SplitLines(r.output);
+  auto header = std::find_if(lines.begin(), lines.end(),
+                             [](const std::string& l) { return l.rfind("scene ", 0) == 0; });
+  ASSERT_NE(header, lines.end()) << r.output;
+  auto row = std::find_if(lines.begin(), lines.end(),
+                          [](const std::string& l) { return l.rfind("reach_reset ", 0) == 0; });
+  ASSERT_NE(row, lines.end()) << r.output;
+  const size_t result = header->find("result");
+  ASSERT_NE(result, std::string::npos) << *header;
+  EXPECT_EQ(row->find("FAIL"), result) << *header << "\n" << *row;
+  // every value column's cells sit under a header word: no two spaces in a row where a value is
+  std::istringstream words(*header);
+  int named = 0;
+  for (std::string word; words >> word;) ++named;
+  EXPECT_EQ(named, 9) << *header;  // scene result over thr limit max rms limit verdict
+
+  // the side-by-side: golden | actual | diff, each named in a strip above it
+  const Image side = ReadPng((out / "reach_reset_side.png").string());
+  const int w = 320, strip = SideBySideLabelHeight(240);
+  ASSERT_EQ(side.width, SideBySideWidth(w));
+  ASSERT_EQ(side.height, 240 + strip);
+  ASSERT_GE(strip, 12);
+  for (int p = 0; p < 3; ++p) {
+    const int x0 = p * (w + kSideBySideGap);
+    int text = 0, background = 0;
+    for (int y = 0; y < strip; ++y) {
+      for (int x = x0; x < x0 + w; ++x) {
+        const uint8_t* px = &side.pixels[(y * side.width + x) * 3];
+        if (px[0] > 180 && px[1] > 180 && px[2] > 180) ++text;
+        if (px[0] == 40 && px[1] == 40 && px[2] == 40) ++background;
+      }
+    }
+    EXPECT_GT(text, 20) << kSideBySideLabels[p] << ": no label in its strip";
+    EXPECT_GT(background, strip * w * 3 / 4) << kSideBySideLabels[p];
+  }
+  // the panels themselves sit under the strip, unchanged: the actual image's first row
+  const Image actual = ReadPng((out / "reach_reset_actual.png").string());
+  const int x1 = w + kSideBySideGap;
+  for (int x = 0; x < w; ++x) {
+    for (int c = 0; c < 3; ++c) {
+      ASSERT_EQ(side.pixels[(strip * side.width + x1 + x) * 3 + c], actual.pixels[x * 3 + c]);
+    }
+  }
 }
 
 }  // namespace

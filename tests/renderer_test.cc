@@ -1,9 +1,11 @@
 // The renderer on real GL contexts and the real Fetch PickAndPlace model (the genuine
-// Gymnasium-Robotics assets and the bundled model, each skipped when absent).
+// Gymnasium-Robotics assets and the bundled model, each skipped when absent); the segmentation
+// layer without the mocap crosshair.
 #include "render/renderer.h"
 
 #include <gtest/gtest.h>
 #include <mujoco/mujoco.h>
+#include <time.h>
 
 #include <algorithm>
 #include <array>
@@ -12,14 +14,20 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <map>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <regex>
 #include <set>
 #include <string>
 #include <vector>
 
 #include "base/errors.h"
 #include "encode/png_io.h"
+#include "encode/video_options.h"
+#include "encode/video_writer.h"
 #include "render/gl_context.h"
 #include "render/view.h"
 #include "src/assets.h"
@@ -35,6 +43,10 @@ namespace fetchscope {
 namespace {
 
 namespace fs = std::filesystem;
+using testing::CommandResult;
+using testing::ReadFile;
+using testing::RunFetchscope;
+using testing::TempDir;
 
 constexpr int kSize = 480;
 
@@ -1175,6 +1187,104 @@ TEST(HudPlacement, TextNeverLeavesTheBox) {
     }
   }
   EXPECT_GT(changed, 500);
+}
+
+// The colour the segmentation layer gives robot0:mocap (its body id's palette entry).
+std::array<uint8_t, 3> MocapColour() {
+  char error[1000] = "";
+  mjModel* m = mj_loadXML((testing::SourceDir() / "models" / "reach.xml").c_str(), nullptr, error,
+                          sizeof(error));
+  EXPECT_NE(m, nullptr) << error;
+  if (!m) return {};
+  const int body = mj_name2id(m, mjOBJ_BODY, "robot0:mocap");
+  EXPECT_GE(body, 0);
+  EXPECT_GE(m->body_mocapid[body], 0);
+  mj_deleteModel(m);
+  return SegmentationColor(body);
+}
+
+TEST(RoughEdges, SegmentationLeavesOutTheMocapCrosshair) {
+  TempDir tmp;
+  const std::array<uint8_t, 3> mocap = MocapColour();
+  for (int steps : {0, 3}) {  // at reset the cross sits at the world origin, then on the gripper
+    SCOPED_TRACE(steps);
+    const fs::path png = tmp.path() / ("s" + std::to_string(steps) + ".png");
+    const CommandResult r =
+        RunFetchscope("render --layers segmentation --width 240 --height 240 --steps " +
+                      std::to_string(steps) + " -o " + png.string());
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    const nlohmann::json legend = nlohmann::json::parse(
+        ReadFile(tmp.path() / ("s" + std::to_string(steps) + "_segmentation_legend.json")));
+    bool gripper = false;
+    for (const auto& o : legend["objects"]) {
+      EXPECT_EQ(o["body"].get<std::string>().find("mocap"), std::string::npos) << o.dump();
+      gripper |= o["body"] == "robot0:r_gripper_finger_link";
+    }
+    EXPECT_TRUE(gripper) << legend.dump();
+    const Image image = ReadPng(png.string());
+    long mocap_pixels = 0;
+    for (size_t i = 0; i + 2 < image.pixels.size(); i += 3) {
+      mocap_pixels += image.pixels[i] == mocap[0] && image.pixels[i + 1] == mocap[1] &&
+                      image.pixels[i + 2] == mocap[2];
+    }
+    EXPECT_EQ(mocap_pixels, 0);
+  }
+}
+
+// Through the renderer: with the crosshair asked for (RenderOptions::segment_mocap) and
+// without (the default). Without it, every pixel that was not the crosshair keeps its colour,
+// no object loses a pixel, and the crosshair's pixels go to what lies behind it.
+TEST(RoughEdges, SegmentationWithoutTheMocapKeepsEveryOtherPixel) {
+  std::unique_ptr<GlContext> gl;
+  try {
+    gl = CreateGlContext("auto");
+  } catch (const std::exception& e) {
+    GTEST_SKIP() << e.what();
+  }
+  FetchEnv env(FindEnvSpec("FetchReachDense-v4"), ResolveAssets("bundled"));
+  env.Reset(0);
+  for (int k = 0; k < 3; ++k) env.Step(Action{});
+  FrameInfo info;
+  info.goal = env.goal();
+  const std::array<uint8_t, 3> mocap = MocapColour();
+  RenderOptions options;
+  options.width = options.height = 240;
+  auto segment = [&](bool with_mocap, std::map<std::array<uint8_t, 3>, long>* counts) {
+    RenderOptions o = options;
+    o.segment_mocap = with_mocap;
+    Renderer renderer(*gl, env.model(), o);
+    std::vector<uint8_t> layer;
+    renderer.RenderLayer(env.data(), info, Layer::kSegmentation, &layer);
+    for (const SegmentObject& object : renderer.segmentation_legend()) {
+      (*counts)[object.color] = object.pixels;
+    }
+    return layer;
+  };
+  std::map<std::array<uint8_t, 3>, long> with_counts, without_counts;
+  const std::vector<uint8_t> with = segment(true, &with_counts);
+  const std::vector<uint8_t> without = segment(false, &without_counts);
+  ASSERT_GT(with_counts[mocap], 100) << "the crosshair, when asked for";
+  EXPECT_EQ(without_counts.count(mocap), 0u) << "the legend lists no mocap";
+  ASSERT_EQ(with.size(), without.size());
+  long kept = 0, moved = 0;
+  for (size_t i = 0; i < with.size(); i += 3) {
+    const std::array<uint8_t, 3> a{with[i], with[i + 1], with[i + 2]};
+    const std::array<uint8_t, 3> b{without[i], without[i + 1], without[i + 2]};
+    EXPECT_NE(b, mocap);
+    if (a == mocap) {
+      ++moved;
+    } else {
+      kept += a == b;
+      EXPECT_EQ(a, b) << "pixel " << i / 3;
+    }
+  }
+  EXPECT_EQ(moved, with_counts[mocap]);
+  EXPECT_EQ(kept + moved, static_cast<long>(with.size() / 3));
+  for (const auto& [colour, pixels] : with_counts) {
+    if (colour != mocap) {
+      EXPECT_GE(without_counts[colour], pixels);
+    }
+  }
 }
 
 }  // namespace

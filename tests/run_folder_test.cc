@@ -1,10 +1,13 @@
 // record's --out folder holds one run: a folder with another run's files is refused (exit 2),
 // --overwrite replaces that run wholly, --resume continues an interrupted run with the bytes of
-// an uninterrupted one, and a run that fails leaves nothing that was not there before.
+// an uninterrupted one, and a run that fails leaves nothing that was not there before; --out may
+// not be the run --from replays, --overwrite removes only what fetchscope wrote, and an --out
+// nothing can be written in is refused before anything is rendered.
 #include "run/run_folder.h"
 
 #include <gtest/gtest.h>
 #include <signal.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -14,13 +17,16 @@
 #include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <regex>
 #include <set>
 #include <string>
 #include <thread>
 #include <tuple>
 #include <vector>
 
+#include "inspect/report.h"
 #include "run/run_files.h"
+#include "run/run_summary.h"
 #include "tests/test_util.h"
 
 namespace fetchscope {
@@ -33,6 +39,7 @@ using testing::SpawnFetchscope;
 using testing::TempDir;
 using testing::WaitExit;
 namespace fs = std::filesystem;
+using testing::AllFiles;
 
 const std::string kSmall =
     "record --quiet --env-id FetchPush-v4 --width 32 --height 32 --steps 5 --policy random ";
@@ -338,6 +345,170 @@ TEST_F(RunFolderTest, AFailedRunLeavesNothingBehind) {
     EXPECT_EQ(r.exit_code, 1) << r.output;
     EXPECT_EQ(Names(existing), std::set<std::string>{"notes.txt"}) << r.output;
   }
+}
+
+class RunSafetyTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    unsetenv("DISPLAY");
+    for (const char* name : {"SLURM_ARRAY_TASK_ID", "JOB_COMPLETION_INDEX"}) unsetenv(name);
+  }
+};
+
+TEST_F(RunSafetyTest, OutThatIsTheFromRunIsRefusedThroughSymlinksToo) {
+  TempDir tmp;
+  const fs::path run = tmp.path() / "run", alias = tmp.path() / "alias";
+  auto r = RunFetchscope(kSmall + "--episodes 2 --seed 3 --out " + run.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  fs::create_directory_symlink(run, alias);
+  const auto before = AllFiles(run);
+  for (const auto& [from, out] : std::vector<std::pair<fs::path, fs::path>>{
+           {run, run}, {alias, run}, {run, alias}, {run / ".", alias / ""}}) {
+    SCOPED_TRACE(from.string() + " -> " + out.string());
+    r = RunFetchscope("record --quiet --from " + from.string() + " --out " + out.string() +
+                      " --overwrite");
+    EXPECT_EQ(r.exit_code, 2) << r.output;
+    // one line, naming both as given
+    EXPECT_NE(r.output.find("--out '" + out.string() + "' is --from '" + from.string() + "'"),
+              std::string::npos)
+        << r.output;
+    EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
+    EXPECT_TRUE(AllFiles(run) == before) << "the source run changed";
+  }
+  // a folder inside the source, a source file inside --out: refused alike
+  r = RunFetchscope("record --quiet --from " + alias.string() + " --out " + (run / "hd").string());
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("lies inside --from"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(run / "hd"));
+  r = RunFetchscope("record --quiet --from " + (alias / "episode_001.json").string() + " --out " +
+                    run.string() + " --resume");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("holds --from"), std::string::npos) << r.output;
+  EXPECT_TRUE(AllFiles(run) == before) << "the source run changed";
+  // another folder is fine
+  r = RunFetchscope("record --quiet --from " + alias.string() + " --out " +
+                    (tmp.path() / "again").string());
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+}
+
+TEST_F(RunSafetyTest, OverwriteRefusesFilesFetchscopeDidNotWriteAndKeepsThem) {
+  TempDir tmp;
+  const fs::path run = tmp.path() / "run";
+  auto r = RunFetchscope(kSmall + "--episodes 2 --seed 1 --out " + run.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  // the user replaced the report with their own page
+  WriteText(run / "index.html", "<html><body>my notes</body></html>\n");
+  const auto before = AllFiles(run);
+  r = RunFetchscope(kSmall + "--episodes 2 --seed 2 --overwrite --out " + run.string());
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("holds index.html, not written by fetchscope"), std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("move them out of --out"), std::string::npos) << r.output;
+  EXPECT_TRUE(AllFiles(run) == before) << "--overwrite touched the folder";
+  // `report` does not replace it either
+  r = RunFetchscope("report " + run.string());
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("is not a report fetchscope wrote"), std::string::npos) << r.output;
+  EXPECT_EQ(ReadFile(run / "index.html"), before.at("index.html"));
+  // with --no-report the run leaves the page alone, and records
+  r = RunFetchscope(kSmall + "--episodes 2 --seed 2 --overwrite --no-report --out " + run.string());
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(ReadFile(run / "index.html"), before.at("index.html"));
+  EXPECT_EQ(nlohmann::json::parse(ReadFile(run / "manifest.json"))["seed"], 2);
+
+  // a web app's manifest.json and episode-like files: listed, a few then "and N more"
+  const fs::path web = tmp.path() / "web";
+  fs::create_directories(web);
+  WriteText(web / "manifest.json", "{\"name\": \"my app\", \"icons\": []}\n");
+  for (int k = 0; k < 4; ++k) WriteText(web / ("episode_00" + std::to_string(k) + ".mp4"), "x");
+  const auto web_before = AllFiles(web);
+  for (const char* mode : {"", "--overwrite ", "--resume "}) {
+    r = RunFetchscope(kSmall + "--episodes 1 " + mode + "--out " + web.string());
+    EXPECT_EQ(r.exit_code, 2) << mode << r.output;
+    EXPECT_NE(r.output.find("holds episode_000.mp4, episode_001.mp4, episode_002.mp4 and 2 more, "
+                            "not written by fetchscope"),
+              std::string::npos)
+        << mode << r.output;
+    EXPECT_TRUE(AllFiles(web) == web_before) << mode;
+  }
+}
+
+// A run killed before its manifest (SIGKILL) left fetchscope's episode files: --overwrite still
+// replaces them, since each sits beside its fetchscope trajectory.
+TEST_F(RunSafetyTest, OverwriteStillReplacesAKilledRunsEpisodes) {
+  TempDir tmp;
+  const fs::path run = tmp.path() / "run";
+  auto r = RunFetchscope(kSmall + "--episodes 2 --seed 1 --no-report --out " + run.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  fs::remove(run / "manifest.json");
+  r = RunFetchscope(kSmall + "--episodes 1 --seed 2 --overwrite --out " + run.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_FALSE(fs::exists(run / "episode_001.mp4"));
+  EXPECT_TRUE(fs::exists(run / "index.html"));
+}
+
+TEST_F(RunSafetyTest, UnwritableOutIsRefusedBeforeRendering) {
+  // /proc takes no new files, not even root's
+  auto r = RunFetchscope(kSmall + "--episodes 1 --out /proc");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("--out '/proc' is not writable"), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("lost episode"), std::string::npos) << r.output;
+  EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
+  // a folder under a regular file cannot be made, by anyone
+  TempDir tmp;
+  WriteText(tmp.path() / "file", "x");
+  r = RunFetchscope(kSmall + "--episodes 1 --out " + (tmp.path() / "file" / "run").string());
+  EXPECT_NE(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("cannot create output folder"), std::string::npos) << r.output;
+}
+
+TEST_F(RunSafetyTest, ReadOnlyFolderIsRefusedBeforeRendering) {
+  if (geteuid() == 0) GTEST_SKIP() << "root ignores permission bits (see the /proc test)";
+  TempDir tmp;
+  const fs::path ro = tmp.path() / "ro";
+  fs::create_directories(ro);
+  chmod(ro.c_str(), 0555);
+  auto r = RunFetchscope(kSmall + "--episodes 1 --out " + ro.string());
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("is not writable"), std::string::npos) << r.output;
+  // and a folder to be made in it
+  r = RunFetchscope(kSmall + "--episodes 1 --out " + (ro / "sub").string());
+  EXPECT_NE(r.exit_code, 0) << r.output;
+  EXPECT_EQ(r.output.find("lost episode"), std::string::npos) << r.output;
+  chmod(ro.c_str(), 0755);
+}
+
+// --episodes N --resume extends a finished run to N episodes, byte for byte as a fresh run of N;
+// fewer than the run has is refused in one line.
+TEST_F(RunSafetyTest, ResumeWithMoreEpisodesExtendsTheRunByteForByte) {
+  TempDir tmp;
+  const fs::path out = tmp.path() / "run", fresh = tmp.path() / "fresh";
+  const std::string run = kSmall + "--seed 4 --no-report ";
+  auto r = RunFetchscope(run + "--episodes 2 --out " + out.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  r = RunFetchscope(run + "--episodes 4 --resume --out " + out.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  r = RunFetchscope(run + "--episodes 4 --out " + fresh.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto extended = EpisodeFiles(out), expected = EpisodeFiles(fresh);
+  ASSERT_EQ(extended.size(), expected.size());
+  for (const auto& [name, bytes] : expected) {
+    EXPECT_TRUE(extended.at(name) == bytes) << name << " differs after extending";
+  }
+  const auto m = nlohmann::json::parse(ReadFile(out / "manifest.json"));
+  const auto mf = nlohmann::json::parse(ReadFile(fresh / "manifest.json"));
+  EXPECT_EQ(m["episodes"], mf["episodes"]);
+  EXPECT_EQ(m["parameters"], mf["parameters"]);
+  EXPECT_EQ(m["episodes_requested"], 4);
+  // fewer: refused, naming both counts
+  const auto before = AllFiles(out);
+  r = RunFetchscope(run + "--episodes 3 --resume --out " + out.string());
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("with --episodes 3: the run there has 4; pass --episodes 4"),
+            std::string::npos)
+      << r.output;
+  EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
+  EXPECT_TRUE(AllFiles(out) == before);
 }
 
 }  // namespace

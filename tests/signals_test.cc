@@ -21,9 +21,11 @@
 namespace fetchscope {
 namespace {
 
+using testing::DecodedFrames;
 using testing::ReadFile;
 using testing::RunCommand;
 using testing::TempDir;
+using testing::WaitExit;
 namespace fs = std::filesystem;
 
 // Starts `fetchscope ARGS` in the background (output to `log`); returns its pid.
@@ -47,23 +49,6 @@ bool WaitForFile(const fs::path& path, pid_t pid) {
     std::this_thread::sleep_for(std::chrono::milliseconds(100));
   }
   return false;
-}
-
-// Exit code as a shell reports it (128+signal when killed).
-int WaitExit(pid_t pid) {
-  int status = 0;
-  waitpid(pid, &status, 0);
-  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-}
-
-// Frames ffprobe decodes from `mp4`, or -1 if it does not play.
-int DecodedFrames(const fs::path& mp4) {
-  auto r = RunCommand(
-      "ffprobe -v error -count_frames -select_streams v:0 -show_entries "
-      "stream=nb_read_frames -of csv=p=0 " +
-      mp4.string());
-  if (r.exit_code != 0 || r.output.empty()) return -1;
-  return std::atoi(r.output.c_str());
 }
 
 // Every output under a final name is whole: videos decode, sheets decode, JSON parses.

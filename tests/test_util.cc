@@ -1,9 +1,13 @@
 #include "tests/test_util.h"
 
+#include <gtest/gtest.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
+#include <cctype>
+#include <cerrno>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
@@ -76,6 +80,54 @@ std::map<std::string, std::string> EpisodeFiles(const std::filesystem::path& dir
   return files;
 }
 
+std::map<std::string, std::string> AllFiles(const std::filesystem::path& dir) {
+  std::map<std::string, std::string> files;
+  for (const auto& e : std::filesystem::directory_iterator(dir)) {
+    if (e.is_regular_file()) files[e.path().filename().string()] = ReadFile(e.path());
+  }
+  return files;
+}
+
+std::set<std::string> FilesIn(const std::filesystem::path& dir) {
+  std::set<std::string> files;
+  for (const auto& entry : std::filesystem::directory_iterator(dir)) {
+    files.insert(entry.path().filename());
+  }
+  return files;
+}
+
+int Count(const std::string& text, const std::string& needle) {
+  int n = 0;
+  for (size_t at = text.find(needle); at != std::string::npos; at = text.find(needle, at + 1)) ++n;
+  return n;
+}
+
+std::vector<std::string> LinesWith(const std::string& text, const std::string& needle) {
+  std::vector<std::string> lines;
+  size_t start = 0;
+  while (start < text.size()) {
+    size_t end = text.find('\n', start);
+    if (end == std::string::npos) end = text.size();
+    const std::string line = text.substr(start, end - start);
+    if (line.find(needle) != std::string::npos) lines.push_back(line);
+    start = end + 1;
+  }
+  return lines;
+}
+
+std::vector<std::string> SplitLines(const std::string& text) {
+  std::vector<std::string> lines;
+  std::istringstream in(text);
+  for (std::string line; std::getline(in, line);) lines.push_back(line);
+  return lines;
+}
+
+int LineCount(const std::string& text) {
+  int n = 0;
+  for (char c : text) n += c == '\n';
+  return n + (!text.empty() && text.back() != '\n');
+}
+
 pid_t SpawnFetchscope(const std::string& args, const std::filesystem::path& log) {
   const std::string command =
       "exec " + std::string(FETCHSCOPE_BIN) + " " + args + " </dev/null >" + log.string() + " 2>&1";
@@ -89,8 +141,41 @@ pid_t SpawnFetchscope(const std::string& args, const std::filesystem::path& log)
 
 int WaitExit(pid_t pid) {
   int status = 0;
-  waitpid(pid, &status, 0);
+  while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  }
   return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+}
+
+nlohmann::json FfprobeJson(const std::filesystem::path& path, const std::string& show_entries) {
+  const CommandResult probe = RunCommand("ffprobe -v error -count_frames -show_entries " +
+                                         show_entries + " -of json '" + path.string() + "'");
+  EXPECT_EQ(probe.exit_code, 0) << probe.output;
+  return nlohmann::json::parse(probe.output, nullptr, /*allow_exceptions=*/false);
+}
+
+std::map<std::string, std::string> FfprobeFormatTags(const std::filesystem::path& path) {
+  const CommandResult probe =
+      RunCommand("ffprobe -v error -show_entries format_tags -of json '" + path.string() + "'");
+  EXPECT_EQ(probe.exit_code, 0) << probe.output;
+  const nlohmann::json j = nlohmann::json::parse(probe.output, nullptr, false);
+  std::map<std::string, std::string> tags;
+  if (j.is_discarded() || !j.contains("format") || !j["format"].contains("tags")) return tags;
+  for (const auto& [key, value] : j["format"]["tags"].items()) {
+    std::string name = key;
+    std::transform(name.begin(), name.end(), name.begin(),
+                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    tags[name] = value.get<std::string>();
+  }
+  return tags;
+}
+
+int DecodedFrames(const std::filesystem::path& video) {
+  auto r = RunCommand(
+      "ffprobe -v error -count_frames -select_streams v:0 -show_entries "
+      "stream=nb_read_frames -of csv=p=0 " +
+      video.string());
+  if (r.exit_code != 0 || r.output.empty()) return -1;
+  return std::atoi(r.output.c_str());
 }
 
 std::string PythonWithH5py() {

@@ -5,7 +5,10 @@
 
 #include <filesystem>
 #include <map>
+#include <nlohmann/json.hpp>
+#include <set>
 #include <string>
+#include <vector>
 
 namespace fetchscope::testing {
 
@@ -48,11 +51,39 @@ std::string ReadFile(const std::filesystem::path& path);
 /// The per-episode output files of a record run folder (episode_*, not manifests): name -> bytes.
 std::map<std::string, std::string> EpisodeFiles(const std::filesystem::path& dir);
 
+/// Every file in `dir` (not below it), by name, with its bytes.
+std::map<std::string, std::string> AllFiles(const std::filesystem::path& dir);
+
+/// The names of the entries of `dir` (not below it).
+std::set<std::string> FilesIn(const std::filesystem::path& dir);
+
+/// How often `needle` occurs in `text` (overlapping occurrences counted).
+int Count(const std::string& text, const std::string& needle);
+
+/// Lines of `text` that hold `needle`.
+std::vector<std::string> LinesWith(const std::string& text, const std::string& needle);
+
+/// The lines of `text`, without their newlines.
+std::vector<std::string> SplitLines(const std::string& text);
+
+/// How many lines `text` has (a last line without a newline counts).
+int LineCount(const std::string& text);
+
 /// Starts `fetchscope ARGS` in the background, its output in `log`; returns its pid.
 pid_t SpawnFetchscope(const std::string& args, const std::filesystem::path& log);
 
 /// Waits for `pid`: its exit status, or 128 + the signal that ended it.
 int WaitExit(pid_t pid);
+
+/// ffprobe's JSON for `path` (-count_frames -show_entries SHOW_ENTRIES -of json); a failed probe
+/// fails the test and gives a discarded value.
+nlohmann::json FfprobeJson(const std::filesystem::path& path, const std::string& show_entries);
+
+/// ffprobe's format tags of `path`, names lowercased (Matroska stores tag names in capitals).
+std::map<std::string, std::string> FfprobeFormatTags(const std::filesystem::path& path);
+
+/// Frames ffprobe decodes from the first video stream of `video`, or -1 if it does not play.
+int DecodedFrames(const std::filesystem::path& video);
 
 /// A python3 that imports h5py and numpy: the one on PATH, else Debian's; "" when none.
 std::string PythonWithH5py();

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Minari 0.5 datasets of real Fetch episodes, for tests/minari_in_test.cc: the episodes of
+"""Minari 0.5 datasets of real Fetch episodes, for tests/cli_record_from_dataset_test.cc: the episodes of
 fetchscope rollouts (the genuine env's numbers) written with Debian's python3-h5py in exactly the
 layout Minari 0.5's create_dataset_from_buffers or DataCollector leaves (the layout helpers are
 minari_h5py.py's, written from Minari 0.5.3's public source).

@@ -24,6 +24,7 @@ namespace {
 
 using testing::ReadFile;
 using testing::TempDir;
+using testing::WaitExit;
 namespace fs = std::filesystem;
 
 std::string PolicyScript() {
@@ -66,13 +67,6 @@ bool WaitForChild(const fs::path& dir, pid_t pid) {
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   }
   return false;
-}
-
-int WaitExit(pid_t pid) {
-  int status = 0;
-  while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
-  }
-  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
 }
 
 bool Alive(pid_t pid) { return kill(pid, 0) == 0 || errno != ESRCH; }

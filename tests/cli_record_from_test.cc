@@ -1,7 +1,11 @@
 // record --from (re-rendering recorded trajectories) and the hindsight overlay, black-box:
-// the real binary, real GL, real libx264, decoded with ffmpeg.
+// the real binary, real GL, real libx264, decoded with ffmpeg; an edited env id named with its
+// file and key.
+#include <fcntl.h>
 #include <gtest/gtest.h>
 #include <signal.h>
+#include <spawn.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -14,8 +18,15 @@
 #include <map>
 #include <nlohmann/json.hpp>
 #include <set>
+#include <string>
 #include <thread>
+#include <vector>
 
+#include "encode/frame_pool.h"
+#include "render/frame_limits.h"
+#include "render/overlay.h"
+#include "run/record_run.h"
+#include "src/trajectory.h"
 #include "tests/test_util.h"
 
 namespace fetchscope {
@@ -27,6 +38,9 @@ using testing::RunCommand;
 using testing::RunFetchscope;
 using testing::TempDir;
 namespace fs = std::filesystem;
+using nlohmann::json;
+using testing::CommandResult;
+using testing::LineCount;
 
 constexpr char kRun[] =
     "record --quiet --env-id FetchPickAndPlace-v4 --policy scripted --seed 5 --episodes 2 "
@@ -384,6 +398,32 @@ TEST_F(RecordFromTest, HindsightOverlayKeepsTrajectoriesAndIsTheSameWithAnyJobs)
     EXPECT_GE(h["relabelled_successes"].get<int>(), h["original_successes"].get<int>());
     EXPECT_LE(h["relabelled_successes"].get<int>(), 4 * 15);
   }
+}
+
+TEST(EditedRecording, UnknownEnvIdNamesTheFileAndTheKey) {
+  TempDir tmp;
+  const fs::path t = tmp.path() / "t.json";
+  CommandResult r =
+      RunFetchscope("rollout --env-id FetchPush-v4 --steps 2 --json-out " + t.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  json j = json::parse(ReadFile(t));
+  j["env_id"] = "FetchPusj-v4";
+  std::ofstream(t) << j.dump();
+  const fs::path out = tmp.path() / "run";
+  r = RunFetchscope("record --from " + t.string() + " --out " + out.string() + " 2>&1");
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_EQ(LineCount(r.output), 1) << r.output;
+  EXPECT_NE(r.output.find(t.string() + ": env_id: unknown env id 'FetchPusj-v4'"),
+            std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("did you mean 'FetchPush-v4'"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(out));
+  // the same file as a replay policy
+  r = RunFetchscope("rollout --policy replay:" + t.string() + " 2>&1");
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.output.find(t.string() + ": env_id: unknown env id 'FetchPusj-v4'"),
+            std::string::npos)
+      << r.output;
 }
 
 }  // namespace

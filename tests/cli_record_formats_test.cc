@@ -1,36 +1,44 @@
 // record --format mp4,webm,gif: one file per episode and format, each probed by ffprobe with the
 // right frame count and the run's tags, listed in the manifest, and byte-identical whatever
-// --jobs.
+// --jobs; the GIF's HUD sized for the GIF.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cctype>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <sstream>
 #include <string>
+#include <vector>
 
+#include "base/number_format.h"
+#include "base/text_table.h"
+#include "encode/contact_sheet.h"
+#include "encode/png_io.h"
+#include "encode/video_reader.h"
 #include "encode/video_writer.h"
+#include "inspect/image_diff.h"
+#include "render/overlay.h"
 #include "tests/test_util.h"
 
 namespace fetchscope {
 namespace {
 
 using testing::EpisodeFiles;
+using testing::FfprobeJson;
 using testing::ReadFile;
 using testing::RunCommand;
 using testing::RunFetchscope;
 using testing::TempDir;
 namespace fs = std::filesystem;
+using testing::CommandResult;
 
-nlohmann::json Probe(const fs::path& path) {
-  const auto r = RunCommand(
-      "ffprobe -v error -count_frames -show_entries "
-      "stream=codec_name,width,height,nb_read_frames:format_tags -of json '" +
-      path.string() + "'");
-  EXPECT_EQ(r.exit_code, 0) << r.output;
-  return nlohmann::json::parse(r.output, nullptr, false);
-}
+// What the tests read back with ffprobe.
+const char kProbeEntries[] = "stream=codec_name,width,height,nb_read_frames:format_tags";
 
 class FormatsTest : public ::testing::Test {
  protected:
@@ -83,7 +91,7 @@ TEST_F(FormatsTest, EveryFormatPerEpisodeProbedTaggedAndTheSameWithJobs) {
     const std::map<std::string, std::pair<std::string, int>> expected = {
         {"mp4", {"h264", frames}}, {"webm", {"vp9", frames}}, {"gif", {"gif", gif_frames}}};
     for (const auto& [ext, codec_frames] : expected) {
-      const nlohmann::json probe = Probe(out / (stem + "." + ext));
+      const nlohmann::json probe = FfprobeJson(out / (stem + "." + ext), kProbeEntries);
       ASSERT_FALSE(probe.is_discarded()) << stem << "." << ext;
       const nlohmann::json& stream = probe["streams"][0];
       EXPECT_EQ(stream["codec_name"], codec_frames.first) << ext;
@@ -137,9 +145,85 @@ TEST_F(FormatsTest, ManifestAndSummaryNameTheEncodersActuallyUsed) {
     EXPECT_NE(r.output.find(", " + codec + " -> " + out.string()), std::string::npos) << r.output;
     EXPECT_EQ(r.output.find("libx264"), std::string::npos) << r.output;
     EXPECT_EQ(r.output.find("nvenc"), std::string::npos) << r.output;
-    const nlohmann::json probe = Probe(out / ("episode_000." + format));
+    const nlohmann::json probe = FfprobeJson(out / ("episode_000." + format), kProbeEntries);
     EXPECT_EQ(probe["streams"][0]["codec_name"], format == "webm" ? "vp9" : "gif");
   }
+}
+
+// The longest run of near-black pixels in column `x` of an RGB24 image `w` wide.
+int BlackRun(const std::vector<uint8_t>& rgb, int w, int h, int x) {
+  int best = 0, run = 0;
+  for (int y = 0; y < h; ++y) {
+    const uint8_t* p = &rgb[(y * w + x) * 3];
+    run = std::max({p[0], p[1], p[2]}) < 48 ? run + 1 : 0;
+    best = std::max(best, run);
+  }
+  return best;
+}
+
+TEST(GifHud, SizedForTheGifWidthWhileTheMp4KeepsItsOwn) {
+  TempDir tmp;
+  const fs::path out = tmp.path() / "run";
+  // an opaque box (--hud-opacity 1) is easy to find in the decoded frames
+  const CommandResult r = RunFetchscope(
+      "record --quiet --no-report --env-id FetchReach-v4 --episodes 1 --steps 1 --width 480 "
+      "--height 480 --format mp4,gif --hud-opacity 1 --out " +
+      out.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  FrameInfo info;
+  info.title = "FetchReach-v4";
+  const HudText hud = FormatHud(info, OverlaySet{});
+  const PixelRect tile{0, 0, 480, 480};
+  const ShownScale gif_scale{320, 480};
+  EXPECT_EQ(HudTextPixels(480, 480, gif_scale), 15);  // 10 px once scaled to 320
+  const PixelRect mp4_box = *PlaceHud(hud, tile, HudPosition::kTopLeft);
+  const PixelRect gif_box = *PlaceHud(hud, tile, HudPosition::kTopLeft, gif_scale);
+  // the same HUD as a 320-pixel frame's, in drawn pixels
+  const PixelRect native = *PlaceHud(hud, PixelRect{0, 0, 320, 320}, HudPosition::kTopLeft);
+  EXPECT_NEAR(gif_box.height * 2.0 / 3, native.height, 2);
+
+  int w = 0, h = 0;
+  const auto gif = ReadAllFrames((out / "episode_000.gif").string(), &w, &h);
+  ASSERT_FALSE(gif.empty());
+  ASSERT_EQ(w, 320);
+  const int gif_x = (gif_box.x + 2) * 2 / 3;  // in the box's left padding: no text
+  EXPECT_NEAR(BlackRun(gif[0], w, h, gif_x), gif_box.height * 2.0 / 3, 3)
+      << "the GIF's HUD box should be " << native.height << " px high, as a 320-pixel video's";
+
+  const auto mp4 = ReadAllFrames((out / "episode_000.mp4").string(), &w, &h);
+  ASSERT_FALSE(mp4.empty());
+  ASSERT_EQ(w, 480);
+  EXPECT_NEAR(BlackRun(mp4[0], w, h, mp4_box.x + 2), mp4_box.height, 3);
+}
+
+TEST(GifHud, LeftOutOfAGifTooNarrowForItAndSaidOnce) {
+  TempDir tmp;
+  const fs::path out = tmp.path() / "run";
+  // two 480-pixel views side by side in a 320-pixel GIF: each shows at 160 x 160
+  const CommandResult r = RunFetchscope(
+      "record --no-report --env-id FetchReach-v4 --episodes 2 --steps 1 --camera "
+      "default,head_camera_rgb --format mp4,gif --hud-opacity 1 --out " +
+      out.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const std::string note = "the GIF (320 px wide) shows each view at 160x160";
+  const size_t at = r.output.find(note);
+  ASSERT_NE(at, std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find(note, at + 1), std::string::npos) << "said more than once";
+  int w = 0, h = 0;
+  const auto gif = ReadAllFrames((out / "episode_000.gif").string(), &w, &h);
+  ASSERT_EQ(w, 320);
+  // the HUD's corner, left of the tile label: the shrunken HUD box made it mostly black
+  int dark = 0;
+  for (int y = 0; y < 40; ++y) {
+    for (int x = 0; x < 40; ++x) {
+      const uint8_t* p = &gif[0][(y * w + x) * 3];
+      dark += std::max({p[0], p[1], p[2]}) < 48;
+    }
+  }
+  EXPECT_LT(dark, 50) << "the GIF still has a HUD box";
+  const auto mp4 = ReadAllFrames((out / "episode_000.mp4").string(), &w, &h);
+  ASSERT_EQ(w, 960);
+  EXPECT_GT(BlackRun(mp4[0], w, h, 8), 60) << "the MP4 keeps its HUD";
 }
 
 }  // namespace

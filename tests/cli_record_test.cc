@@ -1,6 +1,11 @@
 // Black-box tests of render and record (real EGL/OSMesa, real libx264, checked with ffprobe,
-// ffmpeg's decoder and libpng), and record's worker (RecordRunner) in-process.
+// ffmpeg's decoder and libpng), and record's worker (RecordRunner) in-process; --steps past the
+// TimeLimit marked in the trajectory and the HUD.
+#include <fcntl.h>
 #include <gtest/gtest.h>
+#include <spawn.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
 
 #include <atomic>
 #include <cstdlib>
@@ -9,13 +14,19 @@
 #include <map>
 #include <mutex>
 #include <nlohmann/json.hpp>
+#include <set>
 #include <string>
+#include <vector>
 
+#include "encode/frame_pool.h"
 #include "encode/png_io.h"
+#include "render/frame_limits.h"
 #include "render/layers.h"
+#include "render/overlay.h"
 #include "run/record_run.h"
 #include "src/assets.h"
 #include "src/env_spec.h"
+#include "src/trajectory.h"
 #include "tests/test_util.h"
 
 namespace fetchscope {
@@ -26,6 +37,8 @@ using testing::RunCommand;
 using testing::RunFetchscope;
 using testing::TempDir;
 namespace fs = std::filesystem;
+using testing::CommandResult;
+using testing::Count;
 
 class RecordTest : public ::testing::Test {
  protected:
@@ -301,6 +314,37 @@ TEST_F(RecordTest, RecordRunnerWritesTheSameBytesWithOneOrThreeEncoders) {
   for (const auto& [name, bytes] : files[0]) {
     EXPECT_TRUE(files[1][name] == bytes) << name << " differs with 3 encoders";
   }
+}
+
+TEST(PastTimeLimit, RecordMarksTheTrajectoryAndTheHud) {
+  TempDir tmp;
+  const fs::path out = tmp.path() / "run";
+  const CommandResult r = RunFetchscope(
+      "record --env-id FetchReach-v4 --steps 52 --width 64 --height 64 --no-report "
+      "--out " +
+      out.string() + " 2>&1");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(Count(r.output, "TimeLimit"), 1) << r.output;
+  const Trajectory t = ReadTrajectory((out / "episode_000.json").string());
+  ASSERT_EQ(t.episodes.front().steps.size(), 53u);
+  EXPECT_FALSE(t.episodes.front().steps[50].past_time_limit);
+  EXPECT_TRUE(t.episodes.front().steps[51].past_time_limit);
+  EXPECT_TRUE(t.episodes.front().steps[52].past_time_limit);
+  // record --from replays it, marks and all
+  const fs::path again = tmp.path() / "again";
+  const CommandResult from =
+      RunFetchscope("record --from " + out.string() +
+                    " --width 64 --height 64 --no-report -q --out " + again.string() + " 2>&1");
+  ASSERT_EQ(from.exit_code, 0) << from.output;
+  EXPECT_EQ(ReadFile(again / "episode_000.json"), ReadFile(out / "episode_000.json"));
+
+  FrameInfo info;
+  info.step = 51;
+  info.past_time_limit = 50;
+  EXPECT_NE(FormatHud(info, OverlaySet{}).values.find("51 past limit 50"), std::string::npos);
+  info.step = 50;
+  info.past_time_limit = 0;
+  EXPECT_EQ(FormatHud(info, OverlaySet{}).values.substr(0, 3), "50\n");
 }
 
 }  // namespace

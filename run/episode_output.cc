@@ -1,0 +1,53 @@
+#include "run/episode_output.h"
+
+#include <algorithm>
+
+#include "dataset/minari_writer.h"
+
+namespace fetchscope {
+
+void EpisodesInOrder::Done(EpisodeRecord episode) {
+  if (stopped_) return;  // SIGINT/SIGTERM: the run ends as interrupted, the output unwritten
+  const int index = episode.index;
+  pending_.emplace(index, std::move(episode));
+  while (next_ < order_.size()) {
+    const auto it = pending_.find(order_[next_]);
+    if (it == pending_.end()) break;
+    try {
+      output_.Add(it->second);
+    } catch (const MinariInterrupted&) {  // the scheduler reports the signal when it returns
+      stopped_ = true;
+      pending_.clear();
+      return;
+    }
+    pending_.erase(it);
+    ++next_;
+  }
+}
+
+int LongestEpisodeSteps(const Trajectory& trajectory) {
+  int steps = 0;
+  for (const TrajectoryEpisode& e : trajectory.episodes) {
+    steps = std::max(steps, static_cast<int>(e.steps.size()) - 1);
+  }
+  return steps;
+}
+
+std::string WriteEpisodes(const Trajectory& trajectory, const OutputRun& run,
+                          EpisodeOutput& output) {
+  std::vector<const TrajectoryEpisode*> episodes;
+  for (const TrajectoryEpisode& e : trajectory.episodes) episodes.push_back(&e);
+  std::sort(
+      episodes.begin(), episodes.end(),
+      [](const TrajectoryEpisode* a, const TrajectoryEpisode* b) { return a->index < b->index; });
+  try {
+    output.Begin(run);
+    for (const TrajectoryEpisode* e : episodes) output.Add(*e);
+    return output.Finish();
+  } catch (...) {
+    output.Abort();
+    throw;
+  }
+}
+
+}  // namespace fetchscope

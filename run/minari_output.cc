@@ -1,0 +1,61 @@
+#include "run/minari_output.h"
+
+#include "base/errors.h"
+#include "dataset/minari_trajectory.h"
+#include "src/observation_layout.h"
+
+namespace fetchscope {
+
+MinariWriteOptions MinariOptionsFor(const MinariRequest& request, const OutputRun& run) {
+  MinariWriteOptions o;
+  o.dataset_id = request.dataset_id;
+  o.root = request.root;
+  o.overwrite = request.overwrite;
+  o.spec = run.spec;
+  o.algorithm_name = run.policy.empty() ? "unknown" : run.policy;
+  if (!request.author.empty()) o.author = request.author;
+  o.author_email = request.author_email;
+  o.max_episode_steps = run.steps;  // gym.make(id, max_episode_steps=--steps)
+  const std::string version = "fetchscope " FETCHSCOPE_VERSION " ";
+  if (run.command == "export") {
+    o.code_permalink = version + "export " + run.source;
+  } else {  // one shape for rollout and record, without the binary's path or --jobs
+    o.code_permalink = version + run.command + " --env-id " + run.spec->id + " --policy " +
+                       run.policy + " --seed " + std::to_string(run.seed) + " --episodes " +
+                       std::to_string(run.episodes) + " --steps " + std::to_string(run.steps);
+  }
+  o.description =
+      run.command == "rollout"
+          ? run.spec->id + " episodes played by fetchscope's " + o.algorithm_name + " policy"
+          : run.spec->id + " episodes recorded by fetchscope (policy " + o.algorithm_name +
+                ", seed " + run.seed_text + ")";
+  return o;
+}
+
+void CheckMinariOutput(const MinariRequest& request, const OutputRun& run) {
+  CheckMinariDestination(MinariOptionsFor(request, run));
+}
+
+void MinariOutput::Begin(const OutputRun& run) {
+  writer_.reset();
+  writer_ = std::make_unique<MinariWriter>(MinariOptionsFor(request_, run));
+  seed_ = run.seed;
+  width_ = ObservationSize(run.spec->has_object);
+}
+
+void MinariOutput::Add(const EpisodeRecord& episode) {
+  if (!writer_) throw RunError("Minari dataset '" + request_.dataset_id + "': not begun");
+  // episode 0 was reset with the run's seed; the others continued its generator
+  const std::optional<uint64_t> seed =
+      episode.index == 0 ? std::optional<uint64_t>(seed_) : std::nullopt;
+  writer_->Add(ToMinariEpisode(episode, seed, width_));
+}
+
+std::string MinariOutput::Finish() {
+  if (!writer_) throw RunError("Minari dataset '" + request_.dataset_id + "': not begun");
+  const std::string path = writer_->Commit().string();
+  writer_.reset();
+  return path;
+}
+
+}  // namespace fetchscope

@@ -1,0 +1,102 @@
+#include "run/rollout_run.h"
+
+#include <signal.h>
+
+#include <memory>
+#include <optional>
+
+#include "base/errors.h"
+#include "dataset/minari_writer.h"
+#include "src/episode.h"
+#include "src/fetch_env.h"
+#include "src/trajectory.h"
+
+namespace fetchscope {
+namespace {
+
+// Plays episodes and reports each as its trajectory JSON entry.
+class RolloutRunner : public EpisodeRunner {
+ public:
+  RolloutRunner(const EnvSpec& spec, const AssetSource& assets, const std::string& policy,
+                const PolicyContext& context, int steps)
+      : sequence_(std::make_unique<FetchEnv>(spec, assets), MakePolicy(policy, spec, context),
+                  context.seed, steps) {}
+  void Run(int k, WorkerChannel& channel) override {
+    const EpisodeRecord episode = sequence_.Play(
+        k, [&](const StepRecord&, const StepResult*) { return !channel.StopRequested(); });
+    channel.Progress(static_cast<int>(episode.steps.size()) - 1);
+    channel.Done(k, EpisodeJson(episode));
+  }
+
+ private:
+  EpisodeSequence sequence_;
+};
+
+// One episode's JSON entry as the trajectory reader reads it back: what the output receives.
+EpisodeRecord ReadBack(const RolloutJob& job, const nlohmann::json& episode) {
+  Trajectory one = ParseTrajectoryJson(
+      TrajectoryJson(*job.spec, job.assets, job.seed, job.policy, nlohmann::json::array({episode})),
+      "rollout");
+  return std::move(one.episodes.front());
+}
+
+}  // namespace
+
+OutputRun RolloutOutputRun(const RolloutJob& job) {
+  OutputRun run;
+  run.command = "rollout";
+  run.spec = job.spec;
+  run.seed = job.seed;
+  run.seed_text = job.seed_text;
+  run.policy = job.policy;
+  run.episodes = static_cast<int>(job.episodes.size());
+  run.steps = job.steps;
+  return run;
+}
+
+RolloutResult RunRolloutJob(const RolloutJob& job) {
+  EpisodeOutput* output = job.output;
+  if (output) output->Begin(RolloutOutputRun(job));  // an existing id fails now, not after
+  std::optional<EpisodesInOrder> in_order;
+  ScheduleOptions schedule;
+  schedule.episodes = job.episodes;
+  if (output) {
+    in_order.emplace(job.episodes, *output);
+    schedule.on_done = [&](int, const nlohmann::json& e) {
+      if (!in_order->stopped()) in_order->Done(ReadBack(job, e));
+    };
+  }
+  schedule.jobs = job.jobs;
+  schedule.mode = job.mode;
+  const ScheduleResult result = RunEpisodes(schedule, [&](int) {
+    return std::make_unique<RolloutRunner>(*job.spec, job.assets, job.policy, *job.policy_context,
+                                           job.steps);
+  });
+  RolloutResult r;
+  if (!result.failures.empty()) {
+    if (output) output->Abort();
+    if (result.failures.front().usage) throw UsageError(result.failures.front().message);
+    throw RunError(DescribeFailures(result));
+  }
+  if (result.signal) {
+    if (output) output->Abort();
+    r.signal = result.signal;
+    r.stopped = std::string("interrupted (") + (r.signal == SIGINT ? "SIGINT" : "SIGTERM") + ")";
+    return r;
+  }
+  try {
+    if (output) r.output = output->Finish();
+  } catch (const MinariInterrupted& e) {  // a signal after the last episode: still nothing
+    output->Abort();
+    r.signal = e.signal;
+    r.stopped = e.what();
+    return r;
+  }
+  for (const auto& [k, episode] : result.results) {
+    r.successes += episode.at("is_success").get<bool>();
+    r.episodes.push_back(episode);
+  }
+  return r;
+}
+
+}  // namespace fetchscope
