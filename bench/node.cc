@@ -44,12 +44,12 @@ nlohmann::json NodeRenderRow(GlContext& gl, const AssetSource& assets, int w, in
                              double budget_s) {
   const EnvSpec& spec = FindEnvSpec("FetchPush-v4");
   FetchEnv env(spec, assets);
-  ViewOptions view;
-  view.width = w;
-  view.height = h;
-  view.msaa = msaa;
-  view.readback = readback;
-  Renderer renderer(gl, env.model(), MakeRenderOptions(view, env.model()));
+  RenderOptions options;  // record's defaults: the default camera and overlays
+  options.width = w;
+  options.height = h;
+  options.msaa_samples = msaa == "auto" ? kMsaaAuto : std::stoi(msaa);  // "auto" or "0"
+  options.readback = readback == "async" ? Readback::kAsync : Readback::kSync;
+  Renderer renderer(gl, env.model(), options);
   PolicyContext context;
   auto policy = MakePolicy(PolicySpec::Random(), spec, context);
   std::vector<std::vector<uint8_t>> frames(kReadbackDepth,

@@ -42,11 +42,10 @@ nlohmann::json RenderRow(GlContext& gl, const EnvSpec& spec, const AssetSource& 
                          int h, const std::string& msaa, double budget_s,
                          std::vector<std::string>* msaa_values) {
   FetchEnv env(spec, assets);
-  ViewOptions view;
-  view.width = w;
-  view.height = h;
-  view.msaa = msaa;
-  const RenderOptions options = MakeRenderOptions(view, env.model());
+  RenderOptions options;  // render's defaults: the default camera and overlays
+  options.width = w;
+  options.height = h;
+  options.msaa_samples = msaa == "auto" ? kMsaaAuto : std::stoi(msaa);  // auto, 4 or 0
   Renderer renderer(gl, env.model(), options);
   if (msaa == "auto" && renderer.msaa_samples() != 0 && msaa_values->size() == 2)
     msaa_values->push_back("0");

@@ -12,8 +12,8 @@
 #include "cli/chapter.h"
 #include "cli/command.h"
 #include "cli/common.h"
+#include "cli/view_options.h"
 #include "inspect/anatomy_card.h"
-#include "render/view.h"
 #include "src/assets.h"
 #include "src/env_spec.h"
 #include "src/fetch_env.h"
@@ -77,7 +77,8 @@ int RunAnatomy(AnatomyOptions o) {
     card.height = o.view.height;
     card.msaa_samples = msaa_samples;
     card.msaa = o.view.msaa;
-    auto gl = CreateViewContext(o.view, ResolveGpuChoice(o.view));
+    const ViewSetup view = ResolveGlView(o.view);
+    auto gl = CreateViewContext(view.backend, ResolveGpuChoice(view));
     WriteAnatomyCard(o.out, card, *gl);
   }
   if (!pass) {

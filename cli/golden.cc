@@ -10,10 +10,17 @@
 namespace fetchscope::cli {
 namespace {
 
-void AddOptions(CLI::App* sub, GoldenOptions* o) {
+// GoldenOptions with the option text resolved once the command line is parsed.
+struct GoldenCommandOptions {
+  GoldenOptions golden;
+  std::string backend;  // --backend: auto|egl|osmesa; empty: $MUJOCO_GL, else auto
+};
+
+void AddOptions(CLI::App* sub, GoldenCommandOptions* command) {
+  GoldenOptions* o = &command->golden;
   sub->add_option("--golden-dir", o->golden_dir, "Folder holding manifest.json and the goldens")
       ->capture_default_str();
-  sub->add_option("--backend", o->backend,
+  sub->add_option("--backend", command->backend,
                   "auto (EGL, then OSMesa), egl or osmesa; default: $MUJOCO_GL, else auto");
   sub->add_option("--gpu", o->gpu,
                   "EGL device index (default: $MUJOCO_EGL_DEVICE_ID, else the first)")
@@ -29,7 +36,8 @@ void AddOptions(CLI::App* sub, GoldenOptions* o) {
 }  // namespace
 
 Command AddGolden(CLI::App& app) {
-  auto options = std::make_shared<GoldenOptions>();
+  auto command = std::make_shared<GoldenCommandOptions>();
+  GoldenOptions* options = &command->golden;
   CLI::App* golden = app.add_subcommand(
       "golden",
       "Golden-image regression tests: render the scenes of golden/manifest.json and "
@@ -39,14 +47,15 @@ Command AddGolden(CLI::App& app) {
       "check",
       "Compare every scene with its goldens; on failure write NAME_actual.png, "
       "NAME_diff.png and NAME_side.png under --out, print a table worst first, exit 1");
-  AddOptions(check, options.get());
+  AddOptions(check, command.get());
   check->add_option("--out", options->out, "Folder for the images of failed scenes")
       ->capture_default_str();
   CLI::App* update = golden->add_subcommand(
       "update", "Render every scene and write its goldens (NAME.png, NAME_state.json)");
-  AddOptions(update, options.get());
-  return {golden, [options, check] {
-            return check->parsed() ? GoldenCheck(*options) : GoldenUpdate(*options);
+  AddOptions(update, command.get());
+  return {golden, [command, check] {
+            command->golden.backend = ResolveGlBackend(command->backend);
+            return check->parsed() ? GoldenCheck(command->golden) : GoldenUpdate(command->golden);
           }};
 }
 

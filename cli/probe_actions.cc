@@ -50,15 +50,15 @@ int RunProbeActions(const ProbeOptions& o) {
   std::unique_ptr<GlContext> gl;
   std::optional<Renderer> renderer;
   if (!o.out.empty()) {
-    const RenderOptions options = MakeRenderOptions(o.view, env.model());
+    const ViewSetup view = ResolveView(o.view, env.model());
     std::error_code ec;
     fs::create_directories(o.out, ec);
     if (!fs::is_directory(o.out)) {
       throw RunError("cannot create output folder '" + o.out +
                      "': " + (ec ? ec.message() : std::string("a file is in the way")));
     }
-    gl = CreateViewContext(o.view, ResolveGpuChoice(o.view));
-    renderer.emplace(*gl, env.model(), options);
+    gl = CreateViewContext(view.backend, ResolveGpuChoice(view));
+    renderer.emplace(*gl, env.model(), view.render);
   }
 
   ProbeResult result =

@@ -184,8 +184,9 @@ void ResolveRecordWorld(const RecordOptions& o, RecordJob* job) {
   Font::Default();  // the sheets' font: missing or unreadable, the run stops before any file
   plan.assets = ResolveAssets(o.env.assets);
   {
-    FetchEnv env(*plan.spec, plan.assets);  // bad assets and bad cameras fail here
-    const FrameDims frame = FrameSize(MakeRenderOptions(o.view, env.model()));
+    FetchEnv env(*plan.spec, plan.assets);         // bad assets and bad cameras fail here
+    plan.view = ResolveView(o.view, env.model());  // the cameras checked against the model
+    const FrameDims frame = FrameSize(plan.view.render);
     plan.video.width = frame.width;  // --width/--height size each camera's tile
     plan.video.height = frame.height;
     job->model_path = env.model_path();
@@ -203,6 +204,7 @@ RecordJob ResolveRecord(RecordOptions* options, const PolicySpec& policy,
   job.wall_start = Clock::now();
   RecordPlan& plan = job.plan;
   plan.from = from;
+  // --overlay is reported before the other options (ResolveView parses it again with the rest)
   const OverlaySet overlays = ParseOverlays(o.view.overlay);
   plan.hindsight = overlays.hindsight;
   job.hud = overlays.hud;
@@ -212,7 +214,7 @@ RecordJob ResolveRecord(RecordOptions* options, const PolicySpec& policy,
   plan.policy = policy;
   plan.steps = o.steps;
   NotePastTimeLimit(*plan.spec, o.steps, o.quiet, "in the trajectory JSON and the HUD");
-  plan.view = o.view;
+  job.view_text = {o.view.camera, o.view.overlay, o.view.msaa, o.view.gpu};
   plan.out = o.out;
   plan.sheet_every = o.sheet_every;
   job.shard = ResolveRecordShard(o);

@@ -63,10 +63,10 @@ int RunRender(const RenderCommandOptions& o) {
   EpisodeSequence sequence(std::make_unique<FetchEnv>(spec, run.env.assets),
                            MakePolicy(request.policy, spec, run.policy_context), seed, o.steps);
   FetchEnv& fetch = sequence.env();
-  const RenderOptions options = MakeRenderOptions(o.view, fetch.model());
+  const ViewSetup view = ResolveView(o.view, fetch.model());
   const EpisodeRecord episode = sequence.Play(k);
-  auto gl = CreateViewContext(o.view, ResolveGpuChoice(o.view));
-  Renderer renderer(*gl, fetch.model(), options);
+  auto gl = CreateViewContext(view.backend, ResolveGpuChoice(view));
+  Renderer renderer(*gl, fetch.model(), view.render);
   if (o.verbose) {
     const GlInfo& i = gl->info();
     std::fprintf(stderr, "GL: backend %s (%s), vendor %s, renderer %s, version %s\n",

@@ -1,13 +1,82 @@
 #include "cli/view_options.h"
 
+#include <algorithm>
 #include <iterator>
 #include <string>
 #include <vector>
 
 #include "base/errors.h"
+#include "base/suggest.h"
+#include "render/camera.h"
+#include "render/gl_context.h"
 #include "render/gpu_select.h"
+#include "render/overlay.h"
 
 namespace fetchscope::cli {
+
+int ParseMsaa(const std::string& value) {
+  if (value == "auto") return kMsaaAuto;
+  for (const char* accepted : kMsaaValues) {
+    if (value == accepted) return std::stoi(value);
+  }
+  std::string list;
+  for (const char* accepted : kMsaaValues) list += std::string(list.empty() ? "" : ", ") + accepted;
+  throw UsageError("--msaa '" + value + "' is not accepted; use " + list);
+}
+
+Readback ParseReadback(const std::string& value) {
+  if (value == "auto") return Readback::kAuto;
+  if (value == "sync") return Readback::kSync;
+  if (value == "async") return Readback::kAsync;
+  throw UsageError("--readback '" + value + "' is not accepted; use auto, sync or async");
+}
+
+RenderOptions ResolveRenderOptions(const ViewOptions& view, const mjModel* model) {
+  RenderOptions options;
+  options.width = view.width;
+  options.height = view.height;
+  options.cameras = ParseCameraList(view.camera, model);
+  options.overlays = ParseOverlays(view.overlay);
+  options.msaa_samples = ParseMsaa(view.msaa);
+  options.readback = ParseReadback(view.readback);
+  options.hud_position = ParseHudPosition(view.hud_position);
+  options.hud_opacity = CheckHudOpacity(view.hud_opacity);
+  CheckRenderFrame(options);
+  return options;
+}
+
+ViewSetup ResolveGlView(const ViewOptions& view) {
+  ViewSetup setup;
+  setup.backend = ResolveGlBackend(view.backend);
+  setup.gpu = EffectiveGpuSpec(view.gpu);
+  return setup;
+}
+
+ViewSetup ResolveView(const ViewOptions& view, const mjModel* model) {
+  const RenderOptions render = ResolveRenderOptions(view, model);
+  ViewSetup setup = ResolveGlView(view);
+  setup.render = render;
+  return setup;
+}
+
+std::vector<const VideoFormat*> ParseVideoFormats(const std::string& list) {
+  std::vector<std::string> known;
+  for (const VideoFormat& format : VideoFormats()) known.emplace_back(format.name);
+  std::vector<const VideoFormat*> formats;
+  for (const std::string& entry : SplitCommaList(list)) {  // "mp4, gif" as "mp4,gif"
+    const VideoFormat* row = FindVideoFormat(entry);
+    if (row == nullptr) {
+      throw UsageError("unknown --format '" + entry + "' in '" + list + "'" +
+                       DidYouMean(entry, known) + ": accepted a comma list of " +
+                       VideoFormatList());
+    }
+    if (std::find(formats.begin(), formats.end(), row) != formats.end()) {
+      throw UsageError("--format '" + list + "' names " + entry + " twice: give each format once");
+    }
+    formats.push_back(row);
+  }
+  return formats;
+}
 
 void AddViewOptions(CLI::App* sub, ViewOptions* o) {
   sub->add_option("--camera", o->camera,

@@ -30,20 +30,18 @@ std::string EpisodeFileStem(int k) {
   return name;
 }
 
-std::string LayerVideoName(int k, Layer layer, const std::string& format) {
-  return EpisodeFileStem(k) + "_" + LayerName(layer) + "." + VideoFormatExtension(format);
+std::string LayerVideoName(int k, Layer layer, const VideoFormat& format) {
+  return EpisodeFileStem(k) + "_" + LayerName(layer) + "." + std::string(format.extension);
 }
 
-std::string FormatCodec(const std::string& format, const std::string& h264) {
-  const VideoFormat* row = FindVideoFormat(format);
-  if (row == nullptr) return format;
-  return row->codec.empty() ? h264 : std::string(row->codec);
+std::string FormatCodec(const VideoFormat& format, const std::string& h264) {
+  return format.codec.empty() ? h264 : std::string(format.codec);
 }
 
 VideoOptions EpisodeVideoOptions(const EpisodeSinkOptions& options, int k,
-                                 const std::string& format) {
+                                 const VideoFormat& format) {
   VideoOptions video = options.video;
-  video.format = format;
+  video.format = &format;
   video.metadata = {{"title", options.env_id + " seed " + std::to_string(options.seed) +
                                   " episode " + std::to_string(k) + " (" + options.policy + ")"},
                     {"env_id", options.env_id},
@@ -86,17 +84,17 @@ EpisodeEncoder::EpisodeEncoder(const EpisodeSinkOptions& options, int k, FramePo
   const std::vector<int> indices = SheetFrameIndices(options.steps + 1, options.sheet_every);
   on_sheet_.insert(indices.begin(), indices.end());
   // the writers open here, on the render thread, so a bad folder fails before any frame
-  for (const std::string& format : options.formats) {
+  for (const VideoFormat* format : options.formats) {
     writers_.emplace_back(
-        (fs::path(options.out) / (name_ + "." + VideoFormatExtension(format))).string(),
-        EpisodeVideoOptions(options, k, format));
+        (fs::path(options.out) / (name_ + "." + std::string(format->extension))).string(),
+        EpisodeVideoOptions(options, k, *format));
   }
   for (Layer layer : options.layers) {
-    for (const std::string& format : options.formats) {
-      VideoOptions video = EpisodeVideoOptions(options, k, format);
+    for (const VideoFormat* format : options.formats) {
+      VideoOptions video = EpisodeVideoOptions(options, k, *format);
       video.metadata.emplace_back("layer", LayerName(layer));
       layer_writers_.emplace_back(
-          (fs::path(options.out) / LayerVideoName(k, layer, format)).string(), video);
+          (fs::path(options.out) / LayerVideoName(k, layer, *format)).string(), video);
     }
   }
   thread_ = std::thread([this] { Body(); });
@@ -153,8 +151,7 @@ void EpisodeEncoder::Body() {
           const auto t0 = Clock::now();
           for (size_t i = 0; i < writers_.size(); ++i) {
             // a scaled-down GIF takes the copy whose text is sized for it
-            const VideoFormat* row = FindVideoFormat(options_.formats[i]);
-            const bool gif_copy = row != nullptr && row->palette && !f->gif_rgb.empty();
+            const bool gif_copy = options_.formats[i]->palette && !f->gif_rgb.empty();
             writers_[i].AddFrame(gif_copy ? f->gif_rgb.data() : f->rgb.data());
           }
           const size_t formats = options_.formats.size();
@@ -241,8 +238,9 @@ void EpisodeEncoder::Finalize() {
   const bool success = episode_.steps.back().is_success;
   nlohmann::json videos = nlohmann::json::object();  // format -> file and frames in it
   for (size_t i = 0; i < writers_.size(); ++i) {
-    videos[o.formats[i]] = {{"file", fs::path(writers_[i].path()).filename().string()},
-                            {"frames", writers_[i].frames_encoded()}};
+    videos[std::string(o.formats[i]->name)] = {
+        {"file", fs::path(writers_[i].path()).filename().string()},
+        {"frames", writers_[i].frames_encoded()}};
   }
   const VideoWriter& first = writers_.front();
   nlohmann::json entry = {{"index", k_},
@@ -280,10 +278,11 @@ nlohmann::json EpisodeEncoder::FinishLayers() {
     nlohmann::json videos = nlohmann::json::object();
     for (size_t f = 0; f < formats; ++f) {
       const VideoWriter& writer = layer_writers_[l * formats + f];
-      videos[options_.formats[f]] = {{"file", fs::path(writer.path()).filename().string()},
-                                     {"frames", writer.frames_encoded()}};
+      videos[std::string(options_.formats[f]->name)] = {
+          {"file", fs::path(writer.path()).filename().string()},
+          {"frames", writer.frames_encoded()}};
     }
-    nlohmann::json entry = {{"video", videos[options_.formats.front()]["file"]},
+    nlohmann::json entry = {{"video", videos[std::string(options_.formats.front()->name)]["file"]},
                             {"videos", videos}};
     if (layer == Layer::kDepth) {
       nlohmann::json scales = nlohmann::json::array();

@@ -23,6 +23,7 @@
 #include "base/cpu_clock.h"
 #include "encode/contact_sheet.h"
 #include "encode/frame_pool.h"
+#include "encode/video_format.h"
 #include "encode/video_writer.h"
 #include "render/layers.h"
 #include "render/renderer.h"
@@ -43,24 +44,25 @@ struct EpisodeSinkOptions {
   int sheet_every = 0;               ///< every K-th frame on the sheet (SheetFrameIndices)
   std::vector<std::string> cameras;  ///< the camera of each view, in order (depth scales)
   VideoOptions video;                ///< size and codec decided; format and tags set per file
-  std::vector<std::string> formats;  ///< video formats, in --format order
-  std::vector<Layer> layers;         ///< layers beyond rgb, one video per format each
+  /// video formats, rows of VideoFormats(), in --format order
+  std::vector<const VideoFormat*> formats;
+  std::vector<Layer> layers;  ///< layers beyond rgb, one video per format each
 };
 
 /// The stem of episode k's files: "episode_007".
 std::string EpisodeFileStem(int k);
 
 /// The file of episode k's `layer` video in `format`: "episode_000_depth.mp4".
-std::string LayerVideoName(int k, Layer layer, const std::string& format);
+std::string LayerVideoName(int k, Layer layer, const VideoFormat& format);
 
-/// The codec each format's file is encoded with: mp4 with the run's H.264 decision `h264`,
-/// webm with libvpx-vp9, gif with gif.
-std::string FormatCodec(const std::string& format, const std::string& h264);
+/// The codec a format's file is encoded with: the row's encoder, or the run's H.264 decision
+/// `h264` for an H.264 row (mp4).
+std::string FormatCodec(const VideoFormat& format, const std::string& h264);
 
 /// The options of episode k's video in `format`: the encoder settings of `options` plus the tags
 /// that trace a clip found alone back to its run (ffprobe -show_format lists them).
 VideoOptions EpisodeVideoOptions(const EpisodeSinkOptions& options, int k,
-                                 const std::string& format);
+                                 const VideoFormat& format);
 
 /// The scale at which the run's GIF shows its frames, {GIF width, frame width}, when the run
 /// writes a GIF narrower than its frames; nullopt otherwise. Such a GIF gets its own copy of each

@@ -36,9 +36,9 @@ void CheckOutputFolder(const fs::path& final_path) {
   }
 }
 
-fs::path TemporaryPathFor(const fs::path& final_path, const std::string& format) {
+fs::path TemporaryPathFor(const fs::path& final_path, std::string_view extension) {
   return final_path.parent_path() /
-         ("." + final_path.stem().string() + ".partial." + VideoFormatExtension(format));
+         ("." + final_path.stem().string() + ".partial." + std::string(extension));
 }
 
 std::string GifComment(const std::vector<std::pair<std::string, std::string>>& metadata) {

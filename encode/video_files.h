@@ -5,6 +5,7 @@
 
 #include <filesystem>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -19,7 +20,7 @@ void CheckOutputFolder(const std::filesystem::path& final_path);
 /// ".<stem>.partial.<ext>" beside the final file: hidden, and never mistaken for a finished
 /// video by a glob on "*_000.mp4".
 std::filesystem::path TemporaryPathFor(const std::filesystem::path& final_path,
-                                       const std::string& format);
+                                       std::string_view extension);
 
 /// The GIF form of the tags: one comment, "key=value; key=value".
 std::string GifComment(const std::vector<std::pair<std::string, std::string>>& metadata);

@@ -19,4 +19,18 @@ const VideoFormat* FindVideoFormat(std::string_view name) {
   return nullptr;
 }
 
+std::string VideoFormatList() {
+  std::string list;
+  for (const VideoFormat& format : VideoFormats()) {
+    list += (list.empty() ? "" : ", ") + std::string(format.name);
+  }
+  return list;
+}
+
+std::vector<std::string> VideoFormatNames(const std::vector<const VideoFormat*>& formats) {
+  std::vector<std::string> names;
+  for (const VideoFormat* format : formats) names.emplace_back(format->name);
+  return names;
+}
+
 }  // namespace fetchscope

@@ -26,24 +26,38 @@ const std::vector<VideoFormat>& VideoFormats();
 /// The row named `name`, or nullptr for a name that is not a format.
 const VideoFormat* FindVideoFormat(std::string_view name);
 
-/// True when `formats` (names) holds a format of which `has` is true.
-template <typename Predicate>
-bool AnyVideoFormat(const std::vector<std::string>& formats, Predicate has) {
-  for (const std::string& name : formats) {
-    const VideoFormat* format = FindVideoFormat(name);
-    if (format != nullptr && has(*format)) return true;
+/// The row of `format`: the row itself, or for a name (a manifest's, read back) the table's row
+/// of that name, nullptr for a name that is not a format.
+inline const VideoFormat* VideoFormatRow(const VideoFormat* format) { return format; }
+inline const VideoFormat* VideoFormatRow(const std::string& name) { return FindVideoFormat(name); }
+
+/// True when `formats` (rows, or names read back from a manifest) hold a format of which `has`
+/// is true.
+template <typename Format, typename Predicate>
+bool AnyVideoFormat(const std::vector<Format>& formats, Predicate has) {
+  for (const Format& format : formats) {
+    const VideoFormat* row = VideoFormatRow(format);
+    if (row != nullptr && has(*row)) return true;
   }
   return false;
 }
 
 /// True when `formats` encode H.264 (so the node probe decides an encoder for them).
-inline bool EncodesH264(const std::vector<std::string>& formats) {
+template <typename Format>
+bool EncodesH264(const std::vector<Format>& formats) {
   return AnyVideoFormat(formats, [](const VideoFormat& f) { return f.codec.empty(); });
 }
 
 /// True when `formats` include a palette (GIF) format.
-inline bool HasPaletteFormat(const std::vector<std::string>& formats) {
+template <typename Format>
+bool HasPaletteFormat(const std::vector<Format>& formats) {
   return AnyVideoFormat(formats, [](const VideoFormat& f) { return f.palette; });
 }
+
+/// The table's names in its order, for messages: "mp4, webm, gif".
+std::string VideoFormatList();
+
+/// The names of `formats`, in order (the manifest's "formats").
+std::vector<std::string> VideoFormatNames(const std::vector<const VideoFormat*>& formats);
 
 }  // namespace fetchscope

@@ -67,10 +67,7 @@ void ValidateVideoOptions(const VideoOptions& options) {
         "video crf " + std::to_string(options.crf) +
         " is out of range: accepted 0..51 (lower is better quality, 23 is the default)");
   }
-  if (FindVideoFormat(options.format) == nullptr) {
-    throw UsageError("unknown video format " + Quoted(options.format) + ": accepted " +
-                     kVideoFormats);
-  }
+  if (options.format == nullptr) throw UsageError("no video format: accepted " + VideoFormatList());
   if (!in_range(options.gif_fps, 1, kMaxGifFps)) {
     throw UsageError("GIF fps " + std::to_string(options.gif_fps) +
                      " is out of range: accepted 1.." + std::to_string(kMaxGifFps) +
@@ -93,32 +90,6 @@ void ValidateVideoOptions(const VideoOptions& options) {
       accepted += (accepted.empty() ? "" : ", ") + std::string(name);
     throw UsageError("unknown video preset " + Quoted(options.preset) + ": accepted " + accepted);
   }
-}
-
-std::vector<std::string> ParseVideoFormats(const std::string& list) {
-  static const std::vector<std::string> kKnown = [] {
-    std::vector<std::string> names;
-    for (const VideoFormat& format : VideoFormats()) names.emplace_back(format.name);
-    return names;
-  }();
-  std::vector<std::string> formats;
-  for (const std::string& entry : SplitCommaList(list)) {  // "mp4, gif" as "mp4,gif"
-    if (std::find(kKnown.begin(), kKnown.end(), entry) == kKnown.end()) {
-      throw UsageError("unknown --format " + Quoted(entry) + " in " + Quoted(list) +
-                       DidYouMean(entry, kKnown) + ": accepted a comma list of " + kVideoFormats);
-    }
-    if (std::find(formats.begin(), formats.end(), entry) != formats.end()) {
-      throw UsageError("--format " + Quoted(list) + " names " + entry +
-                       " twice: give each format once");
-    }
-    formats.push_back(entry);
-  }
-  return formats;
-}
-
-std::string VideoFormatExtension(const std::string& format) {
-  const VideoFormat* row = FindVideoFormat(format);
-  return std::string(row != nullptr ? row->extension : VideoFormats().front().extension);
 }
 
 bool GifKeepsFrame(int index, int fps, int gif_fps) {

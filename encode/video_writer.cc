@@ -69,11 +69,8 @@ class TemporaryFile {
 }  // namespace
 
 struct VideoWriter::Impl {
-  // options.format's row of the format table (ValidateVideoOptions has checked it is one)
-  const VideoFormat& Format() const {
-    const VideoFormat* row = FindVideoFormat(options.format);
-    return row != nullptr ? *row : VideoFormats().front();
-  }
+  // options.format's row of the format table (ValidateVideoOptions has checked there is one)
+  const VideoFormat& Format() const { return *options.format; }
   Impl(const std::string& path, const VideoOptions& options);
   // Options and sizes only, no file: for ProbeEncoder.
   explicit Impl(const VideoOptions& opts)
@@ -134,7 +131,7 @@ VideoWriter::Impl::Impl(const std::string& path, const VideoOptions& opts)
   if (options.preset.empty()) options.preset = kDefaultVideoPreset;
   if (path.empty()) {
     throw UsageError("video path is empty: give a file name ending in ." +
-                     VideoFormatExtension(options.format));
+                     std::string(options.format->extension));
   }
   CheckOutputFolder(path);
   InstallAvLogCapture();
@@ -231,7 +228,7 @@ bool VideoWriter::Impl::TryOpenEncoder(const std::string& name, std::string* fai
     *failure = "out of memory";
     return false;
   }
-  const bool is_gif = name == "gif";
+  const bool is_gif = Format().palette;  // palette frames at the GIF's own rate
   context->width = encoded_width;
   context->height = encoded_height;
   context->pix_fmt = is_gif ? AV_PIX_FMT_PAL8 : AV_PIX_FMT_YUV420P;
@@ -296,7 +293,7 @@ bool VideoWriter::Impl::TryOpenEncoder(const std::string& name, std::string* fai
 }
 
 void VideoWriter::Impl::OpenOutput() {
-  const fs::path temp_path = TemporaryPathFor(final_path, options.format);
+  const fs::path temp_path = TemporaryPathFor(final_path, Format().extension);
   AVFormatContext* raw = nullptr;
   ClearLastAvError();
   // The format is named: the muxer must not guess it from the temporary name.
@@ -332,8 +329,8 @@ void VideoWriter::Impl::OpenOutput() {
   // use_metadata_tags: every tag is written (plain MP4 keeps only a few known names).
   if (Format().faststart) muxer_options.Set("movflags", "+faststart+use_metadata_tags");
   if (int rc = avformat_write_header(muxer.get(), muxer_options.address()); rc < 0) {
-    throw RunError("cannot write the " + options.format + " header of " + Quoted(final_path) +
-                   ": " + DescribeAvError(rc));
+    throw RunError("cannot write the " + std::string(Format().name) + " header of " +
+                   Quoted(final_path) + ": " + DescribeAvError(rc));
   }
 }
 

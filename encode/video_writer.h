@@ -15,6 +15,8 @@
 #include <utility>
 #include <vector>
 
+#include "encode/video_format.h"
+
 namespace fetchscope {
 
 /// Encoder settings for VideoWriter.
@@ -34,24 +36,15 @@ struct VideoOptions {
   /// the machine or the number of workers; record runs several single-threaded encoders at
   /// once instead (one per episode). 0 = libx264's own choice (about 1.5 x cores).
   int threads = 1;
-  /// Container and codec: mp4 (H.264 per `codec`), webm (VP9; `codec` is ignored) or gif.
-  std::string format = "mp4";
+  /// Container and codec: a row of VideoFormats() (encode/video_format.h), by default its first
+  /// (mp4: H.264 per `codec`); a row with its own encoder (webm's VP9, gif) ignores `codec`.
+  const VideoFormat* format = &VideoFormats().front();
   int gif_fps = 10;     ///< GIF frame rate (1..50), at most `fps` (never duplicates frames)
   int gif_width = 320;  ///< GIF width in pixels (16..4096), at most `width`; height keeps aspect
   /// Container tags, in order (e.g. env_id, seed, policy, episode, fetchscope_version): MP4 and
   /// WebM tags that `ffprobe -show_format` lists; GIF: one comment extension holding them all.
   std::vector<std::pair<std::string, std::string>> metadata;
 };
-
-/// The formats VideoOptions::format accepts, in the order --format's help lists them.
-inline constexpr const char* kVideoFormats = "mp4, webm, gif";
-
-/// Parses a --format list ("mp4", "webm,gif", ...): each entry once, at least one. Throws
-/// UsageError naming a bad or repeated entry and what is accepted.
-std::vector<std::string> ParseVideoFormats(const std::string& list);
-
-/// The file extension of a format, without the dot: "mp4", "webm", "gif".
-std::string VideoFormatExtension(const std::string& format);
 
 /// Frames a GIF made from `frames` frames at `fps` holds at options' gif_fps: every frame when
 /// gif_fps >= fps, else libavfilter's fps filter picks the frame nearest each 1/gif_fps tick.

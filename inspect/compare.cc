@@ -10,6 +10,7 @@
 #include "base/atomic_file.h"
 #include "base/errors.h"
 #include "base/json_util.h"
+#include "encode/video_format.h"
 #include "encode/video_reader.h"
 #include "encode/video_writer.h"
 #include "inspect/html_page.h"
@@ -234,8 +235,10 @@ void CompareFrames(const CompareOptions& o, const RecordedRun& a, const Recorded
   json& row = result->row;
   {
     const std::string format = ChooseVideos(a, b, k).format;
-    // a gif holds every n-th frame: it plays at its own rate
-    const json::json_pointer fps_at(format == "gif" ? "/gif/fps" : "/fps");
+    // a palette (GIF) video holds every n-th frame: it plays at its own rate
+    const VideoFormat* format_row = FindVideoFormat(format);
+    const json::json_pointer fps_at(format_row != nullptr && format_row->palette ? "/gif/fps"
+                                                                                 : "/fps");
     const json& recorded = a.manifest.video;
     const int fps = recorded.contains(fps_at) && recorded.at(fps_at).is_number_integer()
                         ? recorded.at(fps_at).get<int>()

@@ -8,16 +8,18 @@
 #include <string>
 #include <vector>
 
+#include "render/gl_context.h"
+
 namespace fetchscope {
 
 /// What golden check and update run on.
 struct GoldenOptions {
-  std::string golden_dir = "golden";  ///< folder holding manifest.json and the goldens
-  std::string out = "out/golden";     ///< check: folder for the images of failed scenes
-  std::string backend;                ///< auto|egl|osmesa; empty: $MUJOCO_GL, else auto
-  int gpu = -1;                       ///< EGL device index; -1: from the environment
-  std::vector<std::string> only;      ///< only these scenes (empty: every scene)
-  std::string genuine_assets;         ///< Gymnasium-Robotics envs/assets; empty: looked for
+  std::string golden_dir = "golden";     ///< folder holding manifest.json and the goldens
+  std::string out = "out/golden";        ///< check: folder for the images of failed scenes
+  GlBackend backend = GlBackend::kAuto;  ///< --backend, else $MUJOCO_GL, else auto (cli/)
+  int gpu = -1;                          ///< EGL device index; -1: from the environment
+  std::vector<std::string> only;         ///< only these scenes (empty: every scene)
+  std::string genuine_assets;            ///< Gymnasium-Robotics envs/assets; empty: looked for
 };
 
 /// Compares every selected scene with its goldens and prints a table, worst first; a failed

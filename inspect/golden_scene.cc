@@ -9,6 +9,8 @@
 
 #include "base/errors.h"
 #include "base/json_util.h"
+#include "render/camera.h"
+#include "render/overlay.h"
 #include "render/renderer.h"
 #include "render/view.h"
 #include "src/assets.h"
@@ -313,14 +315,15 @@ SceneResult RenderScene(GlContext& gl, const GoldenScene& scene, const std::stri
   context.steps_per_episode = scene.steps;
   auto policy = MakePolicy(scene.policy, spec, context);
   FetchEnv env(spec, ResolveAssets(assets_root));
-  ViewOptions view;
-  view.camera = scene.camera;
-  view.overlay = scene.overlay;
-  view.width = scene.width;
-  view.height = scene.height;
-  RenderOptions options = MakeRenderOptions(view, env.model());
+  // the scene's own cameras and overlays (golden/scenes.json, checked when it was read)
+  RenderOptions options;
+  options.width = scene.width;
+  options.height = scene.height;
+  options.cameras = ParseCameraList(scene.camera, env.model());
+  options.overlays = ParseOverlays(scene.overlay);
   // pinned per scene: goldens must not follow whatever default --msaa has
   options.msaa_samples = scene.msaa;
+  CheckRenderFrame(options);
   gl.MakeCurrent();
   Renderer renderer(gl, env.model(), options);
 

@@ -15,6 +15,7 @@
 #include "base/atomic_file.h"
 #include "base/errors.h"
 #include "base/json_util.h"
+#include "encode/video_format.h"
 #include "inspect/html_page.h"
 #include "inspect/viewer.h"
 #include "render/overlay.h"
@@ -108,9 +109,10 @@ std::string FormatsText(const Manifest& m) {
   for (const json& f : *formats) {
     if (f.is_string()) names.push_back(f.get<std::string>());
   }
-  if (names == std::vector<std::string>{"mp4"}) return "";
+  // the default --format alone (the table's first row) goes unmentioned
+  if (names.size() == 1 && names.front() == VideoFormats().front().name) return "";
   std::string text = ", formats " + Join(names, ", ");
-  if (std::find(names.begin(), names.end(), "gif") != names.end()) {
+  if (HasPaletteFormat(names)) {
     text += " (gif: " + Str(m.video, "/gif/fps") + " frames/s, " + Str(m.video, "/gif/width") +
             " px wide at most)";
   }

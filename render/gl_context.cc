@@ -94,7 +94,7 @@ void ResolveWindowedMujocoGl() {
   setenv("MUJOCO_GL", "auto", 1);
 }
 
-std::unique_ptr<GlContext> CreateGlContext(const std::string& backend, int gpu) {
+GlBackend ResolveGlBackend(const std::string& backend) {
   std::string name = backend;
   std::string origin = "backend";
   if (name.empty()) {
@@ -107,12 +107,22 @@ std::unique_ptr<GlContext> CreateGlContext(const std::string& backend, int gpu) 
       name = "auto";
     }
   }
-  if (name == "egl") return CreateEglContext(gpu);
-  if (name == "osmesa") return CreateOsMesaContext();
+  if (name == "egl") return GlBackend::kEgl;
+  if (name == "osmesa") return GlBackend::kOsmesa;
   if (name != "auto") {
     throw UsageError(origin + " '" + name + "' is not known" +
                      DidYouMean(name, {"auto", "egl", "osmesa"}) + "; accepted: auto|egl|osmesa");
   }
+  return GlBackend::kAuto;
+}
+
+std::unique_ptr<GlContext> CreateGlContext(const std::string& backend, int gpu) {
+  return CreateGlContext(ResolveGlBackend(backend), gpu);
+}
+
+std::unique_ptr<GlContext> CreateGlContext(GlBackend backend, int gpu) {
+  if (backend == GlBackend::kEgl) return CreateEglContext(gpu);
+  if (backend == GlBackend::kOsmesa) return CreateOsMesaContext();
 
   // auto: EGL first (hardware when present), OSMesa as the software fallback. A bad device
   // index is the user's mistake, not a missing backend, so UsageError is not caught here.

@@ -59,12 +59,26 @@ class GlContext {
   std::string selection_;
 };
 
-/// Creates a context. backend: "auto" (EGL, then OSMesa), "egl", "osmesa"; an empty string
-/// means $MUJOCO_GL if set, else auto. gpu: EGL device index; -1 means what the environment
+/// The GL backend a context is made with.
+enum class GlBackend {
+  kAuto,    ///< EGL, then OSMesa
+  kEgl,     ///< EGL only
+  kOsmesa,  ///< OSMesa only
+};
+
+/// The backend `name` asks for: "auto", "egl", "osmesa"; an empty string means $MUJOCO_GL if
+/// set (a windowed GL there, warned about once, means auto), else auto. Throws UsageError for
+/// an unknown name, naming it (and MUJOCO_GL when it came from there).
+GlBackend ResolveGlBackend(const std::string& name);
+
+/// Creates a context on `backend`. gpu: EGL device index; -1 means what the environment
 /// names (EffectiveGpuSpec: MUJOCO_EGL_DEVICE_ID, else cuda:0 when CUDA_VISIBLE_DEVICES is
 /// set), else the first hardware device that initialises, else Mesa's surfaceless platform.
-/// Throws UsageError for an unknown backend name or an out-of-range device index, and RunError
-/// when no context can be made (saying why each backend failed and what to install).
+/// Throws UsageError for an out-of-range device index, and RunError when no context can be
+/// made (saying why each backend failed and what to install).
+std::unique_ptr<GlContext> CreateGlContext(GlBackend backend, int gpu = -1);
+
+/// CreateGlContext(ResolveGlBackend(backend), gpu).
 std::unique_ptr<GlContext> CreateGlContext(const std::string& backend, int gpu = -1);
 
 /// When $MUJOCO_GL asks for a windowed GL (glfw, glx, glut, wgl, cgl), which fetchscope never

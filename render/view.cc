@@ -1,55 +1,23 @@
 #include "render/view.h"
 
 #include <cmath>
-#include <cstdlib>
-#include <string>
 
 #include "base/errors.h"
 #include "render/frame_limits.h"
 
 namespace fetchscope {
 
-int ParseMsaa(const std::string& value) {
-  if (value == "auto") return kMsaaAuto;
-  for (const char* accepted : kMsaaValues) {
-    if (value == accepted) return std::stoi(value);
-  }
-  std::string list;
-  for (const char* accepted : kMsaaValues) list += std::string(list.empty() ? "" : ", ") + accepted;
-  throw UsageError("--msaa '" + value + "' is not accepted; use " + list);
-}
-
-Readback ParseReadback(const std::string& value) {
-  if (value == "auto") return Readback::kAuto;
-  if (value == "sync") return Readback::kSync;
-  if (value == "async") return Readback::kAsync;
-  throw UsageError("--readback '" + value + "' is not accepted; use auto, sync or async");
-}
-
-RenderOptions MakeRenderOptions(const ViewOptions& view, const mjModel* model) {
-  RenderOptions options;
-  options.width = view.width;
-  options.height = view.height;
-  options.cameras = ParseCameraList(view.camera, model);
-  options.overlays = ParseOverlays(view.overlay);
-  options.msaa_samples = ParseMsaa(view.msaa);
-  options.readback = ParseReadback(view.readback);
-  options.hud_position = ParseHudPosition(view.hud_position);
-  options.hud_opacity = CheckHudOpacity(view.hud_opacity);
+void CheckRenderFrame(const RenderOptions& options) {
   const FrameDims frame = FrameSize(options);  // too large for memory: refused before any work
-  CheckFrameSize(view.width, view.height, static_cast<int>(options.cameras.size()), frame.width,
-                 frame.height);
-  return options;
+  CheckFrameSize(options.width, options.height, static_cast<int>(options.cameras.size()),
+                 frame.width, frame.height);
 }
 
-GpuChoice ResolveGpuChoice(const ViewOptions& view) {
-  const GpuSpec spec = EffectiveGpuSpec(view.gpu);
-  std::string backend = view.backend;
-  if (backend.empty()) {
-    const char* env = std::getenv("MUJOCO_GL");
-    backend = env && *env ? env : "auto";
+GpuChoice ResolveGpuChoice(const ViewSetup& view) {
+  const GpuSpec& spec = view.gpu;
+  if (spec.kind == GpuSpec::Kind::kAuto || view.backend == GlBackend::kOsmesa) {
+    return GpuChoice{{}, "auto"};
   }
-  if (spec.kind == GpuSpec::Kind::kAuto || backend == "osmesa") return GpuChoice{{}, "auto"};
   EglDeviceList list;
   try {
     list = ListEglDevices();
@@ -60,10 +28,10 @@ GpuChoice ResolveGpuChoice(const ViewOptions& view) {
   return ChooseGpus(spec, list);
 }
 
-std::unique_ptr<GlContext> CreateViewContext(const ViewOptions& view, const GpuChoice& choice,
+std::unique_ptr<GlContext> CreateViewContext(GlBackend backend, const GpuChoice& choice,
                                              int worker) {
   const int device = choice.devices.empty() ? -1 : choice.devices[worker % choice.devices.size()];
-  auto gl = CreateGlContext(view.backend, device);
+  auto gl = CreateGlContext(backend, device);
   gl->set_selection(gl->info().backend == "egl" ? choice.reason : "osmesa (no device)");
   return gl;
 }

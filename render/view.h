@@ -1,12 +1,12 @@
-// What a command renders and how (--camera, --overlay, --width, --height, --backend, --gpu,
-// --msaa, --readback, --hud-*), turned into a GL context, renderer options and the per-frame
-// overlay description. cli/view_options.h adds these options to a command.
+// What a command renders and how, typed (ViewSetup: the renderer's options, the GL backend, the
+// GPU request), turned into a GL context and the per-frame overlay description. The options'
+// text (--camera, --overlay, --width, --height, --backend, --gpu, --msaa, --readback, --hud-*)
+// is parsed into a ViewSetup by cli/view_options.h, once, in the parent.
 #pragma once
 
 #include <mujoco/mujoco.h>
 
 #include <memory>
-#include <string>
 
 #include "render/gl_context.h"
 #include "render/gpu_select.h"
@@ -17,48 +17,28 @@
 
 namespace fetchscope {
 
-/// --camera, --overlay, --width, --height, --backend, --gpu, --msaa, --readback, --hud-*.
-struct ViewOptions {
-  std::string camera = "default";                    ///< see ParseCameraList
-  std::string overlay = "goal,achieved,hud,labels";  ///< see ParseOverlays
-  int width = 480;                                   ///< pixels
-  int height = 480;                                  ///< pixels
-  std::string backend;                               ///< auto|egl|osmesa; empty: $MUJOCO_GL or auto
-  std::string gpu;                        ///< see ParseGpuSpec; empty: from the environment
-  std::string msaa = "auto";              ///< see ParseMsaa
-  std::string readback = "auto";          ///< see ParseReadback
-  std::string hud_position = "top-left";  ///< see ParseHudPosition
-  double hud_opacity = 0.6;               ///< see CheckHudOpacity
+/// What a command renders and where, resolved once from its options by the command line
+/// (cli/view_options.h): the renderer's options with the cameras already checked against the
+/// model, the GL backend and the GPU request in effect. Workers read it; nothing here is text.
+struct ViewSetup {
+  RenderOptions render;                  ///< cameras, overlays, tile size, msaa, readback, HUD
+  GlBackend backend = GlBackend::kAuto;  ///< the backend every context is made with
+  GpuSpec gpu;                           ///< --gpu, else what the environment names (auto)
 };
 
-/// The accepted --readback values, in the order the help and errors list them.
-inline constexpr const char* kReadbackValues[] = {"auto", "sync", "async"};
+/// Checks that a whole frame of `options` fits in memory (FrameSize of its tiles); throws
+/// UsageError otherwise, before any work.
+void CheckRenderFrame(const RenderOptions& options);
 
-/// RenderOptions::readback for a --readback value. Throws UsageError naming the value and
-/// listing kReadbackValues.
-Readback ParseReadback(const std::string& value);
-
-/// The accepted --msaa values, in the order the help and errors list them.
-inline constexpr const char* kMsaaValues[] = {"auto", "0", "1", "2", "4", "8", "16"};
-
-/// RenderOptions::msaa_samples for an --msaa value: "auto" (kMsaaAuto: the model's 4 on
-/// hardware GL, 0 on a software rasterizer) or a sample count. Throws UsageError naming the
-/// value and listing kMsaaValues.
-int ParseMsaa(const std::string& value);
-
-/// The renderer options for `view` on `model` (parses --camera, --overlay, --hud-position and
-/// checks --hud-opacity). The frame is FrameSize(result): --width/--height size each tile.
-RenderOptions MakeRenderOptions(const ViewOptions& view, const mjModel* model);
-
-/// The GPU request of `view` in effect (--gpu, else MUJOCO_EGL_DEVICE_ID, else
+/// The GPU request of `view` (view.gpu: --gpu, else MUJOCO_EGL_DEVICE_ID, else
 /// CUDA_VISIBLE_DEVICES, else auto) matched against this machine's EGL devices: the EGL indices
 /// to render on, in worker order (empty: auto). Enumerates only when a device is named and the
 /// backend may be EGL. Throws UsageError/RunError as ChooseGpus.
-GpuChoice ResolveGpuChoice(const ViewOptions& view);
+GpuChoice ResolveGpuChoice(const ViewSetup& view);
 
-/// A GL context for `view` on `choice` (worker w renders on choice.devices[w % size]); its
+/// A GL context on `backend` and `choice` (worker w renders on choice.devices[w % size]); its
 /// info().selection says how the device was chosen.
-std::unique_ptr<GlContext> CreateViewContext(const ViewOptions& view, const GpuChoice& choice,
+std::unique_ptr<GlContext> CreateViewContext(GlBackend backend, const GpuChoice& choice,
                                              int worker = 0);
 
 /// The overlay/HUD description of the env's current state after `record`.

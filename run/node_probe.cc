@@ -10,19 +10,17 @@ namespace fetchscope {
 namespace {
 
 // True when resolving `view`'s GPU request touches EGL devices at all.
-bool NamesDevices(const ViewOptions& view) {
-  return EffectiveGpuSpec(view.gpu).kind != GpuSpec::Kind::kAuto;
-}
+bool NamesDevices(const ViewSetup& view) { return view.gpu.kind != GpuSpec::Kind::kAuto; }
 
 // Makes a context on every chosen device; --gpu all keeps those that work.
-std::string TestDevices(const ViewOptions& view, GpuChoice* choice) {
+std::string TestDevices(const ViewSetup& view, GpuChoice* choice) {
   if (choice->devices.empty()) return "";
-  const bool all = EffectiveGpuSpec(view.gpu).kind == GpuSpec::Kind::kAll;
+  const bool all = view.gpu.kind == GpuSpec::Kind::kAll;
   std::vector<int> working;
   std::string warnings;
   for (int device : choice->devices) {
     try {
-      CreateGlContext("egl", device);
+      CreateGlContext(GlBackend::kEgl, device);
       working.push_back(device);
     } catch (const RunError& e) {
       if (!all) throw RunError(choice->reason + ": " + e.what());
@@ -75,7 +73,7 @@ nlohmann::json RunInChild(const std::function<nlohmann::json()>& body) {
   return answer->at("ok");
 }
 
-NodeProbe ProbeNode(const ViewOptions& view, const VideoOptions* video) {
+NodeProbe ProbeNode(const ViewSetup& view, const VideoOptions* video) {
   const bool devices = NamesDevices(view);
   const bool nvenc = video && video->codec != "libx264" && NvidiaDevicePresent();
   auto probe = [&]() -> nlohmann::json {

@@ -20,11 +20,11 @@ struct NodeProbe {
   std::string warnings;      ///< e.g. a device of --gpu all that failed to initialise
 };
 
-/// Resolves the GPU request of `view` (testing each named device by making a context on it:
-/// with --gpu all a failing device is dropped with a warning, otherwise it is an error) and,
-/// when `video` is given, the encoder. Throws UsageError/RunError as ChooseGpus,
+/// Resolves the GPU request of `view` (view.gpu on view.backend; testing each named device by
+/// making a context on it: with --gpu all a failing device is dropped with a warning, otherwise it
+/// is an error) and, when `video` is given, the encoder. Throws UsageError/RunError as ChooseGpus,
 /// CreateGlContext and DecideVideoCodec do, before anything is written.
-NodeProbe ProbeNode(const ViewOptions& view, const VideoOptions* video);
+NodeProbe ProbeNode(const ViewSetup& view, const VideoOptions* video);
 
 /// Runs `body` in a forked child and returns what it returned. An exception in the child is
 /// rethrown here with its message and kind (UsageError or RunError); a child that dies is a

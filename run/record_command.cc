@@ -34,7 +34,7 @@ NodeProbe ProbeRecordNode(RecordJob* job) {
     std::fprintf(stderr, "fetchscope: warning: %s\n", node.warnings.c_str());
   }
   const std::string gif_note =
-      GifHudNote(MakeEpisodeSinkOptions(plan), plan.view.width, plan.view.height);
+      GifHudNote(MakeEpisodeSinkOptions(plan), plan.view.render.width, plan.view.render.height);
   if (!gif_note.empty() && job->hud && !job->quiet) {
     std::fprintf(stderr, "fetchscope: note: %s\n", gif_note.c_str());
   }

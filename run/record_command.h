@@ -47,6 +47,13 @@ struct RecordJob {
   std::chrono::steady_clock::time_point wall_start;  ///< when the command started
   /// Writes the run's report (inspect/, above this layer) for the manifest at this path.
   std::function<void(const std::string& manifest_path)> write_report;
+  /// The view options as given: the manifest's words, and what SameRun compares.
+  struct ViewText {
+    std::string camera;   ///< --camera
+    std::string overlay;  ///< --overlay
+    std::string msaa;     ///< --msaa
+    std::string gpu;      ///< --gpu ("" when not given)
+  } view_text;
 };
 
 /// The run a record job's dataset describes (plan.spec, seed, seed_text, policy and steps,

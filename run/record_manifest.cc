@@ -28,9 +28,10 @@ nlohmann::json RecordVideoJson(const RecordJob& job, const NodeProbe& node) {
   const bool h264 = EncodesH264(plan.formats);
   nlohmann::json codecs = nlohmann::json::object();
   std::string codec_used;
-  for (const std::string& format : plan.formats) {
-    codecs[format] = FormatCodec(format, v.codec);
-    codec_used += (codec_used.empty() ? "" : ", ") + codecs[format].get<std::string>();
+  for (const VideoFormat* format : plan.formats) {
+    const std::string codec = FormatCodec(*format, v.codec);
+    codecs[std::string(format->name)] = codec;
+    codec_used += (codec_used.empty() ? "" : ", ") + codec;
   }
   const std::string codec_reason =
       h264 ? node.codec.reason
@@ -48,8 +49,8 @@ nlohmann::json RecordVideoJson(const RecordJob& job, const NodeProbe& node) {
           {"encoder_threads", v.threads},
           {"x264_params", X264ParamsFor(PresetOrDefault(v.preset))},
           {"encoders_per_worker", plan.encoders},
-          {"container", plan.formats.front()},
-          {"formats", plan.formats},
+          {"container", plan.formats.front()->name},
+          {"formats", VideoFormatNames(plan.formats)},
           {"gif", {{"fps", std::min(v.gif_fps, v.fps)}, {"width", v.gif_width}}},
           {"pix_fmt", "yuv420p"}};
 }
@@ -98,18 +99,18 @@ RunParameters RecordParameters(const RecordJob& job) {
   p.steps = plan.steps;
   p.sheet_every = plan.sheet_every;
   p.assets_sha256 = plan.assets.sha256;
-  p.camera = plan.view.camera;
-  p.overlay = plan.view.overlay;
-  p.width = plan.view.width;
-  p.height = plan.view.height;
-  p.msaa = plan.view.msaa;
+  p.camera = job.view_text.camera;
+  p.overlay = job.view_text.overlay;
+  p.width = plan.view.render.width;
+  p.height = plan.view.render.height;
+  p.msaa = job.view_text.msaa;
   p.codec = plan.video.codec;
   p.crf = plan.video.crf;
   p.preset = PresetOrDefault(plan.video.preset);
   p.fps = plan.video.fps;
   p.shard_index = job.shard.index;
   p.shard_count = job.shard.count;
-  p.formats = plan.formats;
+  p.formats = VideoFormatNames(plan.formats);
   p.gif_fps = plan.video.gif_fps;
   p.gif_width = plan.video.gif_width;
   p.layers = LayersLabel(plan.layers);
@@ -161,11 +162,12 @@ Manifest BuildRecordManifest(const RecordJob& job, const NodeProbe& node,
   m.jobs = result.jobs;
   m.worker_mode = job.worker_mode;
   m.workers = RecordWorkersJson(result, tally.by_worker);
-  m.gpu = {{"request", plan.view.gpu}, {"choice", plan.gpu.reason}, {"devices", plan.gpu.devices}};
+  m.gpu = {
+      {"request", job.view_text.gpu}, {"choice", plan.gpu.reason}, {"devices", plan.gpu.devices}};
   m.assets = AssetsJson(plan.assets);
   m.model_file = job.model_path;
-  m.camera = plan.view.camera;
-  m.overlay = plan.view.overlay;
+  m.camera = job.view_text.camera;
+  m.overlay = job.view_text.overlay;
   AddRecordBackend(result, &m);
   m.layers = SplitCommaList(LayersLabel(plan.layers));
   m.video = RecordVideoJson(job, node);

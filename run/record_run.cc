@@ -10,7 +10,6 @@
 
 #include "base/cores.h"
 #include "base/cpu_clock.h"
-#include "base/suggest.h"
 #include "render/layers.h"
 
 namespace fetchscope {
@@ -34,7 +33,7 @@ EpisodeSinkOptions MakeEpisodeSinkOptions(const RecordPlan& plan) {
   sink.assets = plan.assets;
   sink.steps = plan.steps;
   sink.sheet_every = plan.sheet_every;
-  sink.cameras = SplitCommaList(plan.view.camera);
+  for (const CameraSpec& camera : plan.view.render.cameras) sink.cameras.push_back(camera.name);
   sink.video = plan.video;
   sink.formats = plan.formats;
   sink.layers = plan.layers;
@@ -65,9 +64,8 @@ RecordRunner::~RecordRunner() {
 }
 
 nlohmann::json RecordRunner::Start() {
-  gl_ = CreateViewContext(plan_.view, plan_.gpu, worker_);
-  renderer_.emplace(*gl_, sequence_.env().model(),
-                    MakeRenderOptions(plan_.view, sequence_.env().model()));
+  gl_ = CreateViewContext(plan_.view.backend, plan_.gpu, worker_);
+  renderer_.emplace(*gl_, sequence_.env().model(), plan_.view.render);
   const size_t frame_bytes = static_cast<size_t>(renderer_->width()) * renderer_->height() * 3;
   pool_.emplace(FramePoolSize(plan_.encoders, plan_.steps, frame_bytes * (1 + plan_.layers.size())),
                 frame_bytes, plan_.layers.size(), gif_scale_.has_value());

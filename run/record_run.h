@@ -17,6 +17,7 @@
 
 #include "encode/episode_sink.h"
 #include "encode/frame_pool.h"
+#include "encode/video_format.h"
 #include "encode/video_writer.h"
 #include "render/gl_context.h"
 #include "render/gpu_select.h"
@@ -33,20 +34,20 @@ namespace fetchscope {
 
 /// Everything the parent decided before the workers start; workers only read it.
 struct RecordPlan {
-  const EnvSpec* spec = nullptr;     ///< the environment
-  uint64_t seed = 0;                 ///< episode 0's reset seed
-  std::string seed_text;             ///< the seed as given (sheet titles)
-  AssetSource assets;                ///< resolved assets
-  PolicySpec policy;                 ///< --policy, parsed (record --from: zero, named)
-  PolicyContext policy_context;      ///< what the policy is made with
-  int steps = 50;                    ///< steps per episode
-  ViewOptions view;                  ///< cameras, overlays, size, backend
-  std::string out;                   ///< the run folder
-  int sheet_every = 0;               ///< contact sheet: every K-th frame (0: about 12 tiles)
-  VideoOptions video;                ///< codec already decided; format and metadata set per file
-  std::vector<std::string> formats;  ///< --format, in the order given
-  GpuChoice gpu;                     ///< EGL devices, worker w on devices[w % size]
-  int encoders = 1;                  ///< episodes a worker encodes at once
+  const EnvSpec* spec = nullptr;  ///< the environment
+  uint64_t seed = 0;              ///< episode 0's reset seed
+  std::string seed_text;          ///< the seed as given (sheet titles)
+  AssetSource assets;             ///< resolved assets
+  PolicySpec policy;              ///< --policy, parsed (record --from: zero, named)
+  PolicyContext policy_context;   ///< what the policy is made with
+  int steps = 50;                 ///< steps per episode
+  ViewSetup view;                 ///< render options (cameras resolved), backend, GPU request
+  std::string out;                ///< the run folder
+  int sheet_every = 0;            ///< contact sheet: every K-th frame (0: about 12 tiles)
+  VideoOptions video;             ///< codec already decided; format and metadata set per file
+  std::vector<const VideoFormat*> formats;  ///< --format: rows of VideoFormats(), as given
+  GpuChoice gpu;                            ///< EGL devices, worker w on devices[w % size]
+  int encoders = 1;                         ///< episodes a worker encodes at once
   /// record --from: the episodes to replay (not owned); null: the policy plays them
   const TrajectorySource* from = nullptr;
   bool hindsight = false;     ///< the hindsight overlay: run the episode first, then render it

@@ -11,6 +11,7 @@
 #include <thread>
 
 #include "base/errors.h"
+#include "cli/view_options.h"
 #include "render/gl_context.h"
 #include "render/renderer.h"
 #include "render/view.h"
@@ -174,12 +175,12 @@ TEST_P(JobsTest, RenderersOnSeparateThreadsAgree) {
       try {
         FetchEnv env(spec, assets);
         const Observation obs = env.Reset(7);
-        ViewOptions view;
+        cli::ViewOptions view;
         view.width = view.height = kSize;
         // made one at a time, as record does: MuJoCo binds its GL functions at the first
         std::unique_lock<std::mutex> lock(setup);
         auto gl = CreateGlContext(GetParam());
-        Renderer renderer(*gl, env.model(), MakeRenderOptions(view, env.model()));
+        Renderer renderer(*gl, env.model(), cli::ResolveRenderOptions(view, env.model()));
         lock.unlock();
         StepRecord record;
         record.obs = obs;

@@ -268,13 +268,13 @@ RecordPlan SmallPlan(const fs::path& out, int encoders) {
   plan.policy_context.seed = plan.seed;
   plan.policy_context.steps_per_episode = plan.steps;
   plan.policy_context.episodes = 3;
-  plan.view.width = 64;
-  plan.view.height = 48;
+  plan.view.render.width = 64;
+  plan.view.render.height = 48;
   plan.out = out.string();
   plan.video.width = 64;
   plan.video.height = 48;
   plan.video.codec = "libx264";
-  plan.formats = {"mp4"};
+  plan.formats = {FindVideoFormat("mp4")};
   plan.layers = {Layer::kDepth};
   plan.encoders = encoders;
   return plan;

@@ -99,7 +99,7 @@ EpisodeSinkOptions SinkOptions(const fs::path& out, int steps) {
   o.video.width = kWidth;
   o.video.height = kHeight;
   o.video.codec = "libx264";
-  o.formats = {"mp4"};
+  o.formats = {FindVideoFormat("mp4")};
   return o;
 }
 
@@ -215,7 +215,7 @@ TEST(EpisodeEncoder, WritesOneVideoPerLayerAndFormatWithTheDepthScaleAndLegend) 
   TempDir dir;
   const int steps = 2, frames = steps + 1;
   EpisodeSinkOptions options = SinkOptions(dir.path(), steps);
-  options.formats = {"mp4", "gif"};
+  options.formats = {FindVideoFormat("mp4"), FindVideoFormat("gif")};
   options.layers = {Layer::kDepth, Layer::kSegmentation};
   options.cameras = {"head_camera_rgb"};
   FramePool pool(3, static_cast<size_t>(kWidth) * kHeight * 3, options.layers.size());
@@ -284,15 +284,16 @@ TEST(EpisodeEncoder, ABadFolderFailsInTheConstructorBeforeAnyFrame) {
 TEST(EpisodeFiles, NamesAndCodecs) {
   EXPECT_EQ(EpisodeFileStem(7), "episode_007");
   EXPECT_EQ(EpisodeFileStem(1234), "episode_1234");
-  EXPECT_EQ(LayerVideoName(3, Layer::kDepth, "webm"), "episode_003_depth.webm");
-  EXPECT_EQ(LayerVideoName(0, Layer::kSegmentation, "gif"), "episode_000_segmentation.gif");
-  EXPECT_EQ(FormatCodec("mp4", "h264_nvenc"), "h264_nvenc");
-  EXPECT_EQ(FormatCodec("webm", "libx264"), "libvpx-vp9");
-  EXPECT_EQ(FormatCodec("gif", "libx264"), "gif");
+  EXPECT_EQ(LayerVideoName(3, Layer::kDepth, *FindVideoFormat("webm")), "episode_003_depth.webm");
+  EXPECT_EQ(LayerVideoName(0, Layer::kSegmentation, *FindVideoFormat("gif")),
+            "episode_000_segmentation.gif");
+  EXPECT_EQ(FormatCodec(*FindVideoFormat("mp4"), "h264_nvenc"), "h264_nvenc");
+  EXPECT_EQ(FormatCodec(*FindVideoFormat("webm"), "libx264"), "libvpx-vp9");
+  EXPECT_EQ(FormatCodec(*FindVideoFormat("gif"), "libx264"), "gif");
   EpisodeSinkOptions options = SinkOptions("out", 5);
   options.video.fps = 12;
-  const VideoOptions video = EpisodeVideoOptions(options, 4, "webm");
-  EXPECT_EQ(video.format, "webm");
+  const VideoOptions video = EpisodeVideoOptions(options, 4, *FindVideoFormat("webm"));
+  EXPECT_EQ(video.format, FindVideoFormat("webm"));
   EXPECT_EQ(video.fps, 12);
   ASSERT_FALSE(video.metadata.empty());
   EXPECT_EQ(video.metadata[0].first, "title");

@@ -48,24 +48,6 @@ INSTANTIATE_TEST_SUITE_P(
                       NameCase{"AMD Radeon RX 6800 (navi21, LLVM 15.0.6, DRM 3.49, 6.1.0)", ""},
                       NameCase{"Mesa Intel(R) UHD Graphics 620 (KBL GT2)", ""}));
 
-TEST(ParseMsaaTest, AcceptsAutoAndTheCounts) {
-  EXPECT_EQ(ParseMsaa("auto"), kMsaaAuto);
-  for (int n : {0, 1, 2, 4, 8, 16}) EXPECT_EQ(ParseMsaa(std::to_string(n)), n);
-}
-
-TEST(ParseMsaaTest, RefusesOthersListingTheAccepted) {
-  for (const char* bad : {"3", "-1", "32", "four", ""}) {
-    try {
-      ParseMsaa(bad);
-      ADD_FAILURE() << "accepted '" << bad << "'";
-    } catch (const UsageError& e) {
-      const std::string message = e.what();
-      EXPECT_NE(message.find(std::string("'") + bad + "'"), std::string::npos) << message;
-      EXPECT_NE(message.find("auto, 0, 1, 2, 4, 8, 16"), std::string::npos) << message;
-    }
-  }
-}
-
 class MsaaTest : public ::testing::Test {
  protected:
   void SetUp() override {
