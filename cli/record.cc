@@ -125,23 +125,6 @@ void ValidatePolicy(const PolicySpec& policy, const EnvSpec& spec, const PolicyC
   MakePolicy(policy, spec, context);
 }
 
-// The episodes this run records: those of its shard among 0 .. --episodes-1 or, replaying a
-// trajectory JSON, the file's episodes, each under its own index (and so with its own reset);
-// --episodes then becomes one past the last index.
-// The replay file was read once, by ParsePolicySpec: the policy checked below and every worker
-// replay the trajectory the plan's PolicySpec holds.
-std::vector<int> RecordEpisodeList(RecordOptions* o, const Shard& shard, RecordPlan* plan) {
-  const std::optional<std::vector<int>> indices = ReplayedEpisodes(
-      plan->policy, o->episodes_given ? o->episodes : 0, plan->spec->id, plan->seed);
-  if (!indices) return ShardEpisodes(shard, o->episodes);
-  o->episodes = indices->back() + 1;
-  std::vector<int> mine;
-  for (int k : *indices) {
-    if (shard.Owns(k)) mine.push_back(k);
-  }
-  return mine;
-}
-
 // --shard, or the environment's array index, with a note where a Slurm array and the run in
 // --out disagree on the number of shards.
 Shard ResolveRecordShard(const RecordOptions& o) {
@@ -171,18 +154,12 @@ void ResolveRecordVideo(const RecordOptions& o, RecordPlan* plan) {
   ValidateVideoOptions(plan->video);
 }
 
-// The policy's context, the policy checked, the font, the assets and the frame size: the model
+// The policy checked, the font and the frame size: the model
 // is loaded once here so that bad assets, cameras or an edited recording fail before any file.
 void ResolveRecordWorld(const RecordOptions& o, RecordJob* job) {
   RecordPlan& plan = job->plan;
-  plan.policy_context.seed = plan.seed;
-  plan.policy_context.steps_per_episode = o.steps;
-  plan.policy_context.episodes = o.episodes;
-  plan.policy_context.stop_requested = [] { return StopSignal() != 0; };
-  plan.policy_context.episode_indices = job->episodes;
   if (!plan.from) ValidatePolicy(plan.policy, *plan.spec, plan.policy_context);
   Font::Default();  // the sheets' font: missing or unreadable, the run stops before any file
-  plan.assets = ResolveAssets(o.env.assets);
   {
     FetchEnv env(*plan.spec, plan.assets);         // bad assets and bad cameras fail here
     plan.view = ResolveView(o.view, env.model());  // the cameras checked against the model
@@ -208,12 +185,19 @@ RecordJob ResolveRecord(RecordOptions* options, const PolicySpec& policy,
   const OverlaySet overlays = ParseOverlays(o.view.overlay);
   plan.hindsight = overlays.hindsight;
   job.hud = overlays.hud;
-  plan.spec = &FindEnvSpec(o.env.env_id);
-  plan.seed = ParseSeed(o.env.seed);
+  // the one resolver: env, seed, assets, the episodes (a replayed trajectory's own) and the
+  // policy's context
+  EpisodeRequest request{policy,  o.episodes, o.episodes_given,
+                         o.steps, o.quiet,    "in the trajectory JSON and the HUD"};
+  const ResolvedRun run = ResolveRun(o.env, request);
+  plan.spec = run.env.spec;
+  plan.seed = run.env.seed;
   plan.seed_text = o.env.seed;
+  plan.assets = run.env.assets;
   plan.policy = policy;
+  plan.policy_context = run.policy_context;
   plan.steps = o.steps;
-  NotePastTimeLimit(*plan.spec, o.steps, o.quiet, "in the trajectory JSON and the HUD");
+  o.episodes = run.policy_context.episodes;  // a replayed trajectory: one past its last
   job.view_text = {o.view.camera, o.view.overlay, o.view.msaa, o.view.gpu};
   plan.out = o.out;
   plan.sheet_every = o.sheet_every;
@@ -232,7 +216,8 @@ RecordJob ResolveRecord(RecordOptions* options, const PolicySpec& policy,
   }
   ResolveRecordVideo(o, &plan);
   job.formats_text = o.formats;
-  job.episodes = from ? FromEpisodes(*from) : RecordEpisodeList(&o, job.shard, &plan);
+  job.episodes = from ? FromEpisodes(*from) : ShardEpisodes(job.shard, run.episodes);
+  plan.policy_context.episode_indices = job.episodes;
   job.episodes_requested = o.episodes;
   job.jobs = ResolveJobs(o.jobs, static_cast<int>(job.episodes.size()));
   plan.encoders = EncodersPerWorker(job.jobs);

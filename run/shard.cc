@@ -157,6 +157,14 @@ std::vector<int> ShardEpisodes(const Shard& shard, int episodes) {
   return mine;
 }
 
+std::vector<int> ShardEpisodes(const Shard& shard, const std::vector<int>& episodes) {
+  std::vector<int> mine;
+  for (int k : episodes) {
+    if (shard.Owns(k)) mine.push_back(k);
+  }
+  return mine;
+}
+
 std::string ShardManifestName(const Shard& shard) {
   return ManifestFileName(shard.index, shard.count);
 }

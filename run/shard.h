@@ -50,6 +50,9 @@ int RunShardCount(const std::string& out);
 /// The episodes of `shard` among 0 .. episodes-1, ascending.
 std::vector<int> ShardEpisodes(const Shard& shard, int episodes);
 
+/// The episodes of `shard` among `episodes` (a run's list, ascending), in their order.
+std::vector<int> ShardEpisodes(const Shard& shard, const std::vector<int>& episodes);
+
 /// The shard's manifest file name (ManifestFileName): "manifest.json" for an unsplit run, else
 /// "manifest_shard_IIII_of_NNNN.json".
 std::string ShardManifestName(const Shard& shard);

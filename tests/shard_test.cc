@@ -234,6 +234,9 @@ TEST(ShardTest, EpisodesAndManifestNames) {
   EXPECT_EQ(ShardEpisodes({1, 3, ""}, 8), (std::vector<int>{1, 4, 7}));
   EXPECT_EQ(ShardEpisodes({0, 1, ""}, 3), (std::vector<int>{0, 1, 2}));
   EXPECT_TRUE(ShardEpisodes({5, 6, ""}, 5).empty());
+  // a replayed trajectory's own indices, not 0 .. N-1
+  EXPECT_EQ(ShardEpisodes({1, 2, ""}, std::vector<int>{0, 3, 5, 8}), (std::vector<int>{3, 5}));
+  EXPECT_TRUE(ShardEpisodes({1, 3, ""}, std::vector<int>{0, 3, 6}).empty());
   EXPECT_EQ(ShardManifestName({0, 1, ""}), "manifest.json");
   EXPECT_EQ(ShardManifestName({2, 16, ""}), "manifest_shard_0002_of_0016.json");
 }
