@@ -238,27 +238,8 @@ int RunRecord(const RecordOptions& options, const PolicySpec& policy,
   };
   return RecordRun(std::move(job));
 }
-}  // namespace
-
-Command AddRecord(CLI::App& app) {
-  auto o = std::make_shared<RecordOptions>();
-  CLI::App* sub = app.add_subcommand(
-      "record",
-      "Record episodes: episode_NNN.mp4 (.webm, .gif: --format), episode_NNN_sheet.png, "
-      "episode_NNN.json, manifest.json");
-  AddEnvOptions(sub, &o->env);
-  AddViewOptions(sub, &o->view);
-  sub->add_option("--episodes", o->episodes, "Number of episodes")
-      ->capture_default_str()
-      ->check(CLI::Range(1, 1000000));
-  sub->add_option("--steps", o->steps, kStepsHelp)
-      ->capture_default_str()
-      ->check(CLI::Range(1, kMaxSteps));
-  sub->add_option("--policy", o->policy, kPolicyHelp)->capture_default_str();
-  sub->add_option("--exec-timeout", o->exec_timeout, "Seconds an exec: policy may take per answer")
-      ->capture_default_str()
-      ->check(CLI::Range(0.001, 86400.0));
-  sub->add_option("--replay-dtype", o->replay_dtype, kReplayDtypeHelp);
+// --fps, --codec, --crf, --preset, --format, --gif-*, --layers and --sheet-every.
+void AddRecordVideoOptions(CLI::App* sub, RecordOptions* o) {
   sub->add_option("--fps", o->fps, "Video frame rate (25 = the control rate: real time)")
       ->capture_default_str();
   sub->add_option("--codec", o->codec,
@@ -296,11 +277,10 @@ Command AddRecord(CLI::App& app) {
          "Contact sheet: every K-th frame (0: about 12 tiles); the last frame is always included")
       ->capture_default_str()
       ->check(CLI::Range(0, 1000));
-  sub->add_option("--out", o->out,
-                  "Output folder: checked writable before anything is rendered; never --from's "
-                  "folder, one holding it or one inside it")
-      ->capture_default_str();
-  sub->add_flag("-q,--quiet", o->quiet, "No progress or summary on stderr");
+}
+
+// --minari with its root and author, --overwrite and --resume.
+void AddRecordReuseOptions(CLI::App* sub, RecordOptions* o) {
   sub->add_option("--minari", o->minari,
                   "Also write the recorded episodes as a Minari dataset of this id (docs/guide/"
                   "datasets.md); an existing one is refused, --overwrite replaces it after the "
@@ -323,6 +303,35 @@ Command AddRecord(CLI::App& app) {
                 "one is refused). A run already whole is summarised and left as it is. With "
                 "nothing to resume (no such folder, or no manifest in it) the whole run is "
                 "recorded, with a note saying so");
+}
+}  // namespace
+
+Command AddRecord(CLI::App& app) {
+  auto o = std::make_shared<RecordOptions>();
+  CLI::App* sub = app.add_subcommand(
+      "record",
+      "Record episodes: episode_NNN.mp4 (.webm, .gif: --format), episode_NNN_sheet.png, "
+      "episode_NNN.json, manifest.json");
+  AddEnvOptions(sub, &o->env);
+  AddViewOptions(sub, &o->view);
+  sub->add_option("--episodes", o->episodes, "Number of episodes")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 1000000));
+  sub->add_option("--steps", o->steps, kStepsHelp)
+      ->capture_default_str()
+      ->check(CLI::Range(1, kMaxSteps));
+  sub->add_option("--policy", o->policy, kPolicyHelp)->capture_default_str();
+  sub->add_option("--exec-timeout", o->exec_timeout, "Seconds an exec: policy may take per answer")
+      ->capture_default_str()
+      ->check(CLI::Range(0.001, 86400.0));
+  sub->add_option("--replay-dtype", o->replay_dtype, kReplayDtypeHelp);
+  AddRecordVideoOptions(sub, o.get());
+  sub->add_option("--out", o->out,
+                  "Output folder: checked writable before anything is rendered; never --from's "
+                  "folder, one holding it or one inside it")
+      ->capture_default_str();
+  sub->add_flag("-q,--quiet", o->quiet, "No progress or summary on stderr");
+  AddRecordReuseOptions(sub, o.get());
   AddJobsOptions(sub, &o->jobs, &o->worker_mode);
   sub->add_option("--shard", o->shard,
                   "Record only shard I of N (0 <= I < N): episodes k with k mod N = I. Without it: "
