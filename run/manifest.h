@@ -5,7 +5,11 @@
 // Versions: the file carries "schema_version" (kManifestSchemaVersion). A manifest without one was
 // written before versions existed and is read as version 0, the same layout; a newer version is
 // refused, naming the file and both versions. Members this build does not know are kept
-// (Manifest::extra, ManifestEpisode::extra) and written back unchanged.
+// (Manifest::extra, ManifestEpisode::extra, each typed section's extra) and written back unchanged.
+//
+// The sections "video", "backend", "gpu", "workers" and "timings_s" are typed too
+// (run/manifest_sections.h); an episode entry is encode/episode_result.h's ManifestEpisode, which
+// the episode sink fills.
 #pragma once
 
 #include <cstdint>
