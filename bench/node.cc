@@ -86,17 +86,10 @@ nlohmann::json NodeRenderRow(GlContext& gl, const AssetSource& assets, int w, in
           {"loop_frames_per_s", frames_done / wall}};
 }
 
-}  // namespace
-
-nlohmann::json BenchNode(const AssetSource& assets, const std::string& backends, double budget_s,
-                         int width, int height) {
-  nlohmann::json result;
+// The node: its cores, GPUs and the encoder a run would choose, into `result`; printed.
+void ProbeNodeInto(nlohmann::json* result) {
   const Cores machine_cores = UsableCores();
   const int cores = machine_cores.usable;
-  const std::string backend = Split(backends).empty() ? "egl" : Split(backends).front();
-  const int w = width, h = height;
-
-  // the node: GPUs and the encoder a run would choose
   nlohmann::json gpus = nlohmann::json::array();
   try {
     for (const EglDevice& d : ListEglDevices().devices) gpus.push_back(d.Describe());
@@ -111,21 +104,22 @@ nlohmann::json BenchNode(const AssetSource& assets, const std::string& backends,
   } catch (const std::exception& e) {
     encoder_reason = e.what();
   }
-  result["width"] = w;
-  result["height"] = h;
-  result["cores"] = cores;
-  result["cores_online"] = machine_cores.online;
-  result["cores_source"] = machine_cores.source;
-  result["gpus"] = gpus;
-  result["encoder"] = {{"codec", encoder}, {"reason", encoder_reason}};
+  (*result)["cores"] = cores;
+  (*result)["cores_online"] = machine_cores.online;
+  (*result)["cores_source"] = machine_cores.source;
+  (*result)["gpus"] = gpus;
+  (*result)["encoder"] = {{"codec", encoder}, {"reason", encoder_reason}};
   std::string gpu_list;
   for (const auto& g : gpus) gpu_list += (gpu_list.empty() ? "" : "; ") + g.get<std::string>();
   std::printf("node: %d usable cores (%s; %d online); EGL devices: %s; encoder: %s (%s)\n", cores,
               machine_cores.source.c_str(), machine_cores.online,
               gpu_list.empty() ? "none" : gpu_list.c_str(), encoder.c_str(),
               encoder_reason.c_str());
+}
 
-  // one context, rendering only, synchronous against asynchronous readback
+// One context, rendering only, synchronous against asynchronous readback.
+nlohmann::json NodeRenderRows(const AssetSource& assets, const std::string& backend, int w, int h,
+                              double budget_s) {
   nlohmann::json render_rows = nlohmann::json::array();
   std::printf("%-44s %-9s %12s %12s\n", "render, one context (FetchPush, random)", "size",
               "render fps", "+sim fps");
@@ -151,28 +145,90 @@ nlohmann::json BenchNode(const AssetSource& assets, const std::string& backends,
     render_rows.push_back({{"skipped", e.what()}});
     std::printf("render: skipped: %s\n", e.what());
   }
-  result["render"] = render_rows;
+  return render_rows;
+}
 
-  // whole record runs (sheets, trajectory JSON, manifest) at --jobs 1, cores/4, cores/2 and
-  // cores, worker processes against threads; then msaa 0 at the --jobs that was fastest with
-  // msaa auto (not always the core count: workers each with an encoder thread beside the render
-  // thread can oversubscribe the cores)
+struct RecordCase {
+  int jobs;  // 0: the fastest --jobs of the msaa auto runs before it
+  std::string mode;
+  std::string msaa;
+};
+
+// Whole record runs at --jobs 1, cores/4, cores/2 and cores, worker processes against threads;
+// then msaa 0 at the --jobs that was fastest with msaa auto (not always the core count: workers
+// each with an encoder thread beside the render thread can oversubscribe the cores).
+std::vector<RecordCase> RecordCases(int cores) {
   std::vector<int> job_counts = {1};
   for (int j : {cores / 4, cores / 2, cores}) {
     if (j > job_counts.back()) job_counts.push_back(j);
   }
-  struct Case {
-    int jobs;  // 0: the fastest --jobs of the msaa auto runs before it
-    std::string mode;
-    std::string msaa;
-  };
-  std::vector<Case> cases;
+  std::vector<RecordCase> cases;
   for (int j : job_counts) {
     cases.push_back({j, "process", "auto"});
     if (j > 1) cases.push_back({j, "thread", "auto"});
   }
   cases.push_back({0, "process", "0"});
+  return cases;
+}
+
+// One record run of case `c` (its jobs decided), as a row; printed.
+nlohmann::json NodeRecordRow(const AssetSource& assets, const std::string& backend, int w, int h,
+                             const RecordCase& c, const fs::path& dir, int* auto_msaa,
+                             double* fastest_fps, int* fastest_jobs) {
   const std::string self = fs::read_symlink("/proc/self/exe").string();
+  const int episodes = std::max(8, 4 * c.jobs);
+  const RecordRun run =
+      RunRecordChild(self,
+                     Concat(Concat({"--env-id", "FetchPush-v4", "--policy", "random", "--episodes",
+                                    std::to_string(episodes), "--width", std::to_string(w),
+                                    "--height", std::to_string(h)},
+                                   AssetsArg(assets)),
+                            {"--backend", backend, "--msaa", c.msaa, "--jobs",
+                             std::to_string(c.jobs), "--worker-mode", c.mode}),
+                     dir);
+  const std::string label = "--jobs " + std::to_string(c.jobs) + " " +
+                            (c.mode == "process" ? "processes" : "threads") + ", msaa " + c.msaa;
+  if (run.child.exit_code != 0) {
+    std::printf("%-44s skipped: record failed (exit %d)\n", label.c_str(), run.child.exit_code);
+    return {{"jobs", c.jobs},
+            {"worker_mode", c.mode},
+            {"msaa_requested", c.msaa},
+            {"skipped", "record failed (exit " + std::to_string(run.child.exit_code) + ")"}};
+  }
+  if (c.msaa == "auto" && *auto_msaa < 0) *auto_msaa = ManifestMsaa(run.manifest, "auto");
+  const int frames = episodes * 51;
+  if (c.msaa == "auto" && c.mode == "process" && frames / run.child.wall_s > *fastest_fps) {
+    *fastest_fps = frames / run.child.wall_s;
+    *fastest_jobs = c.jobs;
+  }
+  const ManifestVideo video = run.manifest ? run.manifest->video : ManifestVideo{};
+  const std::string codec = video.codec.value_or("?");
+  std::printf("%-44s %4dx%-4d %12.0f %9.2f %s\n", label.c_str(), w, h, frames / run.child.wall_s,
+              run.child.wall_s, codec.c_str());
+  return {{"jobs", c.jobs},
+          {"worker_mode", c.mode},
+          {"msaa_requested", c.msaa},
+          {"msaa", ManifestMsaa(run.manifest, c.msaa)},
+          {"episodes", episodes},
+          {"frames", frames},
+          {"wall_s", run.child.wall_s},
+          {"frames_per_s", frames / run.child.wall_s},
+          {"peak_rss_mib_largest_process", run.child.peak_rss_mib},
+          {"video", ManifestVideoToJson(video)}};
+}
+
+}  // namespace
+
+nlohmann::json BenchNode(const AssetSource& assets, const std::string& backends, double budget_s,
+                         int width, int height) {
+  nlohmann::json result;
+  const int cores = UsableCores().usable;
+  const std::string backend = Split(backends).empty() ? "egl" : Split(backends).front();
+  result["width"] = width;
+  result["height"] = height;
+  ProbeNodeInto(&result);
+  result["render"] = NodeRenderRows(assets, backend, width, height, budget_s);
+  // whole record runs (sheets, trajectory JSON, manifest)
   const fs::path dir =
       fs::temp_directory_path() / ("fetchscope_bench_node_" + std::to_string(getpid()));
   nlohmann::json record_rows = nlohmann::json::array();
@@ -181,50 +237,11 @@ nlohmann::json BenchNode(const AssetSource& assets, const std::string& backends,
               "wall s", "encoder");
   int fastest_jobs = cores;  // of the msaa auto process runs so far
   double fastest_fps = 0;
-  for (Case c : cases) {
+  for (RecordCase c : RecordCases(cores)) {
     if (c.msaa == "0" && auto_msaa == 0) continue;  // auto already rendered without multisampling
     if (c.jobs == 0) c.jobs = fastest_jobs;
-    const int episodes = std::max(8, 4 * c.jobs);
-    const RecordRun run =
-        RunRecordChild(self,
-                       Concat(Concat({"--env-id", "FetchPush-v4", "--policy", "random",
-                                      "--episodes", std::to_string(episodes), "--width",
-                                      std::to_string(w), "--height", std::to_string(h)},
-                                     AssetsArg(assets)),
-                              {"--backend", backend, "--msaa", c.msaa, "--jobs",
-                               std::to_string(c.jobs), "--worker-mode", c.mode}),
-                       dir);
-    const std::string label = "--jobs " + std::to_string(c.jobs) + " " +
-                              (c.mode == "process" ? "processes" : "threads") + ", msaa " + c.msaa;
-    if (run.child.exit_code != 0) {
-      record_rows.push_back(
-          {{"jobs", c.jobs},
-           {"worker_mode", c.mode},
-           {"msaa_requested", c.msaa},
-           {"skipped", "record failed (exit " + std::to_string(run.child.exit_code) + ")"}});
-      std::printf("%-44s skipped: record failed (exit %d)\n", label.c_str(), run.child.exit_code);
-      continue;
-    }
-    if (c.msaa == "auto" && auto_msaa < 0) auto_msaa = ManifestMsaa(run.manifest, "auto");
-    const int frames = episodes * 51;
-    if (c.msaa == "auto" && c.mode == "process" && frames / run.child.wall_s > fastest_fps) {
-      fastest_fps = frames / run.child.wall_s;
-      fastest_jobs = c.jobs;
-    }
-    const nlohmann::json video = run.manifest ? run.manifest->video : nlohmann::json::object();
-    const std::string codec = video.value("codec", "?");
-    std::printf("%-44s %4dx%-4d %12.0f %9.2f %s\n", label.c_str(), w, h, frames / run.child.wall_s,
-                run.child.wall_s, codec.c_str());
-    record_rows.push_back({{"jobs", c.jobs},
-                           {"worker_mode", c.mode},
-                           {"msaa_requested", c.msaa},
-                           {"msaa", ManifestMsaa(run.manifest, c.msaa)},
-                           {"episodes", episodes},
-                           {"frames", frames},
-                           {"wall_s", run.child.wall_s},
-                           {"frames_per_s", frames / run.child.wall_s},
-                           {"peak_rss_mib_largest_process", run.child.peak_rss_mib},
-                           {"video", video}});
+    record_rows.push_back(NodeRecordRow(assets, backend, width, height, c, dir, &auto_msaa,
+                                        &fastest_fps, &fastest_jobs));
   }
   result["record"] = record_rows;
   return result;

@@ -9,6 +9,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <memory>
 #include <optional>
 #include <sstream>
@@ -60,27 +61,30 @@ nlohmann::json StageAccount(const std::string& self, const AssetSource& assets,
   } else {
     unsetenv("LP_NUM_THREADS");
   }
-  if (run.child.exit_code != 0 || !run.manifest ||
-      !run.manifest->timings_s.contains("cpu_ms_per_frame")) {
+  if (run.child.exit_code != 0 || !run.manifest || !run.manifest->timings_s.cpu_ms_per_frame) {
     const std::string why = run.child.exit_code != 0
                                 ? "record failed (exit " + std::to_string(run.child.exit_code) + ")"
                                 : "the manifest has no timings_s.cpu_ms_per_frame";
     std::printf("record CPU per frame: skipped: %s\n", why.c_str());
     return {{"skipped", why}};
   }
-  const nlohmann::json& ms = run.manifest->timings_s["cpu_ms_per_frame"];
+  const std::map<std::string, double>& ms = *run.manifest->timings_s.cpu_ms_per_frame;
+  const auto at = [&ms](const char* stage) {
+    const auto it = ms.find(stage);
+    return it == ms.end() ? 0.0 : it->second;
+  };
   std::printf("record CPU per frame (FetchPush-v4 random 480x480, --jobs 1, %s, thread CPU):\n",
               backend.c_str());
   for (const char* stage : {"sim", "scene", "gl", "hud", "copy", "render_other", "convert",
                             "encode", "sheet", "trajectory", "encode_other"}) {
-    std::printf("  %-14s %6.3f ms\n", stage, ms.value(stage, 0.0));
+    std::printf("  %-14s %6.3f ms\n", stage, at(stage));
   }
   std::printf(
       "  %-14s %6.3f ms   (every stage but gl: a GPU node's cores pay this and the GL "
       "driver's own CPU)\n",
-      "outside GL", ms.value("outside_gl", 0.0));
+      "outside GL", at("outside_gl"));
   std::printf("  %-14s %6.3f ms   (the whole process, start-up included)\n", "process",
-              ms.value("process", 0.0));
+              at("process"));
   return {{"episodes", episodes},       {"frames", frames},    {"backend", backend},
           {"wall_s", run.child.wall_s}, {"lp_num_threads", 0}, {"cpu_ms_per_frame", ms}};
 }

@@ -220,7 +220,7 @@ void EpisodeEncoder::Finalize() {
   trajectory.episodes = {episode_};
   WriteFileAtomically((fs::path(o.out) / (name_ + ".json")).string(), TrajectoryText(trajectory));
   lap.Into(&cpu_.trajectory);
-  const nlohmann::json layers = FinishLayers();
+  std::map<std::string, EpisodeLayer> layers = FinishLayers();
   const double write_s = Since(t0);
   // this thread's stages: the writers' conversion and encoding, the rest of its time "other"
   for (const auto* list : {&writers_, &layer_writers_}) {
@@ -233,57 +233,46 @@ void EpisodeEncoder::Finalize() {
       ThreadCpuSeconds() - (cpu_.convert + cpu_.encode + cpu_.sheet + cpu_.trajectory);
   CpuStages cpu = render_cpu_;
   cpu += cpu_;
-  nlohmann::json cpu_json = nlohmann::json::object();
-  for (const auto& [stage, seconds] : cpu.Items()) cpu_json[stage] = seconds;
-  const bool success = episode_.steps.back().is_success;
-  nlohmann::json videos = nlohmann::json::object();  // format -> file and frames in it
-  for (size_t i = 0; i < writers_.size(); ++i) {
-    videos[std::string(o.formats[i]->name)] = {
-        {"file", fs::path(writers_[i].path()).filename().string()},
-        {"frames", writers_[i].frames_encoded()}};
+  EpisodeResult result;
+  for (const auto& [stage, seconds] : cpu.Items()) result.timings.cpu_s[stage] = seconds;
+  result.timings.sim = sim_s_;
+  result.timings.render = render_s_;
+  result.timings.encode = encode_s_;
+  result.timings.write = write_s;
+  ManifestEpisode& entry = result.entry;
+  entry.index = k_;
+  for (size_t i = 0; i < writers_.size(); ++i) {  // format -> file and frames in it
+    entry.videos[std::string(o.formats[i]->name)] = {
+        fs::path(writers_[i].path()).filename().string(), writers_[i].frames_encoded()};
   }
   const VideoWriter& first = writers_.front();
-  nlohmann::json entry = {{"index", k_},
-                          {"video", fs::path(first.path()).filename().string()},
-                          {"videos", videos},
-                          {"sheet", name_ + "_sheet.png"},
-                          {"trajectory", name_ + ".json"},
-                          {"frames", first.frames_written()},
-                          {"steps", steps},
-                          {"complete", complete},
-                          {"return", JsonDouble(episode_.episode_return)},
-                          {"is_success", success},
-                          {"codec", first.codec_name()},
-                          {"encoded_width", first.encoded_width()},
-                          {"encoded_height", first.encoded_height()},
-                          {"timings_s",
-                           {{"sim", sim_s_},
-                            {"render", render_s_},
-                            {"encode", encode_s_},
-                            {"write", write_s},
-                            {"cpu_s", cpu_json}}}};
-  if (!layers.empty()) entry["layers"] = layers;
-  if (extra_.is_object()) entry.update(extra_);
-  done_(k_, std::move(entry));
+  entry.video = fs::path(first.path()).filename().string();
+  entry.sheet = name_ + "_sheet.png";
+  entry.trajectory = name_ + ".json";
+  entry.frames = first.frames_written();
+  entry.steps = steps;
+  entry.complete = complete;
+  entry.episode_return = episode_.episode_return;
+  entry.is_success = episode_.steps.back().is_success;
+  entry.layers = std::move(layers);
+  entry.hindsight = hindsight_;
+  done_(k_, std::move(result));
 }
 
-// The manifest entry's "layers" (empty without layers): per layer its videos as "videos" lists
-// them, the first format's file as "video", the depth scale or the segmentation legend (written
-// here).
-nlohmann::json EpisodeEncoder::FinishLayers() {
-  nlohmann::json layers = nlohmann::json::object();
+// The entry's layers (none without layers): per layer its videos by format, the first format's
+// file as `video`, the depth scale or the segmentation legend (written here).
+std::map<std::string, EpisodeLayer> EpisodeEncoder::FinishLayers() {
+  std::map<std::string, EpisodeLayer> layers;
   const size_t formats = options_.formats.size();
   for (size_t l = 0; l < options_.layers.size(); ++l) {
     const Layer layer = options_.layers[l];
-    nlohmann::json videos = nlohmann::json::object();
+    EpisodeLayer entry;
     for (size_t f = 0; f < formats; ++f) {
       const VideoWriter& writer = layer_writers_[l * formats + f];
-      videos[std::string(options_.formats[f]->name)] = {
-          {"file", fs::path(writer.path()).filename().string()},
-          {"frames", writer.frames_encoded()}};
+      entry.videos[std::string(options_.formats[f]->name)] = {
+          fs::path(writer.path()).filename().string(), writer.frames_encoded()};
     }
-    nlohmann::json entry = {{"video", videos[std::string(options_.formats.front()->name)]["file"]},
-                            {"videos", videos}};
+    entry.video = entry.videos[std::string(options_.formats.front()->name)].file;
     if (layer == Layer::kDepth) {
       nlohmann::json scales = nlohmann::json::array();
       const std::vector<std::string>& cameras = options_.cameras;
@@ -292,15 +281,15 @@ nlohmann::json EpisodeEncoder::FinishLayers() {
                           {"near_m", depth_scales_[i].near_mm / 1000.0},
                           {"far_m", depth_scales_[i].far_mm / 1000.0}});
       }
-      entry["scales"] = std::move(scales);
-      entry["mapping"] =
+      entry.details["scales"] = std::move(scales);
+      entry.details["mapping"] =
           "per camera view: grey 255 (white) at near_m and nearer .. 32 at far_m and farther, "
           "0 (black) = no depth";
     }
     if (layer == Layer::kSegmentation) {
       const std::string legend = name_ + "_segmentation_legend.json";
       WriteJson((fs::path(options_.out) / legend).string(), legend_);
-      entry["legend"] = legend;
+      entry.legend = legend;
     }
     layers[LayerName(layer)] = std::move(entry);
   }

@@ -1,8 +1,8 @@
 // The episode video sink: one episode's files, written on their own thread while the episode is
 // still being rendered. Frames arrive from the render thread (encode/frame_pool.h); the sink
 // encodes them into one video per --format (and per extra layer), then writes the contact
-// sheet, the trajectory JSON and the segmentation legend, and hands the episode's manifest
-// entry to a callback.
+// sheet, the trajectory JSON and the segmentation legend, and hands the episode's result
+// (encode/episode_result.h) to a callback.
 #pragma once
 
 #include <atomic>
@@ -11,6 +11,7 @@
 #include <deque>
 #include <exception>
 #include <functional>
+#include <map>
 #include <mutex>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -22,6 +23,7 @@
 
 #include "base/cpu_clock.h"
 #include "encode/contact_sheet.h"
+#include "encode/episode_result.h"
 #include "encode/frame_pool.h"
 #include "encode/video_format.h"
 #include "encode/video_writer.h"
@@ -79,11 +81,12 @@ bool NeedsGifCopy(const EpisodeSinkOptions& options, int t);
 /// empty when the GIF has the HUD or there is no scaled GIF.
 std::string GifHudNote(const EpisodeSinkOptions& options, int tile_width, int tile_height);
 
-/// Receives an episode's manifest entry once its files are written (on the sink's thread).
-using EpisodeDone = std::function<void(int episode, nlohmann::json entry)>;
+/// Receives an episode's result once its files are written (on the sink's thread); the worker
+/// that recorded it is left for the callback to fill in.
+using EpisodeDone = std::function<void(int episode, EpisodeResult result)>;
 
 /// One episode's encoding, on its own thread: the videos frame by frame as frames arrive, then
-/// the contact sheet, the trajectory JSON and the manifest entry, given to `done`. Each video is
+/// the contact sheet, the trajectory JSON and the episode's result, given to `done`. Each video is
 /// encoded by one single-threaded encoder, so the bytes never depend on the machine.
 class EpisodeEncoder {
  public:
@@ -101,8 +104,8 @@ class EpisodeEncoder {
   /// are the render thread's seconds, for the manifest; `render_cpu` its CPU time by stage
   /// (base/cpu_clock.h), to which this thread adds its own (timings_s.cpu_s).
   void Close(EpisodeRecord episode, double sim_s, double render_s, CpuStages render_cpu = {});
-  /// Members added to the manifest entry (e.g. "hindsight"); call before Close.
-  void SetExtra(nlohmann::json extra) { extra_ = std::move(extra); }
+  /// The episode's hindsight counts, for its manifest entry; call before Close.
+  void SetHindsight(EpisodeHindsight hindsight) { hindsight_ = std::move(hindsight); }
   /// The layers' extras: the segmentation legend JSON (written beside the videos) and the depth
   /// scale (in the manifest entry); call before Close.
   void SetLayerInfo(nlohmann::json legend, std::vector<DepthScale> depth);
@@ -120,7 +123,7 @@ class EpisodeEncoder {
   void Body();
   void AddTile(const Frame& f);
   void Finalize();
-  nlohmann::json FinishLayers();
+  std::map<std::string, EpisodeLayer> FinishLayers();
 
   const EpisodeSinkOptions& options_;
   const int k_;
@@ -133,7 +136,7 @@ class EpisodeEncoder {
   std::vector<SheetTile> tiles_;            // scaled at capture (ScaleSheetTile)
   SheetScratch sheet_scratch_;              // ScaleSheetTile's working memory
   EpisodeRecord episode_;
-  nlohmann::json extra_;
+  std::optional<EpisodeHindsight> hindsight_;
   nlohmann::json legend_;                 // the segmentation layer's
   std::vector<DepthScale> depth_scales_;  // the depth layer's, one per camera view
   double sim_s_ = 0, render_s_ = 0, encode_s_ = 0;

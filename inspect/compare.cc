@@ -237,12 +237,11 @@ void CompareFrames(const CompareOptions& o, const RecordedRun& a, const Recorded
     const std::string format = ChooseVideos(a, b, k).format;
     // a palette (GIF) video holds every n-th frame: it plays at its own rate
     const VideoFormat* format_row = FindVideoFormat(format);
-    const json::json_pointer fps_at(format_row != nullptr && format_row->palette ? "/gif/fps"
-                                                                                 : "/fps");
-    const json& recorded = a.manifest.video;
-    const int fps = recorded.contains(fps_at) && recorded.at(fps_at).is_number_integer()
-                        ? recorded.at(fps_at).get<int>()
-                        : 25;
+    const ManifestVideo& recorded = a.manifest.video;
+    const std::optional<int> rate = format_row != nullptr && format_row->palette
+                                        ? recorded.gif.value_or(ManifestVideoGif{}).fps
+                                        : recorded.fps;
+    const int fps = rate.value_or(25);
     auto [ra, rb] = OpenVideos(a, b, k);
     const int w = ra.width(), h = ra.height();
     int strip_height = 0;
@@ -309,11 +308,10 @@ json ReportLink(const RecordedRun& run, const std::string& out) {
       .string();
 }
 
-}  // namespace
-
-CompareResult CompareRuns(const CompareOptions& o) {
-  const RecordedRun a = ReadRunFolder(o.run_a);
-  const RecordedRun b = ReadRunFolder(o.run_b);
+// The episodes both runs recorded, once they are found to be the same episodes; throws UsageError
+// naming what differs.
+std::vector<int> CommonEpisodes(const CompareOptions& o, const RecordedRun& a,
+                                const RecordedRun& b) {
   // compare asks for the same episodes (their resets), not the same run: the policy, the
   // assets, the size or anything else may differ, and that is what it shows
   const std::optional<RunDifference> d =
@@ -336,34 +334,14 @@ CompareResult CompareRuns(const CompareOptions& o) {
                      "'; compare needs the same episodes in both");
   }
   if (ka.empty()) throw UsageError("'" + o.run_a + "' holds no recorded episode to compare");
-  // everything that can be wrong with the input is found before anything is written
-  std::vector<EpisodeComparison> comparisons;
-  if (!o.states_only) Font::Default();  // the panel labels' font: missing, nothing is written
-  for (int k : ka) {
-    comparisons.push_back(CompareStates(o, a, b, k));
-    if (!o.states_only) OpenVideos(a, b, k);
-  }
+  return ka;
+}
 
-  std::error_code ec;
-  fs::create_directories(o.out, ec);
-  if (!fs::is_directory(o.out)) {
-    throw UsageError("cannot create output folder '" + o.out +
-                     "': " + (ec ? ec.message() : std::string("a file is in the way")));
-  }
-  const int fps = a.manifest.video.value("fps", 25);
-  const std::string labels[3] = {"A: " + FolderName(o.run_a), "B: " + FolderName(o.run_b),
-                                 "|A − B| ×" + std::to_string(kHeatGain)};
-  json rows = json::array();
-  bool same = true;
-  int differing = 0;
-  for (size_t i = 0; i < ka.size(); ++i) {
-    EpisodeComparison& c = comparisons[i];
-    if (!o.states_only) CompareFrames(o, a, b, ka[i], labels, &c);
-    same = same && c.same;
-    differing += !c.same;
-    rows.push_back(std::move(c.row));
-  }
-
+// Writes compare.json and the page (index.html) of the compared episodes `rows`; returns the
+// page's path.
+fs::path WriteComparison(const CompareOptions& o, const RecordedRun& a, const RecordedRun& b,
+                         const json& rows, bool same, int differing) {
+  const int fps = a.manifest.video.fps.value_or(25);
   // the title names what differs: the policies when they do, else the two folders
   const std::string policy_a = a.manifest.policy;
   const std::string policy_b = b.manifest.policy;
@@ -401,7 +379,42 @@ CompareResult CompareRuns(const CompareOptions& o) {
   const fs::path html = fs::path(o.out) / "index.html";
   WriteFileAtomically(html.string(), HtmlPage(PageKind::kCompare, "fetchscope compare: " + title,
                                               page_data, blocks));
+  return html;
+}
 
+}  // namespace
+
+CompareResult CompareRuns(const CompareOptions& o) {
+  const RecordedRun a = ReadRunFolder(o.run_a);
+  const RecordedRun b = ReadRunFolder(o.run_b);
+  const std::vector<int> ka = CommonEpisodes(o, a, b);
+  // everything that can be wrong with the input is found before anything is written
+  std::vector<EpisodeComparison> comparisons;
+  if (!o.states_only) Font::Default();  // the panel labels' font: missing, nothing is written
+  for (int k : ka) {
+    comparisons.push_back(CompareStates(o, a, b, k));
+    if (!o.states_only) OpenVideos(a, b, k);
+  }
+
+  std::error_code ec;
+  fs::create_directories(o.out, ec);
+  if (!fs::is_directory(o.out)) {
+    throw UsageError("cannot create output folder '" + o.out +
+                     "': " + (ec ? ec.message() : std::string("a file is in the way")));
+  }
+  const std::string labels[3] = {"A: " + FolderName(o.run_a), "B: " + FolderName(o.run_b),
+                                 "|A − B| ×" + std::to_string(kHeatGain)};
+  json rows = json::array();
+  bool same = true;
+  int differing = 0;
+  for (size_t i = 0; i < ka.size(); ++i) {
+    EpisodeComparison& c = comparisons[i];
+    if (!o.states_only) CompareFrames(o, a, b, ka[i], labels, &c);
+    same = same && c.same;
+    differing += !c.same;
+    rows.push_back(std::move(c.row));
+  }
+  const fs::path html = WriteComparison(o, a, b, rows, same, differing);
   return {std::move(rows), same, differing, html};
 }
 

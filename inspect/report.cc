@@ -54,6 +54,12 @@ std::string Join(const std::vector<std::string>& items, const char* separator) {
   return out;
 }
 
+// A typed manifest member as text: "" when absent.
+std::string Str(const std::optional<std::string>& value) { return value.value_or(""); }
+std::string Str(const std::optional<int>& value) {
+  return value ? std::to_string(*value) : std::string();
+}
+
 std::string Str(const json& j, const char* pointer) {
   const json::json_pointer p(pointer);
   if (!j.contains(p)) return "";
@@ -66,20 +72,26 @@ std::string Str(const json& j, const char* pointer) {
 // "device (renderer)" of every worker that reported, for a plain or merged manifest.
 std::vector<std::string> GlDevices(const Manifest& manifest) {
   std::vector<std::string> devices;
-  auto add_workers = [&](const json& workers) {
-    if (!workers.is_array()) return;
-    for (const json& w : workers) {
-      std::string device = w.value("device", std::string());
-      const std::string renderer = w.value("gl_renderer", std::string());
+  auto add_workers = [&](const std::vector<ManifestWorker>& workers) {
+    for (const ManifestWorker& w : workers) {
+      std::string device = Str(w.device);
+      const std::string renderer = Str(w.gl_renderer);
       if (!renderer.empty()) device += (device.empty() ? "" : " — ") + renderer;
       AddUnique(&devices, device);
     }
   };
   add_workers(manifest.workers);
-  for (const json& shard : manifest.shards) add_workers(shard.value("workers", json()));
+  for (const json& shard : manifest.shards) {
+    const auto workers = shard.find("workers");
+    if (workers == shard.end() || !workers->is_array()) continue;
+    try {
+      add_workers(ManifestWorkersFromJson(*workers));
+    } catch (const ManifestError&) {
+      // a shard record whose workers are not worker entries: no devices from it
+    }
+  }
   if (devices.empty()) {  // older manifests: the backend block only
-    AddUnique(&devices,
-              Str(manifest.backend, "/device") + " " + Str(manifest.backend, "/gl_renderer"));
+    AddUnique(&devices, Str(manifest.backend.device) + " " + Str(manifest.backend.gl_renderer));
   }
   return devices;
 }
@@ -103,18 +115,14 @@ void CollectVideoFiles(const json& j, std::set<std::string>* files) {
 // ", formats mp4, gif (gif: 10 frames/s, 320 px wide)" when record --format chose more or other
 // than mp4; "" otherwise
 std::string FormatsText(const Manifest& m) {
-  const auto formats = m.video.find("formats");
-  if (formats == m.video.end() || !formats->is_array()) return "";
-  std::vector<std::string> names;
-  for (const json& f : *formats) {
-    if (f.is_string()) names.push_back(f.get<std::string>());
-  }
+  if (!m.video.formats) return "";
+  const std::vector<std::string>& names = *m.video.formats;
   // the default --format alone (the table's first row) goes unmentioned
   if (names.size() == 1 && names.front() == VideoFormats().front().name) return "";
   std::string text = ", formats " + Join(names, ", ");
   if (HasPaletteFormat(names)) {
-    text += " (gif: " + Str(m.video, "/gif/fps") + " frames/s, " + Str(m.video, "/gif/width") +
-            " px wide at most)";
+    const ManifestVideoGif gif = m.video.gif.value_or(ManifestVideoGif{});
+    text += " (gif: " + Str(gif.fps) + " frames/s, " + Str(gif.width) + " px wide at most)";
   }
   return text;
 }
@@ -152,15 +160,15 @@ json RunProvenance(const RecordedRun& run) {
   if (!Str(m.assets, "/origin").empty()) assets += " (" + Str(m.assets, "/origin") + ")";
   row("assets", assets + " " + Str(m.assets, "/path"));
   row("assets sha256", Str(m.assets, "/sha256"));
-  std::string encoder = Str(m.video, "/codec");
-  if (!Str(m.video, "/codec_reason").empty()) encoder += " — " + Str(m.video, "/codec_reason");
+  const ManifestVideo& v = m.video;
+  std::string encoder = Str(v.codec);
+  if (!Str(v.codec_reason).empty()) encoder += " — " + Str(v.codec_reason);
   row("encoder", encoder);
-  row("video", Str(m.video, "/width") + "×" + Str(m.video, "/height") + " at " +
-                   Str(m.video, "/fps") + " frames/s, crf " + Str(m.video, "/crf") + ", preset " +
-                   Str(m.video, "/preset") + FormatsText(m));
-  row("GL backend", Str(m.backend, "/name") + " " + Str(m.backend, "/gl_version"));
+  row("video", Str(v.width) + "×" + Str(v.height) + " at " + Str(v.fps) + " frames/s, crf " +
+                   Str(v.crf) + ", preset " + Str(v.preset) + FormatsText(m));
+  row("GL backend", Str(m.backend.name) + " " + Str(m.backend.gl_version));
   row(GlDevices(m).size() > 1 ? "GL devices" : "GL device", Join(GlDevices(m), "; "));
-  row("GPU choice", Str(m.gpu, "/choice"));
+  row("GPU choice", Str(m.gpu.choice));
   row("camera", m.camera);
   row("overlay", m.overlay);
   row("MSAA", std::to_string(m.msaa) + (m.msaa_reason.empty() ? "" : " (" + m.msaa_reason + ")"));
@@ -285,165 +293,163 @@ double GoalDistance(const TrajectoryStep& step) {
   return fetchscope::GoalDistance(step.obs.achieved_goal, step.obs.desired_goal);
 }
 
-json ReportData(const RecordedRun& run) {
-  const Manifest& m = run.manifest;
-  double threshold = 0.05;
-  try {
-    threshold = FindEnvSpec(m.env_id).distance_threshold;
-  } catch (const std::exception&) {
-    // an env this build does not know: Fetch's 0.05 m
-  }
-  const int steps_requested = m.steps_per_episode;
-  json episodes = json::array();
-  json notes = json::array();
+namespace {
+
+// What the report sums up over the recorded episodes while it lists them.
+struct EpisodeTally {
+  json notes = json::array();   // what is missing, in episode order
   std::vector<double> returns;  // of the complete episodes
   int incomplete = 0;
   bool has_hindsight = false;
   bool has_replay = false;  // record --from DATASET
-  std::set<int> all(run.expected.begin(), run.expected.end());
-  for (const auto& [k, entry] : run.recorded) all.insert(k);
-  for (int k : all) {
-    const auto it = run.recorded.find(k);
-    json e = {{"index", k}, {"label", EpisodeLabel(k)}};
-    if (it == run.recorded.end()) {
-      e["status"] = "missing";
-      const auto failure = run.failed.find(k);
-      e["reason"] = failure != run.failed.end() ? failure->second
-                    : m.interrupted             ? "not recorded: the run was interrupted"
-                                                : "not recorded";
-      episodes.push_back(std::move(e));
-      continue;
+};
+
+// Episode k's videos (every format record wrote, linked by its name; the page shows the one a
+// browser plays best), its --layers videos and legends, and any other video its entry names.
+void AddEpisodeVideos(const RecordedRun& run, int k, const ManifestEpisode& entry, json* e,
+                      EpisodeTally* tally) {
+  json& notes = tally->notes;
+  const std::vector<EpisodeVideo> videos = EpisodeVideos(entry);
+  json video_list = json::array();
+  for (const EpisodeVideo& v : videos) {
+    if (fs::is_regular_file(run.dir / v.file)) {
+      video_list.push_back({{"format", v.format}, {"file", v.file}, {"frames", v.frames}});
+    } else {
+      notes.push_back("episode " + EpisodeLabel(k) + ": " + v.format + " video '" + v.file +
+                      "' is missing");
     }
-    const ManifestEpisode& entry = it->second;
-    const int length = entry.steps.value_or(0);
-    const bool complete = entry.complete.value_or(true);  // older manifests: no flag, complete
-    e["status"] = complete ? "ok" : "incomplete";
-    e["complete"] = complete;
-    e["success"] = entry.is_success;
-    e["return"] = entry.episode_return ? JsonDouble(*entry.episode_return) : json(nullptr);
-    // an interrupted episode's return covers only the steps it made: aggregates leave it out
-    if (complete && entry.episode_return && std::isfinite(*entry.episode_return)) {
-      returns.push_back(*entry.episode_return);
-    }
-    incomplete += !complete;
-    e["length"] = length;
-    e["frames"] = entry.frames.value_or(length + 1);
-    // every format record wrote, linked by its name; the page shows the one a browser plays best
-    const std::vector<EpisodeVideo> videos = EpisodeVideos(entry);
-    json video_list = json::array();
-    for (const EpisodeVideo& v : videos) {
+  }
+  const EpisodeVideo* shown = PlayableVideo(videos, run.dir);
+  (*e)["video"] = shown ? json(shown->file) : json(nullptr);
+  (*e)["video_format"] = shown ? json(shown->format) : json(nullptr);
+  (*e)["videos"] = std::move(video_list);
+  // record --layers: per layer ("depth", "segmentation") its videos and legend, linked
+  json layers = json::array();
+  std::set<std::string> layer_files;
+  for (const auto& [name, layer] : entry.layers) {
+    json layer_videos = json::array();
+    for (const EpisodeVideo& v : EpisodeVideos(layer)) {
+      layer_files.insert(v.file);
       if (fs::is_regular_file(run.dir / v.file)) {
-        video_list.push_back({{"format", v.format}, {"file", v.file}, {"frames", v.frames}});
+        layer_videos.push_back({{"format", v.format}, {"file", v.file}, {"frames", v.frames}});
       } else {
-        notes.push_back("episode " + EpisodeLabel(k) + ": " + v.format + " video '" + v.file +
+        notes.push_back("episode " + EpisodeLabel(k) + ": " + name + " video '" + v.file +
                         "' is missing");
       }
     }
-    const EpisodeVideo* shown = PlayableVideo(videos, run.dir);
-    e["video"] = shown ? json(shown->file) : json(nullptr);
-    e["video_format"] = shown ? json(shown->format) : json(nullptr);
-    e["videos"] = std::move(video_list);
-    // record --layers: per layer ("depth", "segmentation") its videos and legend, linked
-    json layers = json::array();
-    std::set<std::string> layer_files;
-    for (const auto& [name, layer] : entry.layers) {
-      json layer_videos = json::array();
-      for (const EpisodeVideo& v : EpisodeVideos(layer)) {
-        layer_files.insert(v.file);
-        if (fs::is_regular_file(run.dir / v.file)) {
-          layer_videos.push_back({{"format", v.format}, {"file", v.file}, {"frames", v.frames}});
-        } else {
-          notes.push_back("episode " + EpisodeLabel(k) + ": " + name + " video '" + v.file +
-                          "' is missing");
-        }
-      }
-      json legend = nullptr;
-      if (!layer.legend.empty() && fs::is_regular_file(run.dir / layer.legend)) {
-        legend = layer.legend;
-      }
-      layers.push_back({{"name", name}, {"videos", std::move(layer_videos)}, {"legend", legend}});
+    json legend = nullptr;
+    if (!layer.legend.empty() && fs::is_regular_file(run.dir / layer.legend)) {
+      legend = layer.legend;
     }
-    e["layers"] = std::move(layers);
-    // any other video the entry names: linked
-    json others = json::array();
-    for (const std::string& file : OtherEpisodeVideos(entry)) {
-      if (layer_files.count(file)) continue;
-      if (fs::is_regular_file(run.dir / file)) {
-        others.push_back(file);
-      } else {
-        notes.push_back("episode " + EpisodeLabel(k) + ": video '" + file + "' is missing");
-      }
-    }
-    e["other_videos"] = std::move(others);
-    for (const auto& [kind, file] :
-         {std::pair<const char*, const std::string&>{"sheet", entry.sheet},
-          {"trajectory", entry.trajectory}}) {
-      e[kind] = file;
-      if (!file.empty() && !fs::is_regular_file(run.dir / file)) {
-        notes.push_back("episode " + EpisodeLabel(k) + ": " + kind + " '" + file + "' is missing");
-        e[kind] = nullptr;
-      }
-    }
-    const auto hindsight = entry.extra.find("hindsight");
-    if (hindsight != entry.extra.end() && hindsight->is_object()) {
-      e["hindsight"] = *hindsight;
-      has_hindsight = true;
-    }
-    // record --from DATASET: the reset used and how far the replay drifted from the dataset
-    const auto divergence = entry.extra.find("divergence");
-    if (divergence != entry.extra.end() && divergence->is_object()) {
-      e["replay"] = *divergence;
-      e["replay"]["reset"] = entry.extra.value("reset", "");
-      has_replay = true;
-    }
-    json distances = json::array();
-    e["final_distance"] = nullptr;
-    if (e["trajectory"].is_string()) {
-      try {
-        const std::vector<TrajectoryStep> steps =
-            ReadEpisodeTrajectory(run.dir / e["trajectory"].get<std::string>());
-        for (const TrajectoryStep& s : steps) distances.push_back(Micro(GoalDistance(s)));
-        if (!steps.empty()) e["final_distance"] = JsonDouble(GoalDistance(steps.back()));
-      } catch (const RunError& error) {
-        notes.push_back(std::string("episode ") + EpisodeLabel(k) + ": " + error.what());
-      }
-    }
-    e["distances"] = std::move(distances);
-    episodes.push_back(std::move(e));
+    layers.push_back({{"name", name}, {"videos", std::move(layer_videos)}, {"legend", legend}});
   }
+  (*e)["layers"] = std::move(layers);
+  // any other video the entry names: linked
+  json others = json::array();
+  for (const std::string& file : OtherEpisodeVideos(entry)) {
+    if (layer_files.count(file)) continue;
+    if (fs::is_regular_file(run.dir / file)) {
+      others.push_back(file);
+    } else {
+      notes.push_back("episode " + EpisodeLabel(k) + ": video '" + file + "' is missing");
+    }
+  }
+  (*e)["other_videos"] = std::move(others);
+}
 
-  // success rate over the complete episodes, in index order, with its Wilson interval as it grows
-  int n = 0, successes = 0;
+// Episode k's sheet and trajectory (null when missing), hindsight counts, replay drift and
+// distances to the goal.
+void AddEpisodeDetails(const RecordedRun& run, int k, const ManifestEpisode& entry, json* e,
+                       EpisodeTally* tally) {
+  for (const auto& [kind, file] : {std::pair<const char*, const std::string&>{"sheet", entry.sheet},
+                                   {"trajectory", entry.trajectory}}) {
+    (*e)[kind] = file;
+    if (!file.empty() && !fs::is_regular_file(run.dir / file)) {
+      tally->notes.push_back("episode " + EpisodeLabel(k) + ": " + kind + " '" + file +
+                             "' is missing");
+      (*e)[kind] = nullptr;
+    }
+  }
+  if (entry.hindsight) {
+    (*e)["hindsight"] = EpisodeHindsightToJson(*entry.hindsight);
+    tally->has_hindsight = true;
+  }
+  // record --from DATASET: the reset used and how far the replay drifted from the dataset
+  const auto divergence = entry.extra.find("divergence");
+  if (divergence != entry.extra.end() && divergence->is_object()) {
+    (*e)["replay"] = *divergence;
+    (*e)["replay"]["reset"] = entry.extra.value("reset", "");
+    tally->has_replay = true;
+  }
+  json distances = json::array();
+  (*e)["final_distance"] = nullptr;
+  if ((*e)["trajectory"].is_string()) {
+    try {
+      const std::vector<TrajectoryStep> steps =
+          ReadEpisodeTrajectory(run.dir / (*e)["trajectory"].get<std::string>());
+      for (const TrajectoryStep& s : steps) distances.push_back(Micro(GoalDistance(s)));
+      if (!steps.empty()) (*e)["final_distance"] = JsonDouble(GoalDistance(steps.back()));
+    } catch (const RunError& error) {
+      tally->notes.push_back(std::string("episode ") + EpisodeLabel(k) + ": " + error.what());
+    }
+  }
+  (*e)["distances"] = std::move(distances);
+}
+
+// The table row of episode k: missing (with why), or recorded (with its outcome and files).
+json EpisodeRow(const RecordedRun& run, int k, EpisodeTally* tally) {
+  const auto it = run.recorded.find(k);
+  json e = {{"index", k}, {"label", EpisodeLabel(k)}};
+  if (it == run.recorded.end()) {
+    e["status"] = "missing";
+    const auto failure = run.failed.find(k);
+    e["reason"] = failure != run.failed.end() ? failure->second
+                  : run.manifest.interrupted  ? "not recorded: the run was interrupted"
+                                              : "not recorded";
+    return e;
+  }
+  const ManifestEpisode& entry = it->second;
+  const int length = entry.steps.value_or(0);
+  const bool complete = entry.complete.value_or(true);  // older manifests: no flag, complete
+  e["status"] = complete ? "ok" : "incomplete";
+  e["complete"] = complete;
+  e["success"] = entry.is_success;
+  e["return"] = entry.episode_return ? JsonDouble(*entry.episode_return) : json(nullptr);
+  // an interrupted episode's return covers only the steps it made: aggregates leave it out
+  if (complete && entry.episode_return && std::isfinite(*entry.episode_return)) {
+    tally->returns.push_back(*entry.episode_return);
+  }
+  tally->incomplete += !complete;
+  e["length"] = length;
+  e["frames"] = entry.frames.value_or(length + 1);
+  AddEpisodeVideos(run, k, entry, &e, tally);
+  AddEpisodeDetails(run, k, entry, &e, tally);
+  return e;
+}
+
+// The success rate over the complete episodes, in index order, with its Wilson interval as it
+// grows; `n` and `successes` the totals.
+json RunningSuccess(const json& episodes, int* n, int* successes) {
   json running = {{"n", json::array()},
                   {"rate", json::array()},
                   {"low", json::array()},
                   {"high", json::array()}};
   for (const json& e : episodes) {
     if (e["status"] != "ok") continue;
-    ++n;
-    successes += e["success"].get<bool>();
-    const auto [low, high] = WilsonInterval(successes, n);
-    running["n"].push_back(n);
-    running["rate"].push_back(static_cast<double>(successes) / n);
+    ++*n;
+    *successes += e["success"].get<bool>();
+    const auto [low, high] = WilsonInterval(*successes, *n);
+    running["n"].push_back(*n);
+    running["rate"].push_back(static_cast<double>(*successes) / *n);
     running["low"].push_back(low);
     running["high"].push_back(high);
   }
-  const auto [low, high] = WilsonInterval(successes, n);
-  const int missing = static_cast<int>(all.size()) - static_cast<int>(run.recorded.size());
-  // how to finish the run: its own command with --resume (a merged run: each shard's)
-  const std::string resume = m.command_line.empty() || m.merged
-                                 ? "; record them with --resume (the run's record command)"
-                                 : "; to record them, run: " + ResumeCommand(m.command_line);
-  if (m.interrupted) {
-    notes.insert(notes.begin(), "the run was interrupted by " + m.signal.value_or("") + ": " +
-                                    std::to_string(missing) + " episode(s) missing, " +
-                                    std::to_string(incomplete) + " incomplete" + resume);
-  } else if (missing > 0) {
-    notes.insert(notes.begin(),
-                 std::to_string(missing) + " episode(s) missing (see the table)" + resume);
-  }
-  // the markers the frames show, in their colours (the viewer's and the sheets' legend); the
-  // ghost where the run replayed a dataset
+  return running;
+}
+
+// The markers the frames show, in their colours (the viewer's and the sheets' legend); the
+// ghost where the run replayed a dataset.
+json OverlayLegendJson(const Manifest& m, bool has_replay) {
   json overlay_legend = json::array();
   try {
     const OverlaySet overlays = ParseOverlays(m.overlay.empty() ? "default" : m.overlay);
@@ -454,12 +460,17 @@ json ReportData(const RecordedRun& run) {
   } catch (const std::exception&) {
     // an --overlay this build does not know: no legend
   }
+  return overlay_legend;
+}
+
+// The provenance rows, with the re-rendered run's own page linked where the path record --from
+// was given still finds one.
+json LinkedProvenance(const RecordedRun& run) {
   json provenance = RunProvenance(run);
-  // the re-rendered run's own page, where the path record --from was given still finds one
   for (json& row : provenance) {
     if (row["label"] != "from") continue;
     std::error_code ec;
-    fs::path source = m.from.value_or("");
+    fs::path source = run.manifest.from.value_or("");
     if (fs::is_directory(source, ec)) source /= kReportFileName;
     if (fs::is_regular_file(source, ec)) {
       row["href"] = fs::absolute(source)
@@ -468,31 +479,66 @@ json ReportData(const RecordedRun& run) {
                         .string();
     }
   }
+  return provenance;
+}
+
+}  // namespace
+
+json ReportData(const RecordedRun& run) {
+  const Manifest& m = run.manifest;
+  double threshold = 0.05;
+  try {
+    threshold = FindEnvSpec(m.env_id).distance_threshold;
+  } catch (const std::exception&) {
+    // an env this build does not know: Fetch's 0.05 m
+  }
+  EpisodeTally tally;
+  json episodes = json::array();
+  std::set<int> all(run.expected.begin(), run.expected.end());
+  for (const auto& [k, entry] : run.recorded) all.insert(k);
+  for (int k : all) episodes.push_back(EpisodeRow(run, k, &tally));
+  int n = 0, successes = 0;
+  json running = RunningSuccess(episodes, &n, &successes);
+  const auto [low, high] = WilsonInterval(successes, n);
+  const int missing = static_cast<int>(all.size()) - static_cast<int>(run.recorded.size());
+  // how to finish the run: its own command with --resume (a merged run: each shard's)
+  const std::string resume = m.command_line.empty() || m.merged
+                                 ? "; record them with --resume (the run's record command)"
+                                 : "; to record them, run: " + ResumeCommand(m.command_line);
+  json& notes = tally.notes;
+  if (m.interrupted) {
+    notes.insert(notes.begin(), "the run was interrupted by " + m.signal.value_or("") + ": " +
+                                    std::to_string(missing) + " episode(s) missing, " +
+                                    std::to_string(tally.incomplete) + " incomplete" + resume);
+  } else if (missing > 0) {
+    notes.insert(notes.begin(),
+                 std::to_string(missing) + " episode(s) missing (see the table)" + resume);
+  }
   return {{"kind", "report"},
           {"title", m.env_id + " · " + m.policy + " · seed " + std::to_string(m.seed)},
           {"generator", std::string("fetchscope ") + FETCHSCOPE_VERSION},
           {"uplot", EmbeddedUplotVersion()},
-          {"provenance", std::move(provenance)},
+          {"provenance", LinkedProvenance(run)},
           {"notes", notes},
           {"threshold", threshold},
-          {"steps_per_episode", steps_requested},
-          {"fps", m.video.contains("fps") ? m.video.at("fps") : json(25)},
-          {"has_hindsight", has_hindsight},
-          {"has_replay", has_replay},
-          {"overlay_legend", std::move(overlay_legend)},
+          {"steps_per_episode", m.steps_per_episode},
+          {"fps", m.video.fps.value_or(25)},
+          {"has_hindsight", tally.has_hindsight},
+          {"has_replay", tally.has_replay},
+          {"overlay_legend", OverlayLegendJson(m, tally.has_replay)},
           {"episodes", std::move(episodes)},
           {"summary",
            {{"expected", all.size()},
             {"recorded", run.recorded.size()},
             {"complete", n},
-            {"incomplete", incomplete},
+            {"incomplete", tally.incomplete},
             {"successes", successes},
             {"rate", n ? JsonDouble(static_cast<double>(successes) / n) : json(nullptr)},
             {"wilson_low", low},
             {"wilson_high", high},
             {"confidence", 0.95}}},
           {"running_success", std::move(running)},
-          {"returns_histogram", Histogram(returns)}};  // complete episodes only
+          {"returns_histogram", Histogram(tally.returns)}};  // complete episodes only
 }
 
 fs::path WriteRunReport(const RecordedRun& run) {

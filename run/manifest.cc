@@ -71,7 +71,9 @@ const std::vector<ParameterRow>& ParameterTable() {
           nullptr, false},
       FETCHSCOPE_PARAMETER(
           "--format", formats,
-          [](const RunParameters& p) { return p.formats != std::vector<std::string>{"mp4"}; },
+          [](const RunParameters& p) {  // given unless the default (the table's first row) alone
+            return p.formats != std::vector<std::string>{std::string(VideoFormats().front().name)};
+          },
           false),
       FETCHSCOPE_PARAMETER("--gif-fps", gif_fps, HasGif, false),
       FETCHSCOPE_PARAMETER("--gif-width", gif_width, HasGif, false),
@@ -114,74 +116,6 @@ RunParameters ParametersFromJson(const json& j) {
   return p;
 }
 
-// ---- episodes
-
-json VideosToJson(const std::map<std::string, VideoFile>& videos) {
-  json out = json::object();
-  for (const auto& [format, v] : videos) {
-    json file = {{"file", v.file}};
-    if (v.frames >= 0) file["frames"] = v.frames;
-    out[format] = std::move(file);
-  }
-  return out;
-}
-
-std::map<std::string, VideoFile> VideosFromJson(const json& j) {
-  std::map<std::string, VideoFile> videos;
-  for (const auto& [format, v] : j.items()) {
-    VideoFile file;
-    file.file = v.at("file").get<std::string>();
-    file.frames = v.value("frames", -1);
-    videos[format] = std::move(file);
-  }
-  return videos;
-}
-
-// mp4 (H.264) and webm (VP9) play in every browser; a gif is an image
-int FormatRank(const std::string& format) {
-  const VideoFormat* row = FindVideoFormat(format);
-  return row != nullptr ? row->browser_rank : static_cast<int>(VideoFormats().size());
-}
-
-std::vector<EpisodeVideo> SortedVideos(const std::string& video,
-                                       const std::map<std::string, VideoFile>& videos, int frames) {
-  std::vector<EpisodeVideo> out;
-  for (const auto& [format, v] : videos) out.push_back({format, v.file, v.frames});
-  if (out.empty() && !video.empty()) {  // manifests from before --format
-    std::string format = std::filesystem::path(video).extension().string();
-    if (!format.empty()) format.erase(0, 1);
-    out.push_back({format, video, frames});
-  }
-  std::stable_sort(out.begin(), out.end(), [](const EpisodeVideo& a, const EpisodeVideo& b) {
-    const int ra = FormatRank(a.format), rb = FormatRank(b.format);
-    return ra != rb ? ra < rb : a.format < b.format;
-  });
-  return out;
-}
-
-std::optional<int> OptionalInt(const json& j, const char* key) {
-  if (!j.contains(key)) return std::nullopt;
-  return j.at(key).get<int>();
-}
-
-// "return": a number, or JsonDouble's "inf", "-inf", "nan"
-double ReadDouble(const json& v) {
-  if (v.is_string()) {
-    const std::string s = v.get<std::string>();
-    if (s == "inf") return HUGE_VAL;
-    if (s == "-inf") return -HUGE_VAL;
-    if (s == "nan") return std::nan("");
-    throw ManifestError("has a number written as '" + s + "'");
-  }
-  return v.get<double>();
-}
-
-bool SameDouble(const std::optional<double>& a, const std::optional<double>& b) {
-  if (a.has_value() != b.has_value()) return false;
-  if (!a) return true;
-  return *a == *b || (std::isnan(*a) && std::isnan(*b));
-}
-
 std::string ReadText(const std::filesystem::path& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw ManifestError("cannot read '" + path.string() + "'");
@@ -195,6 +129,128 @@ json OptionalString(const std::optional<std::string>& s) { return s ? json(*s) :
 std::optional<std::string> ReadOptionalString(const json& j, const char* key) {
   if (!j.contains(key) || j.at(key).is_null()) return std::nullopt;
   return j.at(key).get<std::string>();
+}
+
+// ---- the manifest's reader, by groups of members
+
+// Every member the reader knows (the rest stay in Manifest::extra).
+constexpr const char* kManifestKeys[] = {"schema_version",
+                                         "env_id",
+                                         "seed",
+                                         "policy",
+                                         "from",
+                                         "episodes_requested",
+                                         "steps_per_episode",
+                                         "sheet_every",
+                                         "episodes",
+                                         "missing",
+                                         "failures",
+                                         "shard",
+                                         "jobs",
+                                         "worker_mode",
+                                         "workers",
+                                         "gpu",
+                                         "assets",
+                                         "model_file",
+                                         "camera",
+                                         "overlay",
+                                         "msaa",
+                                         "msaa_reason",
+                                         "backend",
+                                         "layers",
+                                         "video",
+                                         "versions",
+                                         "timings_s",
+                                         "frames",
+                                         "interrupted",
+                                         "incomplete_episodes",
+                                         "signal",
+                                         "command_line",
+                                         "parameters",
+                                         "resumed",
+                                         "merged",
+                                         "shards"};
+
+// "schema_version": 0 when absent (written before versions existed: the same layout); a newer
+// version than this build reads is refused.
+int ReadSchemaVersion(const json& j) {
+  const auto version = j.is_object() ? j.find("schema_version") : j.end();
+  if (!j.is_object() || version == j.end()) return 0;
+  if (!version->is_number_integer() || version->get<int>() < 0) {
+    throw ManifestError("has a bad schema_version " + version->dump());
+  }
+  const int read = version->get<int>();
+  if (read > kManifestSchemaVersion) {
+    throw ManifestError("has manifest schema version " + std::to_string(read) +
+                        "; this fetchscope reads versions 0 to " +
+                        std::to_string(kManifestSchemaVersion) + ": use a newer fetchscope");
+  }
+  return read;
+}
+
+// What was run: the environment, the episodes, the outcome, the command and its parameters.
+void ReadRunMembers(const json& j, Manifest* m) {
+  m->env_id = j.at("env_id").get<std::string>();
+  m->seed = j.value("seed", uint64_t{0});
+  m->policy = j.value("policy", std::string());
+  m->from = ReadOptionalString(j, "from");
+  m->episodes_requested = j.value("episodes_requested", static_cast<int>(j.at("episodes").size()));
+  m->steps_per_episode = j.value("steps_per_episode", 0);
+  m->sheet_every = j.value("sheet_every", 0);
+  for (const json& e : j.at("episodes")) m->episodes.push_back(ManifestEpisodeFromJson(e));
+  m->frames = j.value("frames", 0L);
+  m->interrupted = j.value("interrupted", false);
+  m->incomplete_episodes = j.value("incomplete_episodes", std::vector<int>());
+  m->signal = ReadOptionalString(j, "signal");
+  m->command_line = j.value("command_line", std::string());
+  if (j.contains("parameters")) {
+    m->parameters = ParametersFromJson(j.at("parameters"));
+  } else {  // from before "parameters": what the manifest's own members say
+    m->parameters.recorded = false;
+    m->parameters.env_id = m->env_id;
+    m->parameters.seed = m->seed;
+    m->parameters.steps = m->steps_per_episode;
+  }
+  m->resumed = j.value("resumed", false);
+  m->merged = j.value("merged", false);
+  m->shards = j.value("shards", json::array());
+}
+
+// What one record process did: missing episodes, failures, its shard, its workers and GPU.
+void ReadProcessMembers(const json& j, Manifest* m) {
+  m->missing = j.value("missing", std::vector<int>());
+  for (const json& f : j.value("failures", json::array())) {
+    m->failures.push_back({f.value("worker", 0), f.value("episodes", std::vector<int>()),
+                           f.value("message", std::string())});
+  }
+  if (j.contains("shard") && j.at("shard").is_object()) {
+    const json& s = j.at("shard");
+    ManifestShard shard;
+    shard.index = s.value("index", 0);
+    shard.count = s.value("count", 1);
+    shard.source = ReadOptionalString(s, "source");
+    if (s.contains("episodes")) shard.episodes = s.at("episodes").get<std::vector<int>>();
+    m->shard = std::move(shard);
+  }
+  m->jobs = j.value("jobs", 1);
+  m->worker_mode = j.value("worker_mode", std::string());
+  if (j.contains("workers")) m->workers = ManifestWorkersFromJson(j.at("workers"));
+  if (j.contains("gpu")) m->gpu = ManifestGpuFromJson(j.at("gpu"));
+}
+
+// How the files were made: assets, model, view, GL backend, encoding, versions, timings.
+void ReadSetupMembers(const json& j, Manifest* m) {
+  m->assets = j.value("assets", json::object());
+  m->model_file = j.value("model_file", std::string());
+  m->camera = j.value("camera", std::string());
+  m->overlay = j.value("overlay", std::string());
+  m->msaa = j.value("msaa", 0);
+  m->msaa_reason = j.value("msaa_reason", std::string());
+  if (j.contains("backend")) m->backend = ManifestBackendFromJson(j.at("backend"));
+  m->layers = j.value("layers", std::vector<std::string>());
+  if (j.contains("video")) m->video = ManifestVideoFromJson(j.at("video"));
+  m->versions = j.value("versions", json::object());
+  if (j.contains("timings_s")) m->timings_s = ManifestTimingsFromJson(j.at("timings_s"));
 }
 
 }  // namespace
@@ -227,112 +283,6 @@ std::optional<RunDifference> SameRun(const RunParameters& a, const RunParameters
     return RunDifference{row.option, Shown(va), Shown(vb)};
   }
   return std::nullopt;
-}
-
-// ---- episodes
-
-std::vector<std::string*> ManifestEpisode::Files() {
-  std::vector<std::string*> files;
-  auto add = [&files](std::string* name) {
-    if (!name->empty()) files.push_back(name);
-  };
-  add(&video);
-  for (auto& [format, v] : videos) add(&v.file);
-  add(&sheet);
-  add(&trajectory);
-  for (auto& [name, layer] : layers) {
-    add(&layer.video);
-    for (auto& [format, v] : layer.videos) add(&v.file);
-    add(&layer.legend);
-  }
-  return files;
-}
-
-std::vector<std::string> ManifestEpisode::FileNames() const {
-  ManifestEpisode copy = *this;
-  std::vector<std::string> names;
-  for (const std::string* name : copy.Files()) names.push_back(*name);
-  return names;
-}
-
-bool ManifestEpisode::operator==(const ManifestEpisode& o) const {
-  return std::tie(index, video, videos, sheet, trajectory, frames, steps, complete, is_success,
-                  layers, extra) == std::tie(o.index, o.video, o.videos, o.sheet, o.trajectory,
-                                             o.frames, o.steps, o.complete, o.is_success, o.layers,
-                                             o.extra) &&
-         SameDouble(episode_return, o.episode_return);
-}
-
-std::vector<EpisodeVideo> EpisodeVideos(const ManifestEpisode& episode) {
-  return SortedVideos(episode.video, episode.videos, episode.frames.value_or(-1));
-}
-
-std::vector<EpisodeVideo> EpisodeVideos(const EpisodeLayer& layer) {
-  return SortedVideos(layer.video, layer.videos, -1);
-}
-
-json ManifestEpisodeToJson(const ManifestEpisode& e) {
-  json out = e.extra.is_object() ? e.extra : json::object();
-  out["index"] = e.index;
-  if (!e.video.empty()) out["video"] = e.video;
-  if (!e.videos.empty()) out["videos"] = VideosToJson(e.videos);
-  if (!e.sheet.empty()) out["sheet"] = e.sheet;
-  if (!e.trajectory.empty()) out["trajectory"] = e.trajectory;
-  if (e.frames) out["frames"] = *e.frames;
-  if (e.steps) out["steps"] = *e.steps;
-  if (e.complete) out["complete"] = *e.complete;
-  if (e.episode_return) out["return"] = JsonDouble(*e.episode_return);
-  out["is_success"] = e.is_success;
-  if (!e.layers.empty()) {
-    json layers = json::object();
-    for (const auto& [name, layer] : e.layers) {
-      json l = layer.details.is_object() ? layer.details : json::object();
-      l["video"] = layer.video;
-      l["videos"] = VideosToJson(layer.videos);
-      if (!layer.legend.empty()) l["legend"] = layer.legend;
-      layers[name] = std::move(l);
-    }
-    out["layers"] = std::move(layers);
-  }
-  return out;
-}
-
-ManifestEpisode ManifestEpisodeFromJson(const json& j) {
-  if (!j.is_object() || !j.contains("index") || !j.at("index").is_number_integer()) {
-    throw ManifestError("has an episode without an index: " + j.dump());
-  }
-  ManifestEpisode e;
-  e.extra = j;
-  auto take = [&e](const char* key) -> const json* {
-    const auto it = e.extra.find(key);
-    return it == e.extra.end() ? nullptr : &*it;
-  };
-  e.index = j.at("index").get<int>();
-  if (const json* v = take("video")) e.video = v->get<std::string>();
-  if (const json* v = take("videos")) e.videos = VideosFromJson(*v);
-  if (const json* v = take("sheet")) e.sheet = v->get<std::string>();
-  if (const json* v = take("trajectory")) e.trajectory = v->get<std::string>();
-  e.frames = OptionalInt(j, "frames");
-  e.steps = OptionalInt(j, "steps");
-  if (const json* v = take("complete")) e.complete = v->get<bool>();
-  if (const json* v = take("return")) e.episode_return = ReadDouble(*v);
-  if (const json* v = take("is_success")) e.is_success = v->get<bool>();
-  if (const json* v = take("layers")) {
-    for (const auto& [name, l] : v->items()) {
-      EpisodeLayer layer;
-      layer.details = l;
-      layer.video = l.value("video", std::string());
-      if (l.contains("videos")) layer.videos = VideosFromJson(l.at("videos"));
-      layer.legend = l.value("legend", std::string());
-      for (const char* key : {"video", "videos", "legend"}) layer.details.erase(key);
-      e.layers[name] = std::move(layer);
-    }
-  }
-  for (const char* key : {"index", "video", "videos", "sheet", "trajectory", "frames", "steps",
-                          "complete", "return", "is_success", "layers"}) {
-    e.extra.erase(key);
-  }
-  return e;
 }
 
 // ---- the manifest
@@ -380,8 +330,8 @@ json ManifestToJson(const Manifest& m) {
     }
     out["jobs"] = m.jobs;
     out["worker_mode"] = m.worker_mode;
-    out["workers"] = m.workers;
-    out["gpu"] = m.gpu;
+    out["workers"] = ManifestWorkersToJson(m.workers);
+    out["gpu"] = ManifestGpuToJson(m.gpu);
   }
   out["assets"] = m.assets;
   out["model_file"] = m.model_file;
@@ -389,11 +339,11 @@ json ManifestToJson(const Manifest& m) {
   out["overlay"] = m.overlay;
   out["msaa"] = m.msaa;
   out["msaa_reason"] = m.msaa_reason;
-  out["backend"] = m.backend;
+  out["backend"] = ManifestBackendToJson(m.backend);
   out["layers"] = m.layers;
-  out["video"] = m.video;
+  out["video"] = ManifestVideoToJson(m.video);
   out["versions"] = m.versions;
-  out["timings_s"] = m.timings_s;
+  out["timings_s"] = ManifestTimingsToJson(m.timings_s);
   out["frames"] = m.frames;
   out["interrupted"] = m.interrupted;
   out["incomplete_episodes"] = m.incomplete_episodes;
@@ -407,79 +357,16 @@ json ManifestToJson(const Manifest& m) {
 Manifest ManifestFromJson(const json& j) {
   Manifest m;
   // the version first: a newer one may have moved anything else
-  const auto version = j.is_object() ? j.find("schema_version") : j.end();
-  if (j.is_object() && version != j.end()) {
-    if (!version->is_number_integer() || version->get<int>() < 0) {
-      throw ManifestError("has a bad schema_version " + version->dump());
-    }
-    m.schema_version = version->get<int>();
-    if (m.schema_version > kManifestSchemaVersion) {
-      throw ManifestError("has manifest schema version " + std::to_string(m.schema_version) +
-                          "; this fetchscope reads versions 0 to " +
-                          std::to_string(kManifestSchemaVersion) + ": use a newer fetchscope");
-    }
-  } else {
-    m.schema_version = 0;  // written before versions existed: the same layout
-  }
+  m.schema_version = ReadSchemaVersion(j);
   if (!j.is_object() || !j.contains("env_id") || !j.contains("episodes") ||
       !j.at("episodes").is_array()) {
     throw ManifestError("is not a record manifest (it lacks env_id or episodes)");
   }
   try {
     m.extra = j;
-    m.env_id = j.at("env_id").get<std::string>();
-    m.seed = j.value("seed", uint64_t{0});
-    m.policy = j.value("policy", std::string());
-    m.from = ReadOptionalString(j, "from");
-    m.episodes_requested = j.value("episodes_requested", static_cast<int>(j.at("episodes").size()));
-    m.steps_per_episode = j.value("steps_per_episode", 0);
-    m.sheet_every = j.value("sheet_every", 0);
-    for (const json& e : j.at("episodes")) m.episodes.push_back(ManifestEpisodeFromJson(e));
-    m.missing = j.value("missing", std::vector<int>());
-    for (const json& f : j.value("failures", json::array())) {
-      m.failures.push_back({f.value("worker", 0), f.value("episodes", std::vector<int>()),
-                            f.value("message", std::string())});
-    }
-    if (j.contains("shard") && j.at("shard").is_object()) {
-      const json& s = j.at("shard");
-      ManifestShard shard;
-      shard.index = s.value("index", 0);
-      shard.count = s.value("count", 1);
-      shard.source = ReadOptionalString(s, "source");
-      if (s.contains("episodes")) shard.episodes = s.at("episodes").get<std::vector<int>>();
-      m.shard = std::move(shard);
-    }
-    m.jobs = j.value("jobs", 1);
-    m.worker_mode = j.value("worker_mode", std::string());
-    m.workers = j.value("workers", json::array());
-    m.gpu = j.value("gpu", json::object());
-    m.assets = j.value("assets", json::object());
-    m.model_file = j.value("model_file", std::string());
-    m.camera = j.value("camera", std::string());
-    m.overlay = j.value("overlay", std::string());
-    m.msaa = j.value("msaa", 0);
-    m.msaa_reason = j.value("msaa_reason", std::string());
-    m.backend = j.value("backend", json::object());
-    m.layers = j.value("layers", std::vector<std::string>());
-    m.video = j.value("video", json::object());
-    m.versions = j.value("versions", json::object());
-    m.timings_s = j.value("timings_s", json::object());
-    m.frames = j.value("frames", 0L);
-    m.interrupted = j.value("interrupted", false);
-    m.incomplete_episodes = j.value("incomplete_episodes", std::vector<int>());
-    m.signal = ReadOptionalString(j, "signal");
-    m.command_line = j.value("command_line", std::string());
-    if (j.contains("parameters")) {
-      m.parameters = ParametersFromJson(j.at("parameters"));
-    } else {  // from before "parameters": what the manifest's own members say
-      m.parameters.recorded = false;
-      m.parameters.env_id = m.env_id;
-      m.parameters.seed = m.seed;
-      m.parameters.steps = m.steps_per_episode;
-    }
-    m.resumed = j.value("resumed", false);
-    m.merged = j.value("merged", false);
-    m.shards = j.value("shards", json::array());
+    ReadRunMembers(j, &m);
+    ReadProcessMembers(j, &m);
+    ReadSetupMembers(j, &m);
   } catch (const json::exception& e) {
     throw ManifestError(std::string("is not a record manifest: ") + e.what());
   } catch (const std::invalid_argument&) {  // --shard's std::stoi
@@ -487,44 +374,7 @@ Manifest ManifestFromJson(const json& j) {
   } catch (const std::out_of_range&) {
     throw ManifestError("has a parameter --shard that is not I/N");
   }
-  for (const char* key : {"schema_version",
-                          "env_id",
-                          "seed",
-                          "policy",
-                          "from",
-                          "episodes_requested",
-                          "steps_per_episode",
-                          "sheet_every",
-                          "episodes",
-                          "missing",
-                          "failures",
-                          "shard",
-                          "jobs",
-                          "worker_mode",
-                          "workers",
-                          "gpu",
-                          "assets",
-                          "model_file",
-                          "camera",
-                          "overlay",
-                          "msaa",
-                          "msaa_reason",
-                          "backend",
-                          "layers",
-                          "video",
-                          "versions",
-                          "timings_s",
-                          "frames",
-                          "interrupted",
-                          "incomplete_episodes",
-                          "signal",
-                          "command_line",
-                          "parameters",
-                          "resumed",
-                          "merged",
-                          "shards"}) {
-    m.extra.erase(key);
-  }
+  for (const char* key : kManifestKeys) m.extra.erase(key);
   return m;
 }
 

@@ -5,7 +5,11 @@
 // Versions: the file carries "schema_version" (kManifestSchemaVersion). A manifest without one was
 // written before versions existed and is read as version 0, the same layout; a newer version is
 // refused, naming the file and both versions. Members this build does not know are kept
-// (Manifest::extra, ManifestEpisode::extra) and written back unchanged.
+// (Manifest::extra, ManifestEpisode::extra, each typed section's extra) and written back unchanged.
+//
+// The sections "video", "backend", "gpu", "workers" and "timings_s" are typed too
+// (run/manifest_sections.h); an episode entry is encode/episode_result.h's ManifestEpisode, which
+// the episode sink fills.
 #pragma once
 
 #include <cstdint>
@@ -18,6 +22,8 @@
 #include <vector>
 
 #include "base/errors.h"
+#include "encode/episode_result.h"
+#include "run/manifest_sections.h"
 
 namespace fetchscope {
 
@@ -99,53 +105,6 @@ struct EpisodeVideo {
   }
 };
 
-/// One format's file in "videos": the file and the frames in it (-1: not given).
-struct VideoFile {
-  std::string file;
-  int frames = -1;
-  bool operator==(const VideoFile& o) const { return file == o.file && frames == o.frames; }
-};
-
-/// An episode's extra video of record --layers ("depth", "segmentation").
-struct EpisodeLayer {
-  std::string video;                                  ///< the first format's file
-  std::map<std::string, VideoFile> videos;            ///< format -> file
-  std::string legend;                                 ///< segmentation: the legend file ("" none)
-  nlohmann::json details = nlohmann::json::object();  ///< depth: "scales", "mapping"...
-  bool operator==(const EpisodeLayer& o) const {
-    return video == o.video && videos == o.videos && legend == o.legend && details == o.details;
-  }
-};
-
-/// One recorded episode: its files and outcome.
-struct ManifestEpisode {
-  int index = 0;
-  std::string video;                        ///< the first format's file ("" not given)
-  std::map<std::string, VideoFile> videos;  ///< format -> file (absent before --format)
-  std::string sheet;                        ///< contact sheet file
-  std::string trajectory;                   ///< trajectory JSON file
-  std::optional<int> frames;                ///< frames rendered
-  std::optional<int> steps;                 ///< steps taken
-  std::optional<bool> complete;  ///< false: cut short by a signal; absent in older manifests
-  std::optional<double> episode_return;             ///< "return"
-  bool is_success = false;                          ///< at the last step
-  std::map<std::string, EpisodeLayer> layers;       ///< record --layers, by layer name
-  nlohmann::json extra = nlohmann::json::object();  ///< "hindsight" and members not known here
-
-  /// Complete: marked so, or (older manifests without the flag) with all `steps_per_episode`.
-  bool IsComplete(int steps_per_episode) const {
-    return complete.value_or(steps.value_or(-1) == steps_per_episode);
-  }
-  /// Every file name the entry holds (videos, sheet, trajectory, layer videos and legend), for
-  /// reading or rewriting in place; empty names are skipped.
-  std::vector<std::string*> Files();
-  /// Every file name, read-only.
-  std::vector<std::string> FileNames() const;
-
-  bool operator==(const ManifestEpisode& o) const;
-  bool operator!=(const ManifestEpisode& o) const { return !(*this == o); }
-};
-
 /// The episode's videos in the formats record wrote ("videos"; older manifests: "video" alone), in
 /// the order a browser plays them best: mp4, webm, gif, then any other format by name.
 std::vector<EpisodeVideo> EpisodeVideos(const ManifestEpisode& episode);
@@ -190,19 +149,19 @@ struct Manifest {
   std::optional<ManifestShard> shard;                ///< per process; absent before sharding
   int jobs = 1;                                      ///< per process
   std::string worker_mode;                           ///< per process
-  nlohmann::json workers = nlohmann::json::array();  ///< per process: each worker's GL setup
-  nlohmann::json gpu = nlohmann::json::object();     ///< per process: request, choice, devices
+  std::vector<ManifestWorker> workers;               ///< per process: each worker's GL setup
+  ManifestGpu gpu;                                   ///< per process: request, choice, devices
   nlohmann::json assets = nlohmann::json::object();  ///< kind, origin, path, sha256
   std::string model_file;
   std::string camera;
   std::string overlay;
   int msaa = 0;  ///< the samples used
   std::string msaa_reason;
-  nlohmann::json backend = nlohmann::json::object();  ///< name, device, gl_vendor...
-  std::vector<std::string> layers;                    ///< "rgb" and the --layers
-  nlohmann::json video = nlohmann::json::object();    ///< codec, crf, fps, width, formats...
+  ManifestBackend backend;          ///< name, device, gl_vendor...
+  std::vector<std::string> layers;  ///< "rgb" and the --layers
+  ManifestVideo video;              ///< codec, crf, fps, width, formats...
   nlohmann::json versions = nlohmann::json::object();
-  nlohmann::json timings_s = nlohmann::json::object();
+  ManifestTimings timings_s;
   long frames = 0;
   bool interrupted = false;
   std::vector<int> incomplete_episodes;

@@ -133,14 +133,17 @@ Manifest Merged(const Manifest& first, const std::map<int, const ShardManifest*>
     merged.episodes.push_back(std::move(episode));
   }
   json shards = json::array();
-  double wall_max = 0;
-  json sums = {{"wall", 0.0}, {"sim", 0.0}, {"render", 0.0}, {"encode", 0.0}, {"write", 0.0}};
+  double wall_max = 0, wall = 0, sim = 0, render = 0, encode = 0, write = 0;
   long frames = 0;
   for (const auto& [index, m] : by_shard) {
     const Manifest& d = m->data;
-    const json& t = d.timings_s;
-    for (auto& [key, value] : sums.items()) value = value.get<double>() + t.value(key, 0.0);
-    wall_max = std::max(wall_max, t.value("wall", 0.0));
+    const ManifestTimings& t = d.timings_s;
+    wall += t.wall.value_or(0.0);
+    sim += t.sim.value_or(0.0);
+    render += t.render.value_or(0.0);
+    encode += t.encode.value_or(0.0);
+    write += t.write.value_or(0.0);
+    wall_max = std::max(wall_max, t.wall.value_or(0.0));
     frames += d.frames;
     const ManifestShard shard = d.shard.value_or(ManifestShard{});
     shards.push_back({{"index", index},
@@ -149,9 +152,9 @@ Manifest Merged(const Manifest& first, const std::map<int, const ShardManifest*>
                       {"manifest", RelativeTo(m->path, out_dir)},
                       {"episodes", d.episodes.size()},
                       {"jobs", d.jobs},
-                      {"workers", d.workers},
-                      {"backend", d.backend},
-                      {"timings_s", t},
+                      {"workers", ManifestWorkersToJson(d.workers)},
+                      {"backend", ManifestBackendToJson(d.backend)},
+                      {"timings_s", ManifestTimingsToJson(t)},
                       {"frames", d.frames},
                       {"command_line", d.command_line},
                       {"versions", d.versions}});
@@ -159,9 +162,13 @@ Manifest Merged(const Manifest& first, const std::map<int, const ShardManifest*>
   merged.shards = std::move(shards);
   merged.frames = frames;
   // wall: the slowest shard (they run side by side); the others: summed over shards
-  merged.timings_s = {{"wall", wall_max},         {"wall_sum", sums["wall"]},
-                      {"sim", sums["sim"]},       {"render", sums["render"]},
-                      {"encode", sums["encode"]}, {"write", sums["write"]}};
+  merged.timings_s = ManifestTimings{};
+  merged.timings_s.wall = wall_max;
+  merged.timings_s.wall_sum = wall;
+  merged.timings_s.sim = sim;
+  merged.timings_s.render = render;
+  merged.timings_s.encode = encode;
+  merged.timings_s.write = write;
   merged.interrupted = false;
   merged.signal.reset();
   merged.command_line = request.command_line;

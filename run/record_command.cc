@@ -160,9 +160,10 @@ int RecordRun(RecordJob job) {
   ProgressReporter progress("record", static_cast<int>(folder.todo().size()), job.plan.steps + 1,
                             job.quiet);
   const ScheduleResult result = ScheduleRecord(job, folder, progress, early_signal);
-  const bool any_complete =
-      std::any_of(result.results.begin(), result.results.end(),
-                  [](const auto& r) { return r.second.value("complete", false); });
+  const std::map<int, EpisodeResult> results = RecordResults(result);
+  const bool any_complete = std::any_of(results.begin(), results.end(), [](const auto& r) {
+    return r.second.entry.complete.value_or(false);
+  });
   if (result.signal && !any_complete && folder.replacing()) {
     // interrupted before --overwrite recorded a whole episode: the earlier run stays as it was
     if (!job.quiet) {
@@ -175,7 +176,7 @@ int RecordRun(RecordJob job) {
   }
   const double wall =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - job.wall_start).count();
-  RecordTally tally = TallyRecordResults(result);
+  RecordTally tally = TallyRecordResults(results);
   tally.entries = folder.WithKept(std::move(tally.entries));
   if (result.results.empty() && result.signal == 0 && !result.failures.empty()) {
     // nothing was recorded: no manifest, and `folder` removes what this run made

@@ -77,14 +77,13 @@ RunParameters RecordParameters(const RecordJob& job);
 /// The workers' results summed for the manifest.
 struct RecordTally {
   std::vector<ManifestEpisode> entries;       ///< the episodes, without what differs with --jobs
-  std::map<std::string, double> timings;      ///< sim, render, encode, write: seconds summed
+  ManifestTimings timings;                    ///< sim, render, encode, write: seconds summed
   std::map<int, std::vector<int>> by_worker;  ///< the episodes each worker recorded
   std::map<std::string, double> cpu_stages;   ///< thread CPU by stage (base/cpu_clock.h)
 };
-RecordTally TallyRecordResults(const ScheduleResult& result);
+RecordTally TallyRecordResults(const std::map<int, EpisodeResult>& results);
 
-/// The record run's manifest, typed except its video, backend, gpu, workers and timings
-/// sections; `tally.entries` already with the kept episodes of a resumed run.
+/// The record run's manifest; `tally.entries` already with the kept episodes of a resumed run.
 Manifest BuildRecordManifest(const RecordJob& job, const NodeProbe& node,
                              const ScheduleResult& result, RecordTally tally, double wall,
                              long frames, const RunParameters& parameters, bool resumed);

@@ -22,68 +22,67 @@ std::string PresetOrDefault(const std::string& preset) {
 
 // The manifest's "video": the encoder of each format's files, and all of them in --format order
 // as one line.
-nlohmann::json RecordVideoJson(const RecordJob& job, const NodeProbe& node) {
+ManifestVideo RecordVideo(const RecordJob& job, const NodeProbe& node) {
   const RecordPlan& plan = job.plan;
   const VideoOptions& v = plan.video;
-  const bool h264 = EncodesH264(plan.formats);
-  nlohmann::json codecs = nlohmann::json::object();
+  ManifestVideo video;
+  video.codecs.emplace();
   std::string codec_used;
   for (const VideoFormat* format : plan.formats) {
     const std::string codec = FormatCodec(*format, v.codec);
-    codecs[std::string(format->name)] = codec;
+    (*video.codecs)[std::string(format->name)] = codec;
     codec_used += (codec_used.empty() ? "" : ", ") + codec;
   }
-  const std::string codec_reason =
-      h264 ? node.codec.reason
-           : "--format " + job.formats_text + ": no H.264 encoded, so --codec does not apply";
-  return {{"codec", codec_used},
-          {"codecs", codecs},
-          {"codec_reason", codec_reason},
-          {"crf", v.crf},
-          {"preset", PresetOrDefault(v.preset)},
-          {"fps", v.fps},
-          {"width", v.width},
-          {"height", v.height},
-          {"encoded_width", (v.width + 1) & ~1},
-          {"encoded_height", (v.height + 1) & ~1},
-          {"encoder_threads", v.threads},
-          {"x264_params", X264ParamsFor(PresetOrDefault(v.preset))},
-          {"encoders_per_worker", plan.encoders},
-          {"container", plan.formats.front()->name},
-          {"formats", VideoFormatNames(plan.formats)},
-          {"gif", {{"fps", std::min(v.gif_fps, v.fps)}, {"width", v.gif_width}}},
-          {"pix_fmt", "yuv420p"}};
+  video.codec = codec_used;
+  video.codec_reason =
+      EncodesH264(plan.formats)
+          ? node.codec.reason
+          : "--format " + job.formats_text + ": no H.264 encoded, so --codec does not apply";
+  video.crf = v.crf;
+  video.preset = PresetOrDefault(v.preset);
+  video.fps = v.fps;
+  video.width = v.width;
+  video.height = v.height;
+  video.encoded_width = (v.width + 1) & ~1;
+  video.encoded_height = (v.height + 1) & ~1;
+  video.encoder_threads = v.threads;
+  video.x264_params = X264ParamsFor(PresetOrDefault(v.preset));
+  video.encoders_per_worker = plan.encoders;
+  video.container = plan.formats.front()->name;
+  video.formats = VideoFormatNames(plan.formats);
+  video.gif = ManifestVideoGif{std::min(v.gif_fps, v.fps), v.gif_width};
+  video.pix_fmt = "yuv420p";
+  return video;
 }
 
-// The manifest's "workers": each worker's Start() entry (or its index) with its episodes.
-nlohmann::json RecordWorkersJson(const ScheduleResult& result,
-                                 std::map<int, std::vector<int>>& by_worker) {
-  nlohmann::json workers = nlohmann::json::array();
-  for (size_t w = 0; w < result.workers.size(); ++w) {
-    nlohmann::json entry =
-        result.workers[w].is_null() ? nlohmann::json{{"worker", w}} : result.workers[w];
-    entry["episodes"] = by_worker[static_cast<int>(w)];
+// The manifest's "workers": each worker's Start() report (or its index) with its episodes.
+std::vector<ManifestWorker> RecordWorkers(const std::vector<ManifestWorker>& started,
+                                          std::map<int, std::vector<int>>& by_worker) {
+  std::vector<ManifestWorker> workers;
+  for (size_t w = 0; w < started.size(); ++w) {
+    ManifestWorker entry = started[w];
+    entry.episodes = by_worker[static_cast<int>(w)];
     workers.push_back(std::move(entry));
   }
   return workers;
 }
 
 // The GL setup, from the first worker that started (all run the same backend).
-void AddRecordBackend(const ScheduleResult& result, Manifest* manifest) {
-  nlohmann::json first;
-  for (const nlohmann::json& w : result.workers) {
-    if (!w.is_null()) {
+void AddRecordBackend(const std::vector<ManifestWorker>& started, Manifest* manifest) {
+  ManifestWorker first;
+  for (const ManifestWorker& w : started) {
+    if (w.backend) {
       first = w;
       break;
     }
   }
-  manifest->msaa = first.value("msaa", 0);
-  manifest->msaa_reason = first.value("msaa_reason", "");
-  manifest->backend = {{"name", first.value("backend", "")},
-                       {"device", first.value("device", "")},
-                       {"gl_vendor", first.value("gl_vendor", "")},
-                       {"gl_renderer", first.value("gl_renderer", "")},
-                       {"gl_version", first.value("gl_version", "")}};
+  manifest->msaa = first.msaa.value_or(0);
+  manifest->msaa_reason = first.msaa_reason.value_or("");
+  manifest->backend.name = first.backend.value_or("");
+  manifest->backend.device = first.device.value_or("");
+  manifest->backend.gl_vendor = first.gl_vendor.value_or("");
+  manifest->backend.gl_renderer = first.gl_renderer.value_or("");
+  manifest->backend.gl_version = first.gl_version.value_or("");
 }
 
 }  // namespace
@@ -117,26 +116,23 @@ RunParameters RecordParameters(const RecordJob& job) {
   return p;
 }
 
-RecordTally TallyRecordResults(const ScheduleResult& result) {
+RecordTally TallyRecordResults(const std::map<int, EpisodeResult>& results) {
   RecordTally tally;
-  tally.timings = {{"sim", 0}, {"render", 0}, {"encode", 0}, {"write", 0}};
-  for (const auto& [k, entry] : result.results) {
-    nlohmann::json e = entry;
-    for (auto& [phase, seconds] : tally.timings) seconds += e["timings_s"][phase].get<double>();
-    if (e["timings_s"].contains("cpu_s")) {
-      for (const auto& [stage, seconds] : e["timings_s"]["cpu_s"].items()) {
-        tally.cpu_stages[stage] += seconds.get<double>();
-      }
-    }
-    tally.by_worker[e.at("worker").get<int>()].push_back(k);
-    // what differs with --jobs stays out of the episode entries (they are identical)
-    e.erase("worker");
-    e.erase("timings_s");
-    e.erase("codec");
-    e.erase("encoded_width");
-    e.erase("encoded_height");
-    tally.entries.push_back(ManifestEpisodeFromJson(e));
+  double sim = 0, render = 0, encode = 0, write = 0;
+  for (const auto& [k, result] : results) {
+    const EpisodeTimings& t = result.timings;
+    sim += t.sim;
+    render += t.render;
+    encode += t.encode;
+    write += t.write;
+    for (const auto& [stage, seconds] : t.cpu_s) tally.cpu_stages[stage] += seconds;
+    tally.by_worker[result.worker].push_back(k);
+    tally.entries.push_back(result.entry);
   }
+  tally.timings.sim = sim;
+  tally.timings.render = render;
+  tally.timings.encode = encode;
+  tally.timings.write = write;
   return tally;
 }
 
@@ -161,22 +157,21 @@ Manifest BuildRecordManifest(const RecordJob& job, const NodeProbe& node,
   if (!job.shard.source.empty()) m.shard->source = job.shard.source;
   m.jobs = result.jobs;
   m.worker_mode = job.worker_mode;
-  m.workers = RecordWorkersJson(result, tally.by_worker);
-  m.gpu = {
-      {"request", job.view_text.gpu}, {"choice", plan.gpu.reason}, {"devices", plan.gpu.devices}};
+  const std::vector<ManifestWorker> started = StartedWorkers(result);
+  m.workers = RecordWorkers(started, tally.by_worker);
+  m.gpu.request = job.view_text.gpu;
+  m.gpu.choice = plan.gpu.reason;
+  m.gpu.devices = plan.gpu.devices;
   m.assets = AssetsJson(plan.assets);
   m.model_file = job.model_path;
   m.camera = job.view_text.camera;
   m.overlay = job.view_text.overlay;
-  AddRecordBackend(result, &m);
+  AddRecordBackend(started, &m);
   m.layers = SplitCommaList(LayersLabel(plan.layers));
-  m.video = RecordVideoJson(job, node);
+  m.video = RecordVideo(job, node);
   m.versions = VersionsJson();
-  m.timings_s = {{"wall", wall},
-                 {"sim", tally.timings["sim"]},
-                 {"render", tally.timings["render"]},
-                 {"encode", tally.timings["encode"]},
-                 {"write", tally.timings["write"]}};
+  m.timings_s = tally.timings;
+  m.timings_s.wall = wall;
   m.frames = frames;
   AddCpuAccount(tally.cpu_stages, m.frames, &m.timings_s);
   // episodes cut short: by this run's signal, or already in the recording --from replays

@@ -70,17 +70,19 @@ nlohmann::json RecordRunner::Start() {
   pool_.emplace(FramePoolSize(plan_.encoders, plan_.steps, frame_bytes * (1 + plan_.layers.size())),
                 frame_bytes, plan_.layers.size(), gif_scale_.has_value());
   const GlInfo& gi = gl_->info();
-  return {{"worker", worker_},
-          {"pid", static_cast<long>(getpid())},
-          {"backend", gi.backend},
-          {"device", gi.device},
-          {"device_selection", gl_->selection()},
-          {"gl_vendor", gi.vendor},
-          {"gl_renderer", gi.renderer},
-          {"gl_version", gi.version},
-          {"msaa", renderer_->msaa_samples()},
-          {"msaa_reason", renderer_->msaa_reason()},
-          {"readback", renderer_->readback_reason()}};
+  ManifestWorker info;
+  info.worker = worker_;
+  info.pid = static_cast<long>(getpid());
+  info.backend = gi.backend;
+  info.device = gi.device;
+  info.device_selection = gl_->selection();
+  info.gl_vendor = gi.vendor;
+  info.gl_renderer = gi.renderer;
+  info.gl_version = gi.version;
+  info.msaa = renderer_->msaa_samples();
+  info.msaa_reason = renderer_->msaa_reason();
+  info.readback = renderer_->readback_reason();
+  return ManifestWorkerToJson(info);  // the worker channel's JSON
 }
 
 void RecordRunner::Run(int k, WorkerChannel& channel) {
@@ -92,9 +94,9 @@ void RecordRunner::Run(int k, WorkerChannel& channel) {
   }
   const int worker = worker_;
   auto encoder = std::make_unique<EpisodeEncoder>(
-      sink_, k, &*pool_, [&channel, worker](int episode, nlohmann::json entry) {
-        entry["worker"] = worker;
-        channel.Done(episode, std::move(entry));
+      sink_, k, &*pool_, [&channel, worker](int episode, EpisodeResult result) {
+        result.worker = worker;
+        channel.Done(episode, EpisodeResultToJson(result));
       });
   renderer_->ResetTrail();
   EpisodeLegend legend;
@@ -165,7 +167,7 @@ void RecordRunner::Run(int k, WorkerChannel& channel) {
     for (Frame* f : in_flight) pool_->Release(f);
     throw;  // aborts `encoder`
   }
-  encoder->SetExtra({{"hindsight", HindsightCounts(episode)}});
+  encoder->SetHindsight(HindsightCounts(episode));
   encoder->SetLayerInfo(legend.Json(k), std::move(depth_scales));
   const CpuStages& after = renderer_->cpu();
   CpuStages cpu;
@@ -232,14 +234,15 @@ HindsightEpisode RecordRunner::SampleEpisodeHindsight(int k, const std::vector<S
 
 // The manifest entry's "hindsight": relabelled successes (of k per transition) against the
 // episode's own successful transitions.
-nlohmann::json RecordRunner::HindsightCounts(const EpisodeRecord& episode) {
+EpisodeHindsight RecordRunner::HindsightCounts(const EpisodeRecord& episode) {
   const HindsightEpisode h =
       hindsight_ ? *hindsight_ : SampleEpisodeHindsight(episode.index, episode.steps);
-  const int transitions = static_cast<int>(episode.steps.size()) - 1;
-  return {{"relabelled_successes", h.relabelled_successes},
-          {"original_successes", h.original_successes},
-          {"k", kHindsightK},
-          {"transitions", transitions}};
+  EpisodeHindsight counts;
+  counts.relabelled_successes = h.relabelled_successes;
+  counts.original_successes = h.original_successes;
+  counts.k = kHindsightK;
+  counts.transitions = static_cast<int>(episode.steps.size()) - 1;
+  return counts;
 }
 
 // The hindsight overlay's goals for the frame after step t (the transition t-1 -> t).
@@ -264,8 +267,8 @@ void LimitLlvmpipeThreads(int jobs) {
 }
 
 void AddCpuAccount(const std::map<std::string, double>& stages, long frames,
-                   nlohmann::json* timings) {
-  nlohmann::json seconds = nlohmann::json::object();
+                   ManifestTimings* timings) {
+  std::map<std::string, double> seconds;
   double outside = 0;
   for (const auto& [stage, s] : stages) {
     seconds[stage] = s;
@@ -273,12 +276,61 @@ void AddCpuAccount(const std::map<std::string, double>& stages, long frames,
   }
   seconds["outside_gl"] = outside;
   seconds["process"] = ProcessCpuSeconds();
-  nlohmann::json per_frame = nlohmann::json::object();
-  for (const auto& [stage, s] : seconds.items()) {
-    per_frame[stage] = frames > 0 ? 1000 * s.get<double>() / static_cast<double>(frames) : 0.0;
+  std::map<std::string, double> per_frame;
+  for (const auto& [stage, s] : seconds) {
+    per_frame[stage] = frames > 0 ? 1000 * s / static_cast<double>(frames) : 0.0;
   }
-  (*timings)["cpu_s"] = std::move(seconds);
-  (*timings)["cpu_ms_per_frame"] = std::move(per_frame);
+  timings->cpu_s = std::move(seconds);
+  timings->cpu_ms_per_frame = std::move(per_frame);
+}
+
+// ---- the worker channel's JSON
+
+nlohmann::json EpisodeResultToJson(const EpisodeResult& result) {
+  const EpisodeTimings& t = result.timings;
+  return {{"entry", ManifestEpisodeToJson(result.entry)},
+          {"worker", result.worker},
+          {"timings_s",
+           {{"sim", t.sim},
+            {"render", t.render},
+            {"encode", t.encode},
+            {"write", t.write},
+            {"cpu_s", t.cpu_s}}}};
+}
+
+EpisodeResult EpisodeResultFromJson(const nlohmann::json& json) {
+  EpisodeResult result;
+  try {
+    result.entry = ManifestEpisodeFromJson(json.at("entry"));
+    result.worker = json.at("worker").get<int>();
+    const nlohmann::json& t = json.at("timings_s");
+    result.timings.sim = t.at("sim").get<double>();
+    result.timings.render = t.at("render").get<double>();
+    result.timings.encode = t.at("encode").get<double>();
+    result.timings.write = t.at("write").get<double>();
+    result.timings.cpu_s = t.at("cpu_s").get<std::map<std::string, double>>();
+  } catch (const nlohmann::json::exception& e) {
+    throw ManifestError(std::string("an episode result that is not one: ") + e.what());
+  }
+  return result;
+}
+
+std::map<int, EpisodeResult> RecordResults(const ScheduleResult& result) {
+  std::map<int, EpisodeResult> results;
+  for (const auto& [k, json] : result.results) results[k] = EpisodeResultFromJson(json);
+  return results;
+}
+
+std::vector<ManifestWorker> StartedWorkers(const ScheduleResult& result) {
+  std::vector<ManifestWorker> workers;
+  for (size_t w = 0; w < result.workers.size(); ++w) {
+    if (result.workers[w].is_null()) {
+      workers.emplace_back().worker = static_cast<int>(w);
+    } else {
+      workers.push_back(ManifestWorkerFromJson(result.workers[w]));
+    }
+  }
+  return workers;
 }
 
 int EncodersPerWorker(int jobs) {

@@ -24,6 +24,7 @@
 #include "render/renderer.h"
 #include "render/view.h"
 #include "run/episode_scheduler.h"
+#include "run/manifest.h"
 #include "src/assets.h"
 #include "src/env_spec.h"
 #include "src/episode_source.h"
@@ -76,7 +77,7 @@ class RecordRunner : public EpisodeRunner {
   ~RecordRunner() override;
 
   /// Makes the GL context, renderer and frame pool; returns the worker's manifest entry
-  /// (backend, device, GL strings, msaa, readback).
+  /// (backend, device, GL strings, msaa, readback): a ManifestWorker as JSON (StartedWorkers).
   nlohmann::json Start() override;
   /// Plays and renders episode k, handing its frames to a new encoder; returns once rendered
   /// (the encoding may go on), after waiting for the oldest encoder beyond plan.encoders.
@@ -87,7 +88,7 @@ class RecordRunner : public EpisodeRunner {
  private:
   EpisodeRecord PlayEpisode(int k, const StepCallback& on_step, WorkerChannel& channel);
   HindsightEpisode SampleEpisodeHindsight(int k, const std::vector<StepRecord>& steps);
-  nlohmann::json HindsightCounts(const EpisodeRecord& episode);
+  EpisodeHindsight HindsightCounts(const EpisodeRecord& episode);
   void AddRelabelled(int t, FrameInfo* info) const;
 
   const RecordPlan& plan_;
@@ -109,8 +110,22 @@ class RecordRunner : public EpisodeRunner {
 };
 
 /// Records `schedule.episodes` on `schedule.jobs` workers (LimitLlvmpipeThreads first), each
-/// a RecordRunner of `plan`: the scheduler's result, with each episode's manifest entry.
+/// a RecordRunner of `plan`: the scheduler's result, with each episode's result as JSON
+/// (RecordResults types them).
 ScheduleResult RecordEpisodes(const RecordPlan& plan, const ScheduleOptions& schedule);
+
+/// An episode's result as the worker channel carries it (WorkerChannel::Done), and back: the one
+/// place where a record result is JSON. EpisodeResultFromJson throws ManifestError for what is
+/// not a result.
+nlohmann::json EpisodeResultToJson(const EpisodeResult& result);
+EpisodeResult EpisodeResultFromJson(const nlohmann::json& json);
+
+/// The results of a record schedule, typed (EpisodeResultFromJson), by episode.
+std::map<int, EpisodeResult> RecordResults(const ScheduleResult& result);
+
+/// What each worker of a record schedule reported when it started (RecordRunner::Start), typed;
+/// a worker that reported nothing has its index alone.
+std::vector<ManifestWorker> StartedWorkers(const ScheduleResult& result);
 
 /// llvmpipe starts one rasteriser thread per core in every context; with several workers that
 /// oversubscribes the cores, so with `jobs` > 1 each worker rasterises on its own thread instead
@@ -129,6 +144,6 @@ int EncodersPerWorker(int jobs);
 /// children: start-up, and threads no stage sees such as llvmpipe's rasterisers); and
 /// "cpu_ms_per_frame", the same per recorded frame (`frames`).
 void AddCpuAccount(const std::map<std::string, double>& stages, long frames,
-                   nlohmann::json* timings);
+                   ManifestTimings* timings);
 
 }  // namespace fetchscope

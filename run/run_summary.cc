@@ -43,7 +43,7 @@ std::string ResumeCommand(const std::string& command_line) {
 
 std::string RecordSummaryText(const Manifest& m, size_t recorded, size_t kept,
                               const std::string& out) {
-  const double wall = m.timings_s.value("wall", 0.0);
+  const double wall = m.timings_s.wall.value_or(0.0);
   const bool sharded = m.shard && m.shard->count > 1;
   const std::string shard =
       sharded ? ", shard " + std::to_string(m.shard->index) + "/" + std::to_string(m.shard->count)
@@ -58,8 +58,8 @@ std::string RecordSummaryText(const Manifest& m, size_t recorded, size_t kept,
   text += ", " + SuccessText(CountEpisodes(m.episodes));
   if (!m.missing.empty()) text += ", " + std::to_string(m.missing.size()) + " missing";
   auto shown = [](const std::string& s) { return s.empty() ? std::string("?") : s; };
-  text += ", " + shown(m.backend.value("gl_renderer", "")) + " via " +
-          shown(m.backend.value("name", "")) + ", " + m.video.value("codec", "") + " -> " + out;
+  text += ", " + shown(m.backend.gl_renderer.value_or("")) + " via " +
+          shown(m.backend.name.value_or("")) + ", " + m.video.codec.value_or("") + " -> " + out;
   if (m.interrupted) {
     text += " (interrupted)\nrecord: to record the rest, run: " + ResumeCommand(m.command_line);
   }

@@ -299,12 +299,15 @@ TEST_F(RecordTest, RecordRunnerWritesTheSameBytesWithOneOrThreeEncoders) {
     }
     EXPECT_EQ(channel.frames.load(), 2 * (plan.steps + 1));
     ASSERT_EQ(channel.done.size(), 2u);
-    for (const auto& [k, entry] : channel.done) {
-      EXPECT_EQ(entry["index"], k);
-      EXPECT_EQ(entry["worker"], 0);
-      EXPECT_EQ(entry["frames"], plan.steps + 1);
-      EXPECT_EQ(entry["hindsight"]["transitions"], plan.steps);
-      EXPECT_EQ(entry["layers"]["depth"]["scales"].size(), 1u);
+    for (const auto& [k, json] : channel.done) {
+      const EpisodeResult result = EpisodeResultFromJson(json);  // as the parent reads it
+      const ManifestEpisode& entry = result.entry;
+      EXPECT_EQ(entry.index, k);
+      EXPECT_EQ(result.worker, 0);
+      EXPECT_EQ(entry.frames, plan.steps + 1);
+      ASSERT_TRUE(entry.hindsight);
+      EXPECT_EQ(entry.hindsight->transitions, plan.steps);
+      EXPECT_EQ(entry.layers.at("depth").details["scales"].size(), 1u);
     }
     files[i] = testing::EpisodeFiles(out);
     EXPECT_EQ(files[i].count("episode_002_depth.mp4"), 1u);

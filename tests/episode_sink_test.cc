@@ -147,35 +147,38 @@ TEST(EpisodeEncoder, EncodesEveryFrameIntoAnMp4AndWritesTheEpisodesFiles) {
   // two frames: the encoder must hand each back (it keeps only the latest) or this deadlocks
   FramePool pool(2, static_cast<size_t>(kWidth) * kHeight * 3, 0);
   int done_calls = 0;
-  nlohmann::json entry;
+  EpisodeResult result;
   {
-    EpisodeEncoder encoder(options, 2, &pool, [&](int k, nlohmann::json e) {
+    EpisodeEncoder encoder(options, 2, &pool, [&](int k, EpisodeResult r) {
       EXPECT_EQ(k, 2);
       ++done_calls;
-      entry = std::move(e);
+      result = std::move(r);
     });
     PushFrames(&pool, &encoder, frames);
-    encoder.SetExtra({{"hindsight", {{"k", 4}}}});
+    EpisodeHindsight hindsight;
+    hindsight.k = 4;
+    encoder.SetHindsight(hindsight);
     encoder.Close(MakeEpisode(2, steps), 0.25, 0.5);
     encoder.Join();
     EXPECT_TRUE(encoder.finished());
   }
   EXPECT_LE(pool.allocated(), 2u);
   ASSERT_EQ(done_calls, 1);
-  EXPECT_EQ(entry["index"], 2);
-  EXPECT_EQ(entry["video"], "episode_002.mp4");
-  EXPECT_EQ(entry["frames"], frames);
-  EXPECT_EQ(entry["videos"]["mp4"]["frames"], frames);
-  EXPECT_EQ(entry["steps"], steps);
-  EXPECT_EQ(entry["is_success"], true);
-  EXPECT_EQ(entry["complete"], true);
-  EXPECT_EQ(entry["codec"], "libx264");
-  EXPECT_EQ(entry["sheet"], "episode_002_sheet.png");
-  EXPECT_EQ(entry["trajectory"], "episode_002.json");
-  EXPECT_EQ(entry["hindsight"]["k"], 4);  // SetExtra's members join the entry
-  EXPECT_DOUBLE_EQ(entry["timings_s"]["sim"].get<double>(), 0.25);
-  EXPECT_DOUBLE_EQ(entry["timings_s"]["render"].get<double>(), 0.5);
-  EXPECT_FALSE(entry.contains("layers"));
+  const ManifestEpisode& entry = result.entry;
+  EXPECT_EQ(entry.index, 2);
+  EXPECT_EQ(entry.video, "episode_002.mp4");
+  EXPECT_EQ(entry.frames, frames);
+  EXPECT_EQ(entry.videos.at("mp4").frames, frames);
+  EXPECT_EQ(entry.steps, steps);
+  EXPECT_EQ(entry.is_success, true);
+  EXPECT_EQ(entry.complete, true);
+  EXPECT_EQ(entry.sheet, "episode_002_sheet.png");
+  EXPECT_EQ(entry.trajectory, "episode_002.json");
+  ASSERT_TRUE(entry.hindsight);
+  EXPECT_EQ(entry.hindsight->k, 4);  // SetHindsight's counts join the entry
+  EXPECT_DOUBLE_EQ(result.timings.sim, 0.25);
+  EXPECT_DOUBLE_EQ(result.timings.render, 0.5);
+  EXPECT_TRUE(entry.layers.empty());
   EXPECT_TRUE(fs::exists(dir.path() / "episode_002_sheet.png"));
 
   // the trajectory names the run as the sink options do
@@ -219,8 +222,8 @@ TEST(EpisodeEncoder, WritesOneVideoPerLayerAndFormatWithTheDepthScaleAndLegend) 
   options.layers = {Layer::kDepth, Layer::kSegmentation};
   options.cameras = {"head_camera_rgb"};
   FramePool pool(3, static_cast<size_t>(kWidth) * kHeight * 3, options.layers.size());
-  nlohmann::json entry;
-  EpisodeEncoder encoder(options, 0, &pool, [&](int, nlohmann::json e) { entry = std::move(e); });
+  ManifestEpisode entry;
+  EpisodeEncoder encoder(options, 0, &pool, [&](int, EpisodeResult r) { entry = r.entry; });
   PushFrames(&pool, &encoder, frames);
   DepthScale scale;
   scale.width = kWidth;
@@ -237,15 +240,15 @@ TEST(EpisodeEncoder, WritesOneVideoPerLayerAndFormatWithTheDepthScaleAndLegend) 
         "episode_000_segmentation_legend.json"}) {
     EXPECT_TRUE(fs::exists(dir.path() / file)) << file;
   }
-  const nlohmann::json& depth = entry["layers"]["depth"];
-  EXPECT_EQ(depth["video"], "episode_000_depth.mp4");
-  EXPECT_EQ(depth["videos"]["gif"]["file"], "episode_000_depth.gif");
-  EXPECT_EQ(depth["videos"]["mp4"]["frames"], frames);
-  ASSERT_EQ(depth["scales"].size(), 1u);
-  EXPECT_EQ(depth["scales"][0]["camera"], "head_camera_rgb");
-  EXPECT_DOUBLE_EQ(depth["scales"][0]["near_m"].get<double>(), 0.5);
-  EXPECT_DOUBLE_EQ(depth["scales"][0]["far_m"].get<double>(), 2.3);
-  EXPECT_EQ(entry["layers"]["segmentation"]["legend"], "episode_000_segmentation_legend.json");
+  const EpisodeLayer& depth = entry.layers.at("depth");
+  EXPECT_EQ(depth.video, "episode_000_depth.mp4");
+  EXPECT_EQ(depth.videos.at("gif").file, "episode_000_depth.gif");
+  EXPECT_EQ(depth.videos.at("mp4").frames, frames);
+  ASSERT_EQ(depth.details["scales"].size(), 1u);
+  EXPECT_EQ(depth.details["scales"][0]["camera"], "head_camera_rgb");
+  EXPECT_DOUBLE_EQ(depth.details["scales"][0]["near_m"].get<double>(), 0.5);
+  EXPECT_DOUBLE_EQ(depth.details["scales"][0]["far_m"].get<double>(), 2.3);
+  EXPECT_EQ(entry.layers.at("segmentation").legend, "episode_000_segmentation_legend.json");
   int w = 0, h = 0;
   EXPECT_EQ(ReadAllFrames((dir.path() / "episode_000_depth.mp4").string(), &w, &h).size(),
             static_cast<size_t>(frames));
@@ -257,7 +260,7 @@ TEST(EpisodeEncoder, AbortLeavesNoVideoAndReportsNothing) {
   FramePool pool(2, static_cast<size_t>(kWidth) * kHeight * 3, 0);
   bool done = false;
   {
-    EpisodeEncoder encoder(options, 1, &pool, [&](int, nlohmann::json) { done = true; });
+    EpisodeEncoder encoder(options, 1, &pool, [&](int, EpisodeResult) { done = true; });
     PushFrames(&pool, &encoder, 3);
     // destroyed without Close: as when the render thread fails mid-episode
   }
@@ -278,7 +281,7 @@ TEST(EpisodeEncoder, ABadFolderFailsInTheConstructorBeforeAnyFrame) {
   { std::ofstream(file.string()) << "x"; }
   const EpisodeSinkOptions options = SinkOptions(file / "sub", 5);
   FramePool pool(2, static_cast<size_t>(kWidth) * kHeight * 3, 0);
-  EXPECT_THROW(EpisodeEncoder(options, 0, &pool, [](int, nlohmann::json) {}), RunError);
+  EXPECT_THROW(EpisodeEncoder(options, 0, &pool, [](int, EpisodeResult) {}), RunError);
 }
 
 TEST(EpisodeFiles, NamesAndCodecs) {

@@ -64,7 +64,8 @@ ManifestEpisode Episode(int k) {
   segmentation.videos["mp4"] = {segmentation.video, 5};
   segmentation.legend = EpisodeLegendFileName(k);
   e.layers["segmentation"] = segmentation;
-  e.extra = {{"hindsight", {{"successes", 2}}}};
+  e.hindsight = EpisodeHindsight{};
+  e.hindsight->extra = {{"successes", 2}};
   return e;
 }
 
@@ -81,19 +82,19 @@ Manifest SampleManifest() {
   m.shard = ManifestShard{1, 3, std::string("--shard"), std::vector<int>{1, 4}};
   m.jobs = 2;
   m.worker_mode = "process";
-  m.workers = json::array({{{"worker", 0}, {"backend", "osmesa"}}});
-  m.gpu = {{"request", "auto"}, {"choice", "cpu"}, {"devices", json::array()}};
+  m.workers = ManifestWorkersFromJson(json::array({{{"worker", 0}, {"backend", "osmesa"}}}));
+  m.gpu = ManifestGpuFromJson({{"request", "auto"}, {"choice", "cpu"}, {"devices", json::array()}});
   m.assets = {{"kind", "bundled"}, {"sha256", "ab12"}};
   m.model_file = "/x/push.xml";
   m.camera = "default";
   m.overlay = "goal";
   m.msaa = 4;
   m.msaa_reason = "auto";
-  m.backend = {{"name", "osmesa"}};
+  m.backend.name = "osmesa";
   m.layers = {"rgb", "depth", "segmentation"};
-  m.video = {{"fps", 25}, {"formats", {"mp4", "gif"}}};
+  m.video = ManifestVideoFromJson({{"fps", 25}, {"formats", {"mp4", "gif"}}});
   m.versions = {{"fetchscope", "1.0"}};
-  m.timings_s = {{"wall", 1.5}};
+  m.timings_s.wall = 1.5;
   m.frames = 10;
   m.interrupted = true;
   m.incomplete_episodes = {4};
@@ -130,8 +131,8 @@ TEST(ManifestTest, AMergedManifestHasShardsInsteadOfPerProcessMembers) {
   m.failures.clear();
   m.jobs = 1;
   m.worker_mode.clear();
-  m.workers = json::array();
-  m.gpu = json::object();
+  m.workers.clear();
+  m.gpu = ManifestGpu{};
   m.shards = json::array({{{"index", 0}, {"count", 3}}});
   const json j = ManifestToJson(m);
   for (const char* key :
