@@ -1,5 +1,7 @@
 #include "cli/jobs_options.h"
 
+#include "base/errors.h"
+
 namespace fetchscope::cli {
 
 void AddJobsOptions(CLI::App* sub, int* jobs, std::string* mode) {
@@ -14,6 +16,12 @@ void AddJobsOptions(CLI::App* sub, int* jobs, std::string* mode) {
                   "which serialises them on NVIDIA; kept for comparison (bench --what node)")
       ->capture_default_str()
       ->check(CLI::IsMember({"process", "thread"}));
+}
+
+WorkerMode ParseWorkerMode(const std::string& text) {
+  if (text == "process") return WorkerMode::kProcess;
+  if (text == "thread") return WorkerMode::kThread;
+  throw UsageError("--worker-mode '" + text + "' is not known; accepted: process, thread");
 }
 
 }  // namespace fetchscope::cli

@@ -5,9 +5,14 @@
 #include <CLI/CLI.hpp>
 #include <string>
 
+#include "run/episode_scheduler.h"
+
 namespace fetchscope::cli {
 
 /// Adds --jobs and --worker-mode to `sub` (ResolveJobs and ParseWorkerMode read them).
 void AddJobsOptions(CLI::App* sub, int* jobs, std::string* mode);
+
+/// Parses --worker-mode: process or thread. Throws UsageError.
+WorkerMode ParseWorkerMode(const std::string& text);
 
 }  // namespace fetchscope::cli

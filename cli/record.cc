@@ -24,6 +24,7 @@
 #include "cli/jobs_options.h"
 #include "cli/record_from.h"
 #include "cli/resolve.h"
+#include "cli/shard_options.h"
 #include "cli/view_options.h"
 #include "dataset/minari_format.h"
 #include "encode/episode_sink.h"

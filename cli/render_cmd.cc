@@ -1,6 +1,7 @@
 // fetchscope render: one frame (after reset, or after --steps K of a policy) to PNG;
 // fetchscope list-cameras: the cameras a model names.
 #include <algorithm>
+#include <cctype>
 #include <cstdio>
 #include <filesystem>
 
@@ -25,6 +26,16 @@ nlohmann::json SegmentationLegendJson(const std::vector<SegmentObject>& objects)
           {"note",
            "one colour per body (all its geoms) or site; fixed palette, the same in every frame"},
           {"objects", list}};
+}
+
+// Throws UsageError unless `output` (render's -o) ends in .png (any case): the image files
+// are PNG, and a .jpg or .bmp name would hold PNG data.
+void CheckPngOutput(const std::string& option, const std::string& output) {
+  std::string ext = std::filesystem::path(output).extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (ext == ".png") return;
+  throw UsageError(option + " '" + output +
+                   "': render writes PNG images only; accepted: a name ending in .png");
 }
 
 }  // namespace

@@ -1,7 +1,9 @@
 #include "cli/view_options.h"
 
 #include <algorithm>
+#include <cstdio>
 #include <iterator>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -13,6 +15,32 @@
 #include "render/overlay.h"
 
 namespace fetchscope::cli {
+namespace {
+
+std::string FormatG(double value) {
+  char buf[64];
+  std::snprintf(buf, sizeof(buf), "%g", value);
+  return buf;
+}
+
+}  // namespace
+
+HudPosition ParseHudPosition(const std::string& text) {
+  if (text == "top-left") return HudPosition::kTopLeft;
+  if (text == "top-right") return HudPosition::kTopRight;
+  if (text == "bottom-left") return HudPosition::kBottomLeft;
+  if (text == "bottom-right") return HudPosition::kBottomRight;
+  throw UsageError("--hud-position '" + text +
+                   "' is not known; accepted: top-left, top-right, bottom-left, bottom-right");
+}
+
+double CheckHudOpacity(double opacity) {
+  if (!(opacity >= 0.0 && opacity <= 1.0)) {
+    throw UsageError("--hud-opacity " + FormatG(opacity) +
+                     " is out of range; accepted: 0 (no box) .. 1 (opaque box)");
+  }
+  return opacity;
+}
 
 int ParseMsaa(const std::string& value) {
   if (value == "auto") return kMsaaAuto;
@@ -139,6 +167,37 @@ void AddViewOptions(CLI::App* sub, ViewOptions* o) {
         }
         return "";
       });
+}
+
+std::vector<Layer> ParseLayers(const std::string& list) {
+  const std::vector<std::string> names = {"rgb", "depth", "segmentation"};
+  std::vector<Layer> layers;
+  std::set<std::string> seen;
+  for (const std::string& token : SplitCommaList(list)) {
+    if (token.empty()) {
+      throw UsageError("--layers '" + list +
+                       "' has an empty entry; use a comma list of rgb, depth, segmentation");
+    }
+    if (std::find(names.begin(), names.end(), token) == names.end()) {
+      throw UsageError("--layers: unknown layer '" + token + "'" + DidYouMean(token, names) +
+                       "; use a comma list of rgb, depth, segmentation");
+    }
+    if (!seen.insert(token).second) {
+      throw UsageError("--layers names '" + token + "' twice; each layer once");
+    }
+    layers.push_back(token == "rgb"     ? Layer::kRgb
+                     : token == "depth" ? Layer::kDepth
+                                        : Layer::kSegmentation);
+  }
+  return layers;
+}
+
+std::vector<Layer> ParseRecordLayers(const std::string& list) {
+  std::vector<Layer> extra;
+  for (Layer layer : ParseLayers(list)) {
+    if (layer != Layer::kRgb) extra.push_back(layer);
+  }
+  return extra;
 }
 
 }  // namespace fetchscope::cli

@@ -1,7 +1,8 @@
 // The view options (--camera, --overlay, --width, --height, --backend, --gpu, --msaa,
-// --readback, --hud-*) and --format as the user typed them, and their parsers: the command line
-// turns them into typed values here, once, in the parent (render/view.h's ViewSetup, rows of
-// encode/video_format.h's table); run/, encode/ and dataset/ never see the text.
+// --readback, --hud-*), --format and --layers as the user typed them, and their parsers: the
+// command line turns them into typed values here, once, in the parent (render/view.h's
+// ViewSetup, rows of encode/video_format.h's table, render/renderer.h's Layer); run/, encode/
+// and dataset/ never see the text.
 #pragma once
 
 #include <mujoco/mujoco.h>
@@ -11,6 +12,8 @@
 #include <vector>
 
 #include "encode/video_format.h"
+#include "render/overlay.h"
+#include "render/renderer.h"
 #include "render/view.h"
 
 namespace fetchscope::cli {
@@ -32,6 +35,14 @@ struct ViewOptions {
 /// Adds --camera, --overlay, --width, --height, --hud-position, --hud-opacity, --backend,
 /// --msaa, --readback and --gpu to `sub`, bound to `options`.
 void AddViewOptions(CLI::App* sub, ViewOptions* options);
+
+/// Parses --hud-position: top-left, top-right, bottom-left or bottom-right. Throws UsageError
+/// naming the value and listing the accepted ones.
+HudPosition ParseHudPosition(const std::string& text);
+
+/// Checks --hud-opacity (0 = no box behind the text, 1 = opaque); throws UsageError naming
+/// the value and the accepted range when it is outside [0, 1] or not a number.
+double CheckHudOpacity(double opacity);
 
 /// The accepted --readback values, in the order the help and errors list them.
 inline constexpr const char* kReadbackValues[] = {"auto", "sync", "async"};
@@ -66,5 +77,14 @@ ViewSetup ResolveView(const ViewOptions& view, const mjModel* model);
 /// given, each once, at least one. Throws UsageError naming a bad or repeated entry and what is
 /// accepted.
 std::vector<const VideoFormat*> ParseVideoFormats(const std::string& list);
+
+/// Parses --layers: a comma list of rgb, depth, segmentation (spaces after the commas allowed),
+/// each once, in the order given. UsageError names an empty, unknown (with "did you mean") or
+/// repeated entry and what is accepted.
+std::vector<Layer> ParseLayers(const std::string& list);
+
+/// record's --layers: the layers beyond rgb, in the order given (rgb is always recorded: the
+/// episode video, sheet and report need it). Throws as ParseLayers.
+std::vector<Layer> ParseRecordLayers(const std::string& list);
 
 }  // namespace fetchscope::cli

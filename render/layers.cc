@@ -1,13 +1,9 @@
 #include "render/layers.h"
 
 #include <algorithm>
-#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-
-#include "base/errors.h"
-#include "base/suggest.h"
 
 namespace fetchscope {
 
@@ -23,37 +19,6 @@ const char* LayerName(Layer layer) {
   return "?";
 }
 
-std::vector<Layer> ParseLayers(const std::string& list) {
-  const std::vector<std::string> names = {"rgb", "depth", "segmentation"};
-  std::vector<Layer> layers;
-  std::set<std::string> seen;
-  for (const std::string& token : SplitCommaList(list)) {
-    if (token.empty()) {
-      throw UsageError("--layers '" + list +
-                       "' has an empty entry; use a comma list of rgb, depth, segmentation");
-    }
-    if (std::find(names.begin(), names.end(), token) == names.end()) {
-      throw UsageError("--layers: unknown layer '" + token + "'" + DidYouMean(token, names) +
-                       "; use a comma list of rgb, depth, segmentation");
-    }
-    if (!seen.insert(token).second) {
-      throw UsageError("--layers names '" + token + "' twice; each layer once");
-    }
-    layers.push_back(token == "rgb"     ? Layer::kRgb
-                     : token == "depth" ? Layer::kDepth
-                                        : Layer::kSegmentation);
-  }
-  return layers;
-}
-
-std::vector<Layer> ParseRecordLayers(const std::string& list) {
-  std::vector<Layer> extra;
-  for (Layer layer : ParseLayers(list)) {
-    if (layer != Layer::kRgb) extra.push_back(layer);
-  }
-  return extra;
-}
-
 std::string LayerFilePath(const std::string& output, Layer layer, size_t listed) {
   if (listed <= 1 || layer == Layer::kRgb) return output;
   const std::filesystem::path p(output);
@@ -64,14 +29,6 @@ std::string LayerFilePath(const std::string& output, Layer layer, size_t listed)
 std::string LegendFilePath(const std::string& output) {
   const std::filesystem::path p(output);
   return (p.parent_path() / (p.stem().string() + "_segmentation_legend.json")).string();
-}
-
-void CheckPngOutput(const std::string& option, const std::string& output) {
-  std::string ext = std::filesystem::path(output).extension().string();
-  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  if (ext == ".png") return;
-  throw UsageError(option + " '" + output +
-                   "': render writes PNG images only; accepted: a name ending in .png");
 }
 
 std::string LayersLabel(const std::vector<Layer>& layers) {

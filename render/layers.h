@@ -1,5 +1,6 @@
-// The image layers beyond rgb (render/renderer.h's Layer) as files show them: their names and
-// the --layers parser, the depth layer's grey scale, and the segmentation layer's legend.
+// The image layers beyond rgb (render/renderer.h's Layer) as files show them: their names, the
+// depth layer's grey scale, and the segmentation layer's legend (--layers is parsed in
+// cli/view_options.h).
 #pragma once
 
 #include <mujoco/mujoco.h>
@@ -19,15 +20,6 @@ namespace fetchscope {
 /// "segmentation".
 const char* LayerName(Layer layer);
 
-/// Parses --layers: a comma list of rgb, depth, segmentation (spaces after the commas allowed),
-/// each once, in the order given. UsageError names an empty, unknown (with "did you mean") or
-/// repeated entry and what is accepted.
-std::vector<Layer> ParseLayers(const std::string& list);
-
-/// record's --layers: the layers beyond rgb, in the order given (rgb is always recorded: the
-/// episode video, sheet and report need it). Throws as ParseLayers.
-std::vector<Layer> ParseRecordLayers(const std::string& list);
-
 /// render -o's file for `layer` when `listed` layers are asked for: with one layer, `output`
 /// itself; with several, `output` for rgb and NAME_<layer>.png for the others (-o NAME.png), as
 /// record names episode_NNN.mp4 and episode_NNN_depth.mp4. The name never depends on which
@@ -37,10 +29,6 @@ std::string LayerFilePath(const std::string& output, Layer layer, size_t listed)
 /// render -o's segmentation legend: NAME_segmentation_legend.json for -o NAME.png, wherever
 /// the segmentation image goes (record: episode_NNN_segmentation_legend.json).
 std::string LegendFilePath(const std::string& output);
-
-/// Throws UsageError unless `output` (render's -o) ends in .png (any case): the image files
-/// are PNG, and a .jpg or .bmp name would hold PNG data.
-void CheckPngOutput(const std::string& option, const std::string& output);
 
 /// The --layers list the manifest and --resume compare: "rgb" and `layers` (those beyond rgb)
 /// in order, e.g. "rgb,depth".

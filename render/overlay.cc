@@ -120,12 +120,6 @@ bool Overlaps(const PixelRect& a, const PixelRect& b) {
   return a.x < b.x + b.width && b.x < a.x + a.width && a.y < b.y + b.height && b.y < a.y + a.height;
 }
 
-std::string Format(const char* format, double value) {
-  char buf[64];
-  std::snprintf(buf, sizeof(buf), format, value);
-  return buf;
-}
-
 }  // namespace
 
 OverlaySet ParseOverlays(const std::string& spec) {
@@ -379,15 +373,6 @@ void FormatHud(const FrameInfo& info, const OverlaySet& overlays, HudText* out) 
 
 namespace fetchscope {
 
-HudPosition ParseHudPosition(const std::string& text) {
-  if (text == "top-left") return HudPosition::kTopLeft;
-  if (text == "top-right") return HudPosition::kTopRight;
-  if (text == "bottom-left") return HudPosition::kBottomLeft;
-  if (text == "bottom-right") return HudPosition::kBottomRight;
-  throw UsageError("--hud-position '" + text +
-                   "' is not known; accepted: top-left, top-right, bottom-left, bottom-right");
-}
-
 const char* HudPositionName(HudPosition position) {
   switch (position) {
     case HudPosition::kTopLeft:
@@ -400,14 +385,6 @@ const char* HudPositionName(HudPosition position) {
       return "bottom-right";
   }
   return "top-left";
-}
-
-double CheckHudOpacity(double opacity) {
-  if (!(opacity >= 0.0 && opacity <= 1.0)) {
-    throw UsageError("--hud-opacity " + Format("%g", opacity) +
-                     " is out of range; accepted: 0 (no box) .. 1 (opaque box)");
-  }
-  return opacity;
 }
 
 int FrameTextPixels(int tile_width, int tile_height) {

@@ -35,16 +35,8 @@ struct OverlaySet {
 /// Where the HUD box sits in the frame (in the tile at that corner).
 enum class HudPosition { kTopLeft, kTopRight, kBottomLeft, kBottomRight };
 
-/// Parses --hud-position: top-left, top-right, bottom-left or bottom-right. Throws UsageError
-/// naming the value and listing the accepted ones.
-HudPosition ParseHudPosition(const std::string& text);
-
 /// The --hud-position spelling of `position`.
 const char* HudPositionName(HudPosition position);
-
-/// Checks --hud-opacity (0 = no box behind the text, 1 = opaque); throws UsageError naming
-/// the value and the accepted range when it is outside [0, 1] or not a number.
-double CheckHudOpacity(double opacity);
 
 /// Throws UsageError naming the bad token and listing the accepted ones.
 /// Parses --overlay: "default", "none", "all", or a comma list of

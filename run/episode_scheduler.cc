@@ -367,12 +367,6 @@ int ResolveJobs(int jobs, int episodes) {
   return std::max(1, std::min(jobs == 0 ? cores : jobs, std::max(1, episodes)));
 }
 
-WorkerMode ParseWorkerMode(const std::string& text) {
-  if (text == "process") return WorkerMode::kProcess;
-  if (text == "thread") return WorkerMode::kThread;
-  throw UsageError("--worker-mode '" + text + "' is not known; accepted: process, thread");
-}
-
 std::string DescribeFailures(const ScheduleResult& result) {
   std::string out;
   for (const WorkerFailure& f : result.failures) {

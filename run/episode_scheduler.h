@@ -107,9 +107,6 @@ ScheduleResult RunEpisodes(const ScheduleOptions& options, const RunnerFactory& 
 /// `episodes` episodes.
 int ResolveJobs(int jobs, int episodes);
 
-/// Parses --worker-mode: process or thread. Throws UsageError.
-WorkerMode ParseWorkerMode(const std::string& text);
-
 /// A one-line account of the failures for an error message, e.g. "worker 1 (episode 3): ...".
 std::string DescribeFailures(const ScheduleResult& result);
 

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "base/errors.h"
+#include "cli/view_options.h"
 #include "render/overlay.h"
 #include "src/mj_handles.h"
 #include "tests/test_util.h"
@@ -247,26 +248,26 @@ TEST(OverlaySpec, RejectsUnknownNames) {
 }
 
 TEST(HudPlacement, PositionsAndOpacityParse) {
-  EXPECT_EQ(ParseHudPosition("top-left"), HudPosition::kTopLeft);
-  EXPECT_EQ(ParseHudPosition("bottom-right"), HudPosition::kBottomRight);
+  EXPECT_EQ(cli::ParseHudPosition("top-left"), HudPosition::kTopLeft);
+  EXPECT_EQ(cli::ParseHudPosition("bottom-right"), HudPosition::kBottomRight);
   for (HudPosition p : {HudPosition::kTopLeft, HudPosition::kTopRight, HudPosition::kBottomLeft,
                         HudPosition::kBottomRight}) {
-    EXPECT_EQ(ParseHudPosition(HudPositionName(p)), p);
+    EXPECT_EQ(cli::ParseHudPosition(HudPositionName(p)), p);
   }
   for (const char* bad : {"", "top", "TOP-LEFT", "center"}) {
     try {
-      ParseHudPosition(bad);
+      cli::ParseHudPosition(bad);
       FAIL() << bad;
     } catch (const UsageError& e) {
       EXPECT_NE(std::string(e.what()).find("top-left, top-right, bottom-left, bottom-right"),
                 std::string::npos);
     }
   }
-  EXPECT_EQ(CheckHudOpacity(0), 0);
-  EXPECT_EQ(CheckHudOpacity(1), 1);
-  EXPECT_THROW(CheckHudOpacity(1.5), UsageError);
-  EXPECT_THROW(CheckHudOpacity(-0.1), UsageError);
-  EXPECT_THROW(CheckHudOpacity(NAN), UsageError);
+  EXPECT_EQ(cli::CheckHudOpacity(0), 0);
+  EXPECT_EQ(cli::CheckHudOpacity(1), 1);
+  EXPECT_THROW(cli::CheckHudOpacity(1.5), UsageError);
+  EXPECT_THROW(cli::CheckHudOpacity(-0.1), UsageError);
+  EXPECT_THROW(cli::CheckHudOpacity(NAN), UsageError);
 }
 
 TEST(HudPlacement, GrowsWithTheTileAndStaysInside) {

@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "base/errors.h"
+#include "cli/view_options.h"
 #include "encode/frame_pool.h"
 #include "encode/video_reader.h"
 #include "render/layers.h"
@@ -309,8 +310,8 @@ TEST(Layers, NamesLabelsAndRecordsLayersBeyondRgb) {
   EXPECT_STREQ(LayerName(Layer::kRgb), "rgb");
   EXPECT_STREQ(LayerName(Layer::kDepth), "depth");
   EXPECT_STREQ(LayerName(Layer::kSegmentation), "segmentation");
-  EXPECT_EQ(ParseRecordLayers("rgb"), std::vector<Layer>{});
-  EXPECT_EQ(ParseRecordLayers("segmentation, rgb, depth"),
+  EXPECT_EQ(cli::ParseRecordLayers("rgb"), std::vector<Layer>{});
+  EXPECT_EQ(cli::ParseRecordLayers("segmentation, rgb, depth"),
             (std::vector<Layer>{Layer::kSegmentation, Layer::kDepth}));
   EXPECT_EQ(LayersLabel({}), "rgb");
   EXPECT_EQ(LayersLabel({Layer::kSegmentation, Layer::kDepth}), "rgb,segmentation,depth");
@@ -325,7 +326,7 @@ TEST(Layers, ParseLayersNamesWhatIsWrong) {
                         Case{"rgb,dpeth", "unknown layer 'dpeth' (did you mean 'depth'?)"},
                         Case{"depth,depth", "names 'depth' twice"}}) {
     try {
-      ParseLayers(c.list);
+      cli::ParseLayers(c.list);
       ADD_FAILURE() << c.list << " accepted";
     } catch (const UsageError& e) {
       EXPECT_NE(std::string(e.what()).find(c.message), std::string::npos)

@@ -25,6 +25,7 @@
 #include <vector>
 
 #include "base/errors.h"
+#include "cli/view_options.h"
 #include "encode/png_io.h"
 #include "encode/video_options.h"
 #include "encode/video_writer.h"
@@ -754,7 +755,7 @@ TEST_P(RendererTest, HudIsDrawnOnceInsideTheTileAtItsCorner) {
     plain.cameras = ParseCameraList("default,default", model_.get());
     RenderOptions hud = plain;
     hud.overlays = ParseOverlays("hud");
-    hud.hud_position = ParseHudPosition(corner);
+    hud.hud_position = cli::ParseHudPosition(corner);
     const Difference d = Compare(RenderWith(*gl, plain), RenderWith(*gl, hud), 2 * kTile);
     EXPECT_GT(d.fraction, 0.01) << corner;
     const bool right = std::string(corner).find("right") != std::string::npos;

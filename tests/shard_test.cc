@@ -13,6 +13,7 @@
 #include <string>
 
 #include "base/errors.h"
+#include "cli/shard_options.h"
 #include "tests/test_util.h"
 
 namespace fetchscope {
@@ -59,14 +60,14 @@ TEST_P(ResolveShardTest, ResolvesOrNamesTheBadValue) {
   };
   if (!c.error.empty()) {
     try {
-      ResolveShard(c.flag, c.shard_count, lookup);
+      cli::ResolveShard(c.flag, c.shard_count, lookup);
       FAIL() << "accepted";
     } catch (const UsageError& e) {
       EXPECT_NE(std::string(e.what()).find(c.error), std::string::npos) << e.what();
     }
     return;
   }
-  const Shard s = ResolveShard(c.flag, c.shard_count, lookup);
+  const Shard s = cli::ResolveShard(c.flag, c.shard_count, lookup);
   EXPECT_EQ(s.index, c.index);
   EXPECT_EQ(s.count, c.count);
   EXPECT_EQ(s.source, c.source);
@@ -164,7 +165,7 @@ INSTANTIATE_TEST_SUITE_P(
 // run (resubmitted indices) records shard ID of N.
 TEST(ShardTest, SlurmArraysAgainstTheRunInOut) {
   auto resolve = [](const Env& env, int run_shards) {
-    return ResolveShard(
+    return cli::ResolveShard(
         "", 0,
         [&](const char* name) -> const char* {
           auto it = env.find(name);
