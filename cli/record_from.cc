@@ -3,7 +3,9 @@
 #include <algorithm>
 
 #include "base/errors.h"
+#include "dataset/minari_format.h"
 #include "dataset/minari_source.h"
+#include "src/assets.h"
 
 namespace fetchscope::cli {
 
@@ -46,10 +48,17 @@ void CheckFromFlags(const CLI::App& sub, const std::string& from, bool dataset) 
   }
 }
 
-TrajectorySource LoadFromSource(const CLI::App& sub, const FromRequest& r) {
-  const bool dataset = !IsTrajectoryPath(r.from);
-  CheckFromFlags(sub, r.from, dataset);
-  FromRequest request = r;
+TrajectorySource LoadFromSource(const CLI::App& sub, const FromOptions& o) {
+  const bool dataset = !IsTrajectoryPath(o.from);
+  CheckFromFlags(sub, o.from, dataset);
+  FromRequest request;
+  request.from = o.from;
+  if (dataset) request.minari_root = MinariRoot(o.minari_root);
+  request.episodes = o.episodes;
+  request.env_id = o.env_id;
+  request.tolerance = o.tolerance;
+  if (!o.assets.empty()) request.assets = ResolveAssets(o.assets);
+  request.quiet = o.quiet;
   request.tolerance_given = sub.count("--tolerance") > 0;
   return LoadRecordFromSource(request);
 }

@@ -25,9 +25,21 @@ void AddFromOption(CLI::App* sub, std::string* from, double* tolerance);
 /// dataset allows --env-id and --episodes).
 void CheckFromFlags(const CLI::App& sub, const std::string& from, bool dataset = false);
 
-/// Reads --from after checking `sub`'s flags against it (CheckFromFlags): LoadRecordFromSource
+/// record --from's options as given ("" / 0: not given).
+struct FromOptions {
+  std::string from;         ///< --from
+  std::string minari_root;  ///< --minari-root
+  int episodes = 0;         ///< --episodes
+  std::string env_id;       ///< --env-id
+  double tolerance = 1e-6;  ///< --tolerance
+  std::string assets;       ///< --assets
+  bool quiet = false;       ///< -q
+};
+
+/// Reads --from after checking `sub`'s flags against it (CheckFromFlags): the options resolved
+/// (the datasets root, --assets) into a FromRequest for LoadRecordFromSource
 /// (run/record_from_source.h). Throws as those do.
-TrajectorySource LoadFromSource(const CLI::App& sub, const FromRequest& request);
+TrajectorySource LoadFromSource(const CLI::App& sub, const FromOptions& options);
 
 /// Takes env, seed, policy, steps, episodes and (unless given) assets for record --from from
 /// `source`. Throws UsageError when `sub` was given a flag CheckFromFlags refuses.

@@ -57,7 +57,7 @@ TrajectorySource LoadRecordFromSource(const FromRequest& r) {
   if (IsTrajectoryPath(r.from)) return LoadTrajectorySource(r.from);
   MinariSourceRequest request;
   request.what = r.from;
-  request.root = MinariRoot(r.minari_root);
+  request.root = r.minari_root;
   request.episodes = r.episodes;
   request.env_id = r.env_id;
   request.tolerance = r.tolerance;
@@ -76,7 +76,7 @@ TrajectorySource LoadRecordFromSource(const FromRequest& r) {
   if (!r.quiet) std::fprintf(stderr, "record --from: %s\n", found.found.c_str());
   // one replay without rendering: the divergence is known (and printed) before any file
   // a dataset the genuine env made: its assets, where a gymnasium_robotics is installed
-  if (r.assets.empty() && found.genuine_env) {
+  if (!r.assets && found.genuine_env) {
     const AssetSource automatic = ResolveAssets("auto");
     if (automatic.kind != "bundled") {
       source.assets = automatic;
@@ -105,7 +105,7 @@ TrajectorySource LoadRecordFromSource(const FromRequest& r) {
     }
   }
   FetchEnv env(FindEnvSpec(source.env_id),
-               ResolveAssets(r.assets.empty() ? SourceAssets(source) : r.assets));
+               r.assets ? *r.assets : ResolveAssets(SourceAssets(source)));
   MeasureDivergence(env, &source);
   // a reset unlike the dataset's first row, on an env the dataset did not name: the wrong env
   if (!found.env_from_spec && !r.tolerance_given) {

@@ -5,22 +5,25 @@
 // manifest's entries for it: AddDivergence (run/record_command.h).
 #pragma once
 
+#include <filesystem>
+#include <optional>
 #include <string>
 
+#include "src/assets.h"
 #include "src/episode_source.h"
 
 namespace fetchscope {
 
 /// What record --from reads the source with.
 struct FromRequest {
-  std::string from;              ///< --from
-  std::string minari_root;       ///< --minari-root ("" default)
-  int episodes = 0;              ///< --episodes where given, else 0
-  std::string env_id;            ///< --env-id where given, else ""
-  double tolerance = 1e-6;       ///< --tolerance
-  std::string assets;            ///< --assets where given, else ""
-  bool quiet = false;            ///< -q: print nothing
-  bool tolerance_given = false;  ///< --tolerance was given (a dataset's wrong env is let pass)
+  std::string from;                   ///< --from
+  std::filesystem::path minari_root;  ///< the datasets root (MinariRoot; a dataset's only)
+  int episodes = 0;                   ///< --episodes where given, else 0
+  std::string env_id;                 ///< --env-id where given, else ""
+  double tolerance = 1e-6;            ///< --tolerance
+  std::optional<AssetSource> assets;  ///< --assets, resolved, where given
+  bool quiet = false;                 ///< -q: print nothing
+  bool tolerance_given = false;       ///< --tolerance was given (a dataset's wrong env is let pass)
 };
 
 /// Reads --from: a recording (LoadTrajectorySource) or a Minari dataset (LoadMinariSource),
