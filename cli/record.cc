@@ -56,8 +56,7 @@ struct RecordOptions {
   ViewOptions view;
   int episodes = 1;
   int steps = 50;
-  std::string policy = "random";
-  double exec_timeout = 10.0;
+  PolicyOptions policy;  // --policy, --exec-timeout, --replay-dtype
   int fps = 25;
   std::string codec = "auto";
   int crf = 23;
@@ -74,7 +73,6 @@ struct RecordOptions {
   int shard_count = 0;          // with JOB_COMPLETION_INDEX; 0 = not given
   bool overwrite = false;       // replace the run already in --out
   bool resume = false;          // continue the run already in --out
-  std::string replay_dtype;     // --replay-dtype: "", float32, float64
   bool episodes_given = false;  // --episodes was on the command line
   bool no_report = false;       // no index.html (inspect/report.h)
   std::string from;             // record --from: a run folder or trajectory JSON
@@ -103,18 +101,19 @@ int RunRecordFrom(RecordOptions o, const CLI::App& sub, const std::string& comma
       LoadFromSource(sub, {o.from, o.minari_root, sub.count("--episodes") ? o.episodes : 0,
                            sub.count("--env-id") ? o.env.env_id : "", o.tolerance,
                            sub.count("--assets") ? o.env.assets : "", o.quiet});
-  ApplyFromSource(source, sub, &o.env.env_id, &o.env.seed, &o.policy, &o.steps, &o.episodes,
+  ApplyFromSource(source, sub, &o.env.env_id, &o.env.seed, &o.policy.policy, &o.steps, &o.episodes,
                   &o.env.assets);
   // the recording's actions replay as recorded: --replay-dtype is refused as for any policy but
   // replay:FILE (its message names the zero actions played)
-  if (!o.replay_dtype.empty()) ParsePolicySpec("zero", {o.exec_timeout, o.replay_dtype, ""});
-  return RunRecord(o, PolicySpec::Zero(o.policy), command_line, &source);
+  if (!o.policy.replay_dtype.empty())
+    ParsePolicyOptions({"zero", o.policy.exec_timeout, o.policy.replay_dtype});
+  return RunRecord(o, PolicySpec::Zero(o.policy.policy), command_line, &source);
 }
 
 // record: --policy parsed once (a replay file read here, never again); replay:FILE.json
 // brings its env and seed.
 int RunRecordPolicy(RecordOptions o, const std::string& command_line) {
-  const PolicySpec policy = ParsePolicySpec(o.policy, {o.exec_timeout, o.replay_dtype, ""});
+  const PolicySpec policy = ParsePolicyOptions(o.policy);
   ApplyReplayedEnv(policy, &o.env);
   return RunRecord(o, policy, command_line);
 }
@@ -321,11 +320,7 @@ Command AddRecord(CLI::App& app) {
   sub->add_option("--steps", o->steps, kStepsHelp)
       ->capture_default_str()
       ->check(CLI::Range(1, kMaxSteps));
-  sub->add_option("--policy", o->policy, kPolicyHelp)->capture_default_str();
-  sub->add_option("--exec-timeout", o->exec_timeout, "Seconds an exec: policy may take per answer")
-      ->capture_default_str()
-      ->check(CLI::Range(0.001, 86400.0));
-  sub->add_option("--replay-dtype", o->replay_dtype, kReplayDtypeHelp);
+  AddPolicyOptions(sub, &o->policy);
   AddRecordVideoOptions(sub, o.get());
   sub->add_option("--out", o->out,
                   "Output folder: checked writable before anything is rendered; never --from's "

@@ -7,6 +7,19 @@
 
 namespace fetchscope::cli {
 
+void AddPolicyOptions(CLI::App* sub, PolicyOptions* options) {
+  sub->add_option("--policy", options->policy, kPolicyHelp)->capture_default_str();
+  sub->add_option("--exec-timeout", options->exec_timeout,
+                  "Seconds an exec: policy may take per answer")
+      ->capture_default_str()
+      ->check(CLI::Range(0.001, 86400.0));
+  sub->add_option("--replay-dtype", options->replay_dtype, kReplayDtypeHelp);
+}
+
+PolicySpec ParsePolicyOptions(const PolicyOptions& options) {
+  return ParsePolicySpec(options.policy, {options.exec_timeout, options.replay_dtype, ""});
+}
+
 void ApplyReplayedEnv(const PolicySpec& policy, EnvOptions* env) {
   const Trajectory* file = policy.replay_trajectory();
   if (!file) return;  // a CSV, .npy or JSON-lines action file: no env of its own

@@ -15,6 +15,19 @@
 
 namespace fetchscope::cli {
 
+/// --policy, --exec-timeout and --replay-dtype as given (record and rollout take all three).
+struct PolicyOptions {
+  std::string policy = "random";  ///< --policy
+  double exec_timeout = 10.0;     ///< --exec-timeout, seconds per answer of an exec: policy
+  std::string replay_dtype;       ///< --replay-dtype: "", float32, float64
+};
+
+/// Adds --policy, --exec-timeout and --replay-dtype to `sub`.
+void AddPolicyOptions(CLI::App* sub, PolicyOptions* options);
+
+/// `options` parsed once into the typed spec (ParsePolicySpec; a replay file is read here).
+PolicySpec ParsePolicyOptions(const PolicyOptions& options);
+
 /// For `--policy replay:FILE.json` holding fetchscope's trajectory JSON: the env and seed the file
 /// was recorded with replace --env-id and --seed where the command line does not name them, so
 /// the replay reproduces the recording. Where it names others, ReplayedEpisodes refuses the run

@@ -24,10 +24,8 @@ struct RolloutOptions {
   int episodes = 1;
   bool episodes_given = false;  // --episodes was on the command line
   int steps = 50;
-  std::string policy = "random";
+  PolicyOptions policy;  // --policy, --exec-timeout, --replay-dtype
   std::string json_out;
-  double exec_timeout = 10.0;
-  std::string replay_dtype;
   int jobs = 1;
   std::string worker_mode = "process";
   std::string minari;       // --minari: a Minari dataset id to write
@@ -40,7 +38,7 @@ struct RolloutOptions {
 // parse (AddRollout) -> resolve -> run (RunRolloutJob) -> print.
 int RunRollout(const RolloutOptions& o) {
   EpisodeRequest request;
-  request.policy = ParsePolicySpec(o.policy, {o.exec_timeout, o.replay_dtype, ""});
+  request.policy = ParsePolicyOptions(o.policy);
   request.episodes = o.episodes;
   request.episodes_given = o.episodes_given;
   request.steps = o.steps;
@@ -78,18 +76,19 @@ int RunRollout(const RolloutOptions& o) {
   }
   if (o.json_out.empty() && result.output.empty()) {
     const nlohmann::json j =
-        TrajectoryJson(spec, assets, seed, o.policy, std::move(result.episodes));
+        TrajectoryJson(spec, assets, seed, o.policy.policy, std::move(result.episodes));
     std::printf("%s\n", DumpJson(j).c_str());
     return 0;
   }
   std::string wrote;
   if (!o.json_out.empty()) {
-    WriteJson(path, TrajectoryJson(spec, assets, seed, o.policy, std::move(result.episodes)));
+    WriteJson(path,
+              TrajectoryJson(spec, assets, seed, o.policy.policy, std::move(result.episodes)));
     wrote += "wrote " + path + "\n";
   }
   if (minari) wrote += "wrote Minari dataset " + o.minari + " at " + result.output + "\n";
   std::printf("%s: %d episode(s) of %d steps, policy %s, seed %s: success %d/%d (%.0f%%)\n%s",
-              spec.id.c_str(), count, o.steps, o.policy.c_str(), o.env.seed.c_str(),
+              spec.id.c_str(), count, o.steps, o.policy.policy.c_str(), o.env.seed.c_str(),
               result.successes, count, 100.0 * result.successes / count, wrote.c_str());
   return 0;
 }
@@ -108,11 +107,7 @@ Command AddRollout(CLI::App& app) {
   sub->add_option("--steps", o->steps, kStepsHelp)
       ->capture_default_str()
       ->check(CLI::Range(1, kMaxSteps));
-  sub->add_option("--policy", o->policy, kPolicyHelp)->capture_default_str();
-  sub->add_option("--exec-timeout", o->exec_timeout, "Seconds an exec: policy may take per answer")
-      ->capture_default_str()
-      ->check(CLI::Range(0.001, 86400.0));
-  sub->add_option("--replay-dtype", o->replay_dtype, kReplayDtypeHelp);
+  AddPolicyOptions(sub, &o->policy);
   sub->add_option("--json-out", o->json_out,
                   "Write F (.json), F/rollout.json if F ends in /, or F_rollout.json; without it "
                   "JSON goes to stdout");
