@@ -29,6 +29,8 @@
 namespace fetchscope {
 namespace {
 
+using testing::ReachSuccessStep;
+
 struct IndicesCase {
   std::string name;
   int num_frames;
@@ -321,20 +323,6 @@ TEST(ScaleSheetTileTest, PreScaledTilesGiveTheSameSheet) {
   EXPECT_THROW(ScaleSheetTile(nullptr, 0, 10, "", kSheetTileWidth, &scratch), RunError);
   std::vector<uint8_t> pixel(3);
   EXPECT_THROW(ScaleSheetTile(pixel.data(), 1, 1, "", 8, &scratch), UsageError);
-}
-
-// A Reach step on success: the sparse reward is -0.0 (Gymnasium's -(d > threshold)), and an
-// action component of -0.001.
-FrameInfo ReachSuccessStep() {
-  FrameInfo info;
-  info.title = "FetchReach-v4";
-  info.step = 7;
-  info.reward = -0.0;
-  info.distance = 0.012;
-  info.success = true;
-  info.has_action = true;
-  info.action = {-0.001, 0.5, -0.25, -0.0};
-  return info;
 }
 
 TEST(PictureNumber, SheetCaptionShowsRZero) {

@@ -8,22 +8,12 @@
 #include <cstdint>
 #include <vector>
 
+#include "tests/test_util.h"
+
 namespace fetchscope {
 namespace {
 
-// A Reach step on success: the sparse reward is -0.0 (Gymnasium's -(d > threshold)), and an
-// action component of -0.001.
-FrameInfo ReachSuccessStep() {
-  FrameInfo info;
-  info.title = "FetchReach-v4";
-  info.step = 7;
-  info.reward = -0.0;
-  info.distance = 0.012;
-  info.success = true;
-  info.has_action = true;
-  info.action = {-0.001, 0.5, -0.25, -0.0};
-  return info;
-}
+using testing::ReachSuccessStep;
 
 TEST(PictureNumber, HudShowsZeroRewardWithoutSign) {
   const HudText hud = FormatHud(ReachSuccessStep(), OverlaySet{});

@@ -187,4 +187,16 @@ std::string PythonWithH5py() {
   return "";
 }
 
+FrameInfo ReachSuccessStep() {
+  FrameInfo info;
+  info.title = "FetchReach-v4";
+  info.step = 7;
+  info.reward = -0.0;
+  info.distance = 0.012;
+  info.success = true;
+  info.has_action = true;
+  info.action = {-0.001, 0.5, -0.25, -0.0};
+  return info;
+}
+
 }  // namespace fetchscope::testing

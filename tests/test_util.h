@@ -10,6 +10,8 @@
 #include <string>
 #include <vector>
 
+#include "render/overlay.h"
+
 namespace fetchscope::testing {
 
 /// Result of running a shell command.
@@ -87,5 +89,9 @@ int DecodedFrames(const std::filesystem::path& video);
 
 /// A python3 that imports h5py and numpy: the one on PATH, else Debian's; "" when none.
 std::string PythonWithH5py();
+
+/// A Reach step on success, for the HUD and caption tests: the sparse reward is -0.0
+/// (Gymnasium's -(d > threshold)), and an action component is -0.001.
+FrameInfo ReachSuccessStep();
 
 }  // namespace fetchscope::testing
