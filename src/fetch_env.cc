@@ -162,6 +162,7 @@ Observation FetchEnv::Reset(std::optional<uint64_t> seed) {
     d->qpos[object_qpos_ + 0] = x;
     d->qpos[object_qpos_ + 1] = y;
   }
+  KeepCallState(false);
   mj_forward(m, d);
   goal_ = SampleGoal();
   elapsed_steps_ = 0;
@@ -197,6 +198,7 @@ Observation FetchEnv::ResetTo(const std::array<double, 3>& goal,
       std::copy(quat.begin(), quat.end(), q + 3);
     }
   }
+  KeepCallState(false);
   mj_forward(m, d);
   goal_ = goal;
   elapsed_steps_ = 0;
@@ -265,18 +267,25 @@ StepResult FetchEnv::Step(const Action& action) {
     d->mocap_quat[4 * k + 0] += 1.0;
     d->mocap_quat[4 * k + 2] += 1.0;
   }
-  for (int i = 0; i < spec_.n_substeps; ++i) mj_step(m, d);
-  if (spec_.block_gripper) {
-    d->qpos[l_finger_qpos_] = 0.0;
-    d->qpos[r_finger_qpos_] = 0.0;
-    mj_forward(m, d);
+  for (int i = 0; i < spec_.n_substeps; ++i) {
+    if (i == spec_.n_substeps - 1) KeepCallState(true);
+    mj_step(m, d);
   }
+  StepCallback();
   ++elapsed_steps_;
   result.obs = Observe();
   result.is_success = IsSuccess(result.obs.achieved_goal, goal_);
   result.reward = ComputeReward(result.obs.achieved_goal, goal_);
   result.truncated = elapsed_steps_ >= spec_.max_episode_steps;
   return result;
+}
+
+void FetchEnv::StepCallback() {
+  if (!spec_.block_gripper) return;
+  mjData* d = data_.get();
+  d->qpos[l_finger_qpos_] = 0.0;
+  d->qpos[r_finger_qpos_] = 0.0;
+  mj_forward(model_.get(), d);
 }
 
 double FetchEnv::ComputeReward(const std::array<double, 3>& a,

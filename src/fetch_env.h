@@ -42,6 +42,21 @@ struct ObjectPose {
   std::array<double, 3> euler{};     ///< rad, as mat2euler gives them
 };
 
+/// A way back to one state of an environment, exactly (FetchEnv::Checkpoint): MuJoCo's state
+/// just before the last call that computed the env's mjData (a step's last substep, or a reset's
+/// mj_forward) and the env's own (goal, steps taken, generator). Restoring repeats that one call,
+/// so every value the data derives (positions, which a step leaves one substep stale; contacts
+/// and their forces) is bit for bit what the env held, and stepping on gives the same episode.
+struct EnvCheckpoint {
+  /// time, qpos, qvel, act, ctrl, qacc_warmstart, mocap_pos, mocap_quat, qfrc_applied,
+  /// xfrc_applied, in that order, before the call
+  std::vector<double> sim;
+  bool after_step = false;  ///< the call: a step's last mj_step (and its callback); else mj_forward
+  std::array<double, 3> goal{};       ///< the episode's goal
+  int elapsed_steps = 0;              ///< steps since the reset
+  std::optional<NumpyGenerator> rng;  ///< the reset generator as it stood
+};
+
 /// A Fetch environment. Not copyable; one per thread.
 class FetchEnv {
  public:
@@ -71,6 +86,16 @@ class FetchEnv {
   /// env.step(action) with TimeLimit semantics. Requires a prior Reset().
   StepResult Step(const Action& action);
 
+  /// Keeps, from now on, what Checkpoint needs at every Reset, ResetTo and Step (a copy of a few
+  /// hundred numbers per call). Off by default; it never changes what the env computes.
+  void EnableCheckpoints() { checkpoints_ = true; }
+  /// The current state as a checkpoint. Throws RunError before the first reset made after
+  /// EnableCheckpoints.
+  EnvCheckpoint Checkpoint() const;
+  /// Returns to `checkpoint` (taken on this env, or on one of the same spec and assets): the
+  /// data, goal, step count and generator are then exactly as they were.
+  void Restore(const EnvCheckpoint& checkpoint);
+
   /// compute_reward(achieved_goal, desired_goal): pure function of the two goals.
   double ComputeReward(const std::array<double, 3>& achieved,
                        const std::array<double, 3>& desired) const;
@@ -96,6 +121,12 @@ class FetchEnv {
  private:
   void Setup();
   void RestoreInitialState();
+  // With checkpoints on: keeps MuJoCo's state now, before the call that finishes a reset
+  // (`step` false: mj_forward) or a step (true: its last mj_step)
+  void KeepCallState(bool step);
+  // A step's end after its substeps (_step_callback): with a blocked gripper, the fingers closed
+  // and a forward pass
+  void StepCallback();
   std::array<double, 3> SampleGoal();
 
   EnvSpec spec_;
@@ -120,6 +151,9 @@ class FetchEnv {
   std::array<double, 3> goal_{};
   int elapsed_steps_ = 0;
   bool has_reset_ = false;
+  bool checkpoints_ = false;
+  std::vector<double> call_state_;  // KeepCallState's copy, empty until a reset keeps one
+  bool call_is_step_ = false;
   mutable std::vector<double> jacp_, jacr_;
 };
 

@@ -4,8 +4,11 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <vector>
 
 #include "base/errors.h"
+#include "src/episode.h"
+#include "src/policy.h"
 #include "tests/test_util.h"
 
 namespace fetchscope {
@@ -104,6 +107,84 @@ TEST_P(EveryTask, TruncatesAtFiftySteps) {
   FetchEnv env(FindEnvSpec(GetParam()), ResolveAssets("bundled"));
   env.Reset(0);
   for (int t = 1; t <= 50; ++t) EXPECT_EQ(env.Step(Action{}).truncated, t == 50) << t;
+}
+
+// What a frame, the contact overlay and the next step read from mjData: the derived positions,
+// the contacts and the constraint forces, and the state.
+std::vector<double> DerivedValues(const FetchEnv& env) {
+  const mjModel* m = env.model();
+  const mjData* d = env.data();
+  std::vector<double> v;
+  const auto add = [&v](const mjtNum* p, int n) { v.insert(v.end(), p, p + n); };
+  add(&d->time, 1);
+  add(d->qpos, m->nq);
+  add(d->qvel, m->nv);
+  add(d->qacc_warmstart, m->nv);
+  add(d->xpos, 3 * m->nbody);
+  add(d->xquat, 4 * m->nbody);
+  add(d->geom_xpos, 3 * m->ngeom);
+  add(d->geom_xmat, 9 * m->ngeom);
+  add(d->site_xpos, 3 * m->nsite);
+  add(d->subtree_com, 3 * m->nbody);
+  add(d->mocap_pos, 3 * m->nmocap);
+  v.push_back(d->ncon);
+  for (int i = 0; i < d->ncon; ++i) {
+    add(d->contact[i].pos, 3);
+    add(d->contact[i].frame, 9);
+    v.push_back(d->contact[i].dist);
+    v.push_back(d->contact[i].geom1);
+    v.push_back(d->contact[i].geom2);
+  }
+  v.push_back(d->nefc);
+  add(d->efc_force, d->nefc);
+  return v;
+}
+
+// A checkpoint taken after the reset or any step, restored on the same env later or on another
+// env, gives every derived value bit for bit (contacts and forces of a grasp included), and
+// stepping on from it gives the episode of an env that never stopped.
+TEST_P(EveryTask, RestoredCheckpointsGiveTheSameDataAndTheSameEpisode) {
+  const EnvSpec& spec = FindEnvSpec(GetParam());
+  FetchEnv env(spec, ResolveAssets("bundled"));
+  env.EnableCheckpoints();
+  EXPECT_THROW(env.Checkpoint(), RunError);  // none before a reset
+  PolicyContext context;
+  context.seed = 4;
+  auto policy = MakePolicy(PolicySpec::Scripted(), spec, context);
+  std::vector<EnvCheckpoint> checkpoints;
+  std::vector<std::vector<double>> derived;
+  std::vector<Action> actions{Action{}};
+  int most_contacts = 0;
+  const EpisodeRecord episode =
+      RunEpisode(env, *policy, 0, 4, 30, [&](const StepRecord& r, const StepResult*) {
+        checkpoints.push_back(env.Checkpoint());
+        derived.push_back(DerivedValues(env));
+        if (r.action) actions.push_back(*r.action);
+        most_contacts = std::max(most_contacts, env.data()->ncon);
+        return true;
+      });
+  ASSERT_EQ(checkpoints.size(), 31u);
+  EXPECT_GT(most_contacts, 0);
+  FetchEnv other(spec, ResolveAssets("bundled"));
+  for (int k : {0, 1, 12, 29}) {
+    for (FetchEnv* target : {&env, &other}) {
+      target->Restore(checkpoints[k]);
+      ASSERT_EQ(DerivedValues(*target), derived[k]) << "step " << k;
+      EXPECT_EQ(target->elapsed_steps(), k);
+      EXPECT_EQ(target->goal(), episode.steps[k].obs.desired_goal);
+      for (int t = k + 1; t <= 30; ++t) {
+        const StepResult r = target->Step(actions[t]);
+        ASSERT_EQ(r.obs.observation, episode.steps[t].obs.observation) << k << " -> " << t;
+        ASSERT_EQ(DerivedValues(*target), derived[t]) << k << " -> " << t;
+      }
+    }
+  }
+  // the generator comes back too: the next reset after a restore is the next reset of the run
+  FetchEnv straight(spec, ResolveAssets("bundled"));
+  straight.Reset(4);
+  const Observation next = straight.Reset();
+  other.Restore(checkpoints[5]);
+  EXPECT_EQ(other.Reset().desired_goal, next.desired_goal);
 }
 
 INSTANTIATE_TEST_SUITE_P(Fetch, EveryTask,
