@@ -88,6 +88,11 @@ Manifest BuildRecordManifest(const RecordJob& job, const NodeProbe& node,
                              const ScheduleResult& result, RecordTally tally, double wall,
                              long frames, const RunParameters& parameters, bool resumed);
 
+/// A dataset episode's divergence as the manifest's entry and the viewer hold it: first_step,
+/// where, difference, max_difference, tolerance, position_error_mm {gripper, object}, and the
+/// largest difference's place (non-finite numbers as null).
+nlohmann::json DivergenceJson(const EpisodeDivergence& d);
+
 /// A dataset source: each manifest entry gets "reset" and "divergence", the manifest a
 /// "dataset" member (what was found, the tolerance). Nothing for a recording.
 void AddDivergence(const TrajectorySource& source, std::vector<ManifestEpisode>* episodes,

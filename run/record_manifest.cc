@@ -186,6 +186,38 @@ Manifest BuildRecordManifest(const RecordJob& job, const NodeProbe& node,
   return m;
 }
 
+nlohmann::json DivergenceJson(const EpisodeDivergence& d) {
+  // a NaN in the dataset makes an infinite difference: null, as JSON has no infinity
+  const auto number = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nullptr; };
+  nlohmann::json j = {{"first_step", nullptr},
+                      {"where", nullptr},
+                      {"difference", nullptr},
+                      {"max_difference", number(d.max_difference)},
+                      {"tolerance", d.tolerance}};
+  if (d.first_step >= 0) {
+    j["first_step"] = d.first_step;
+    j["where"] = d.where;
+    j["component"] = d.component;
+    j["unit"] = d.unit;
+    j["difference"] = number(d.difference);
+  }
+  // the viewer's "replayed vs recorded" plot: position errors per row, in mm
+  const auto millimetres = [&](const std::vector<double>& metres) {
+    nlohmann::json out = nlohmann::json::array();
+    for (double m : metres) out.push_back(number(InDisplayUnit(m, "m").value));
+    return out;
+  };
+  j["position_error_mm"] = {{"gripper", millimetres(d.gripper_error)}};
+  if (!d.object_error.empty()) j["position_error_mm"]["object"] = millimetres(d.object_error);
+  if (d.max_step >= 0) {  // the largest difference, with its place
+    j["max_step"] = d.max_step;
+    j["max_where"] = d.max_where;
+    j["max_component"] = d.max_component;
+    j["max_unit"] = d.max_unit;
+  }
+  return j;
+}
+
 void AddDivergence(const TrajectorySource& source, std::vector<ManifestEpisode>* episodes,
                    nlohmann::json* manifest_extra) {
   if (!source.dataset) return;
@@ -195,35 +227,7 @@ void AddDivergence(const TrajectorySource& source, std::vector<ManifestEpisode>*
     if (it == source.divergence.end()) continue;
     const EpisodeDivergence& d = it->second;
     e.extra["reset"] = d.reset;
-    // a NaN in the dataset makes an infinite difference: null, as JSON has no infinity
-    const auto number = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nullptr; };
-    nlohmann::json j = {{"first_step", nullptr},
-                        {"where", nullptr},
-                        {"difference", nullptr},
-                        {"max_difference", number(d.max_difference)},
-                        {"tolerance", d.tolerance}};
-    if (d.first_step >= 0) {
-      j["first_step"] = d.first_step;
-      j["where"] = d.where;
-      j["component"] = d.component;
-      j["unit"] = d.unit;
-      j["difference"] = number(d.difference);
-    }
-    // the viewer's "replayed vs recorded" plot: position errors per row, in mm
-    const auto millimetres = [&](const std::vector<double>& metres) {
-      nlohmann::json out = nlohmann::json::array();
-      for (double m : metres) out.push_back(number(InDisplayUnit(m, "m").value));
-      return out;
-    };
-    j["position_error_mm"] = {{"gripper", millimetres(d.gripper_error)}};
-    if (!d.object_error.empty()) j["position_error_mm"]["object"] = millimetres(d.object_error);
-    if (d.max_step >= 0) {  // the largest difference, with its place
-      j["max_step"] = d.max_step;
-      j["max_where"] = d.max_where;
-      j["max_component"] = d.max_component;
-      j["max_unit"] = d.max_unit;
-    }
-    e.extra["divergence"] = j;
+    e.extra["divergence"] = DivergenceJson(d);
   }
 }
 

@@ -297,7 +297,7 @@ bool SameRow(const Observation& a, const Observation& b) {
 
 }  // namespace
 
-void MeasureDivergence(FetchEnv& env, TrajectorySource* source) {
+void ResolveStarts(FetchEnv& env, TrajectorySource* source) {
   std::optional<NumpyGenerator> chain;  // after the previous episode's reset, where it was exact
   int chain_from = -1, previous = -2;
   for (const auto& [k, episode] : source->episodes) {
@@ -310,22 +310,38 @@ void MeasureDivergence(FetchEnv& env, TrajectorySource* source) {
       }
     }
     previous = k;
-    EpisodeDivergence d;
-    d.reset = start.Rule();
-    d.continued_from = start.continued_from;
-    d.tolerance = source->tolerance;
-    const Observation reset = ResetForStart(env, start);
+    ResetForStart(env, start);
     if (start.seed) chain_from = k;
     if (start.seed || start.generator) {
       chain = env.generator();
     } else {
       chain.reset();
     }
-    CompareRow(episode.steps.at(0), reset, 0, d);
+  }
+}
+
+EpisodeDivergence CompareReplay(const TrajectorySource& source, int k,
+                                const std::vector<Observation>& replayed) {
+  const TrajectoryEpisode& episode = source.episodes.at(k);
+  const EpisodeStart& start = source.starts.at(k);
+  EpisodeDivergence d;
+  d.reset = start.Rule();
+  d.continued_from = start.continued_from;
+  d.tolerance = source.tolerance;
+  for (size_t t = 0; t < episode.steps.size() && t < replayed.size(); ++t) {
+    CompareRow(episode.steps[t], replayed[t], static_cast<int>(t), d);
+  }
+  return d;
+}
+
+void MeasureDivergence(FetchEnv& env, TrajectorySource* source) {
+  ResolveStarts(env, source);
+  for (const auto& [k, episode] : source->episodes) {
+    std::vector<Observation> replayed = {ResetForStart(env, source->starts.at(k))};
     for (size_t t = 1; t < episode.steps.size(); ++t) {
-      CompareRow(episode.steps[t], env.Step(*episode.steps[t].action).obs, static_cast<int>(t), d);
+      replayed.push_back(env.Step(*episode.steps[t].action).obs);
     }
-    source->divergence[k] = d;
+    source->divergence[k] = CompareReplay(*source, k, replayed);
   }
 }
 

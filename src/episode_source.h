@@ -162,12 +162,24 @@ void VerifyRecording(FetchEnv& env, const TrajectorySource& source);
 /// FetchEnv::ResetTo).
 Observation ResetForStart(FetchEnv& env, const EpisodeStart& start);
 
+/// Resolves how each episode of the dataset `source` starts, by resets alone: an episode without
+/// a seed whose id follows a seeded (or continued) one keeps that generator continued
+/// (EpisodeStart::generator, "continued generator") where its reset gives the dataset's first row
+/// bit for bit; the others keep their seed or their first observation.
+void ResolveStarts(FetchEnv& env, TrajectorySource* source);
+
+/// The divergence of episode `k` of the dataset `source` (its start resolved) from `replayed`,
+/// its observations as replayed from that start (row t = the observation after step t).
+EpisodeDivergence CompareReplay(const TrajectorySource& source, int k,
+                                const std::vector<Observation>& replayed);
+
 /// Replays every episode of the dataset `source` on `env` (no rendering) and fills
-/// `source->divergence`: every observation, achieved_goal and desired_goal row against the
-/// dataset's, within `source->tolerance`. An episode without a seed whose id follows a seeded
-/// (or continued) one is first reset by continuing that generator; where that gives the
-/// dataset's first row bit for bit, its start keeps the generator (Rule() "continued
-/// generator"), else it is rebuilt from the first row.
+/// `source->divergence` (ResolveStarts, then each episode replayed and CompareReplay): every
+/// observation, achieved_goal and desired_goal row against the dataset's, within
+/// `source->tolerance`. An episode without a seed whose id follows a seeded (or continued) one is
+/// first reset by continuing that generator; where that gives the dataset's first row bit for bit,
+/// its start keeps the generator (Rule() "continued generator"), else it is rebuilt from the first
+/// row.
 void MeasureDivergence(FetchEnv& env, TrajectorySource* source);
 
 /// The dataset's own achieved goal at row `t` of episode `k` (the ghost marker); nullopt for a
