@@ -7,6 +7,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <cctype>
 #include <cerrno>
 #include <chrono>
 #include <cstdio>
@@ -100,6 +101,18 @@ std::string SignalName(int sig) {
         std::string(" (SIG") + abbrev + (description ? std::string(": ") + description : "") + ")";
   }
   return text;
+}
+
+std::string ShellQuote(const std::string& arg) {
+  bool plain = !arg.empty();
+  for (char c : arg) {
+    plain = plain && (std::isalnum(static_cast<unsigned char>(c)) ||
+                      (c != '\0' && std::strchr("@%+=:,./_-", c)));
+  }
+  if (plain) return arg;
+  std::string quoted = "'";
+  for (char c : arg) quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return quoted + "'";
 }
 
 // ---- line channels ----

@@ -58,6 +58,11 @@ struct ChildExit {
 /// "signal 9 (SIGKILL: Killed)": the number, the name users grep for, and the description.
 std::string SignalName(int sig);
 
+/// `arg` as a POSIX shell reads it back as one word: unchanged when it holds only letters,
+/// digits and @%+=:,./_- (and is not empty), else in single quotes (a quote inside as '\''), so
+/// that a command line we print can be pasted.
+std::string ShellQuote(const std::string& arg);
+
 /// Lines both ways over descriptors (a pipe pair, or one socket): writes whole lines, reads
 /// into a buffer and hands out complete lines. One JSON object per line for the JSON calls.
 class LineChannel {

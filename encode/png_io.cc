@@ -8,6 +8,7 @@
 #include <cerrno>
 #include <csetjmp>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <string>
 #include <vector>
@@ -108,12 +109,12 @@ bool Decode(FILE* file, Image* image, std::vector<png_bytep>* rows, PngErrorStat
   return true;
 }
 
-}  // namespace
+constexpr int kColorTypes[] = {0, PNG_COLOR_TYPE_GRAY, PNG_COLOR_TYPE_GRAY_ALPHA,
+                               PNG_COLOR_TYPE_RGB, PNG_COLOR_TYPE_RGB_ALPHA};
 
-void WritePng(const std::string& path, int width, int height, int channels, int bit_depth,
-              const void* pixels, bool fast) {
-  static const int kColorTypes[] = {0, PNG_COLOR_TYPE_GRAY, PNG_COLOR_TYPE_GRAY_ALPHA,
-                                    PNG_COLOR_TYPE_RGB, PNG_COLOR_TYPE_RGB_ALPHA};
+// Throws UsageError for arguments WritePng and EncodePng refuse; returns the row pointers.
+std::vector<png_bytep> CheckedRows(const std::string& path, int width, int height, int channels,
+                                   int bit_depth, const void* pixels) {
   if (channels < 1 || channels > 4) {
     throw UsageError("PNG channels " + std::to_string(channels) + " for " + path +
                      "; accepted: 1 (gray), 2 (gray+alpha), 3 (RGB), 4 (RGBA)");
@@ -133,7 +134,33 @@ void WritePng(const std::string& path, int width, int height, int channels, int 
     // libpng does not write through row pointers; the cast only satisfies its signature
     rows[y] = const_cast<png_bytep>(static_cast<const png_byte*>(pixels) + y * row_bytes);
   }
+  return rows;
+}
 
+// Decodes the PNG in `file` (its signature not yet read); `what` names it in messages.
+Image DecodeFile(FILE* file, const std::string& what) {
+  png_byte signature[8] = {};
+  if (std::fread(signature, 1, 8, file) != 8 || png_sig_cmp(signature, 0, 8) != 0) {
+    std::fclose(file);
+    throw RunError(what + " is not a PNG file");
+  }
+  Image image;
+  std::vector<png_bytep> rows;
+  PngErrorState state;
+  bool decoded = Decode(file, &image, &rows, &state);
+  std::fclose(file);
+  if (!decoded) {
+    throw RunError(what + " is a damaged PNG file (libpng: " +
+                   (state.message[0] ? state.message : "out of memory") + ")");
+  }
+  return image;
+}
+
+}  // namespace
+
+void WritePng(const std::string& path, int width, int height, int channels, int bit_depth,
+              const void* pixels, bool fast) {
+  std::vector<png_bytep> rows = CheckedRows(path, width, height, channels, bit_depth, pixels);
   ParentFolders parents(path);  // missing folders are created; removed again if this fails
   // hidden (".NAME.tmp-XXXXXX"), like every other temporary, so a killed run leaves nothing that
   // looks like an output
@@ -173,24 +200,37 @@ void WritePng(const std::string& path, int width, int height, int channels, int 
   parents.Keep();
 }
 
+std::string EncodePng(int width, int height, int channels, int bit_depth, const void* pixels,
+                      bool fast, const std::string& what) {
+  std::vector<png_bytep> rows = CheckedRows(what, width, height, channels, bit_depth, pixels);
+  char* buffer = nullptr;
+  size_t size = 0;
+  FILE* file = open_memstream(&buffer, &size);
+  if (!file) throw RunError("cannot encode " + what + " as PNG: " + std::strerror(errno));
+  PngErrorState state;
+  const bool encoded =
+      Encode(file, width, height, kColorTypes[channels], bit_depth, rows.data(), fast, &state);
+  const bool closed = std::fclose(file) == 0;
+  std::string bytes(buffer ? buffer : "", buffer ? size : 0);
+  std::free(buffer);
+  if (!encoded || !closed) {
+    throw RunError("cannot encode " + what + " as PNG: " +
+                   (state.message[0] ? std::string("libpng: ") + state.message
+                                     : std::string("out of memory")));
+  }
+  return bytes;
+}
+
 Image ReadPng(const std::string& path) {
   FILE* file = std::fopen(path.c_str(), "rb");
   if (!file) throw RunError("cannot read " + path + ": " + std::strerror(errno));
-  png_byte signature[8] = {};
-  if (std::fread(signature, 1, 8, file) != 8 || png_sig_cmp(signature, 0, 8) != 0) {
-    std::fclose(file);
-    throw RunError(path + " is not a PNG file");
-  }
-  Image image;
-  std::vector<png_bytep> rows;
-  PngErrorState state;
-  bool decoded = Decode(file, &image, &rows, &state);
-  std::fclose(file);
-  if (!decoded) {
-    throw RunError(path + " is a damaged PNG file (libpng: " +
-                   (state.message[0] ? state.message : "out of memory") + ")");
-  }
-  return image;
+  return DecodeFile(file, path);
+}
+
+Image DecodePng(const std::string& bytes, const std::string& what) {
+  FILE* file = fmemopen(const_cast<char*>(bytes.data()), bytes.size(), "rb");
+  if (!file) throw RunError("cannot read " + what + ": " + std::strerror(errno));
+  return DecodeFile(file, what);
 }
 
 }  // namespace fetchscope

@@ -17,6 +17,11 @@ namespace fetchscope {
 void WritePng(const std::string& path, int width, int height, int channels, int bit_depth,
               const void* pixels, bool fast = false);
 
+/// The bytes of the PNG file WritePng would write for these arguments, in memory (serve's
+/// lossless live frames). Throws as WritePng, with `what` naming the image in messages.
+std::string EncodePng(int width, int height, int channels, int bit_depth, const void* pixels,
+                      bool fast = false, const std::string& what = "frame");
+
 /// A decoded image.
 struct Image {
   int width = 0;
@@ -32,5 +37,8 @@ struct Image {
 /// Reads a PNG. Palette images become RGB(A), gray below 8 bits becomes 8-bit, transparency
 /// chunks become an alpha channel. Throws RunError for a missing, unreadable or corrupt file.
 Image ReadPng(const std::string& path);
+
+/// ReadPng of the bytes of a PNG file in memory; `what` names it in messages.
+Image DecodePng(const std::string& bytes, const std::string& what = "PNG data");
 
 }  // namespace fetchscope

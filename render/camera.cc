@@ -1,7 +1,9 @@
 #include "render/camera.h"
 
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <string>
 #include <vector>
 
@@ -13,7 +15,8 @@ namespace {
 
 constexpr char kAccepted[] =
     "accepted: default, track, free:lookat=x,y,z,distance=d,azimuth=a,elevation=e (any subset "
-    "of keys), a camera named in the model, or a comma list of these";
+    "of keys), track:body=NAME,distance=d,azimuth=a,elevation=e (any subset), a camera named in "
+    "the model, or a comma list of these";
 
 // The tracking camera's pose relative to the gripper: close enough to see the fingers and the
 // object, from the same side as the default camera.
@@ -53,10 +56,12 @@ std::string ModelCameraNames(const mjModel* model) {
   throw UsageError("camera " + what + "; " + kAccepted);
 }
 
-// Parses the text after "free:" (keys and their comma-separated values).
-FreeCamera ParseFree(const std::string& token, const std::string& body) {
-  FreeCamera cam = DefaultFreeCamera();
-  bool seen[4] = {false, false, false, false};  // lookat, distance, azimuth, elevation
+// Parses the text after "free:" or "track:" (keys and their comma-separated values) into `cam`;
+// a track camera takes `body` (the body followed, into *track_body) instead of lookat.
+void ParseKeys(const std::string& token, const std::string& body, FreeCamera* out,
+               std::string* track_body) {
+  FreeCamera& cam = *out;
+  bool seen[5] = {false, false, false, false, false};  // lookat, distance, azimuth, elevation, body
   std::vector<std::string> parts = Split(body, ',');
   for (size_t i = 0; i < parts.size(); ++i) {
     size_t eq = parts[i].find('=');
@@ -65,17 +70,23 @@ FreeCamera ParseFree(const std::string& token, const std::string& body) {
     }
     std::string key = parts[i].substr(0, eq);
     std::string value = parts[i].substr(eq + 1);
-    int index = key == "lookat"      ? 0
-                : key == "distance"  ? 1
-                : key == "azimuth"   ? 2
-                : key == "elevation" ? 3
-                                     : -1;
+    int index = key == "lookat" && !track_body ? 0
+                : key == "distance"            ? 1
+                : key == "azimuth"             ? 2
+                : key == "elevation"           ? 3
+                : key == "body" && track_body  ? 4
+                                               : -1;
     if (index < 0) {
-      Fail("'" + token + "': unknown key '" + key +
-           "' (keys: lookat, distance, azimuth, elevation)");
+      Fail("'" + token + "': unknown key '" + key + "' (keys: " + (track_body ? "body" : "lookat") +
+           ", distance, azimuth, elevation)");
     }
     if (seen[index]) Fail("'" + token + "': key '" + key + "' given twice");
     seen[index] = true;
+    if (index == 4) {
+      if (value.empty()) Fail("'" + token + "': body needs a body's name");
+      *track_body = value;
+      continue;
+    }
     if (index == 0) {
       // lookat takes this value and the next two parts
       if (i + 2 >= parts.size()) Fail("'" + token + "': lookat needs three numbers x,y,z");
@@ -104,20 +115,35 @@ FreeCamera ParseFree(const std::string& token, const std::string& body) {
       cam.elevation = number;
     }
   }
+}
+
+FreeCamera ParseFree(const std::string& token, const std::string& body) {
+  FreeCamera cam = DefaultFreeCamera();
+  ParseKeys(token, body, &cam, nullptr);
   return cam;
+}
+
+// A track camera's body, checked against the model (where there is one).
+void CheckTrackBody(const mjModel* model, const std::string& body) {
+  if (!model || mj_name2id(model, mjOBJ_BODY, body.c_str()) >= 0) return;
+  std::vector<std::string> bodies;
+  for (int i = 0; i < model->nbody; ++i) {
+    const char* n = mj_id2name(model, mjOBJ_BODY, i);
+    if (n) bodies.push_back(n);
+  }
+  Fail("'track' follows body " + body + ", which this model lacks" + DidYouMean(body, bodies));
 }
 
 CameraSpec ParseOne(const std::string& token, const mjModel* model) {
   CameraSpec spec{CameraSpec::kDefault, token, DefaultFreeCamera()};
   if (token == "default") return spec;
-  if (token == "track") {
-    if (model && mj_name2id(model, mjOBJ_BODY, kTrackBody) < 0) {
-      Fail("'track' follows body " + std::string(kTrackBody) + ", which this model lacks");
-    }
+  if (token == "track" || token.rfind("track:", 0) == 0) {
     spec.kind = CameraSpec::kTrack;
     spec.free.distance = kTrackDistance;
     spec.free.azimuth = kTrackAzimuth;
     spec.free.elevation = kTrackElevation;
+    if (token != "track") ParseKeys(token, token.substr(6), &spec.free, &spec.body);
+    CheckTrackBody(model, spec.body);
     return spec;
   }
   if (token == "free") {
@@ -144,6 +170,33 @@ CameraSpec ParseOne(const std::string& token, const mjModel* model) {
 
 FreeCamera DefaultFreeCamera() { return FreeCamera{{1.3, 0.75, 0.55}, 2.5, 132.0, -14.0}; }
 
+std::string CameraText(const CameraSpec& spec) {
+  const auto number = [](double v) {
+    char text[32];
+    std::snprintf(text, sizeof(text), "%.6g", v);
+    return std::string(std::strcmp(text, "-0") == 0 ? "0" : text);
+  };
+  const FreeCamera& f = spec.free;
+  const std::string pose = "distance=" + number(f.distance) + ",azimuth=" + number(f.azimuth) +
+                           ",elevation=" + number(f.elevation);
+  switch (spec.kind) {
+    case CameraSpec::kNamed:
+      return spec.name;
+    case CameraSpec::kDefault:
+      return "default";
+    case CameraSpec::kTrack:
+      if (spec.body == kTrackBody && f.distance == kTrackDistance && f.azimuth == kTrackAzimuth &&
+          f.elevation == kTrackElevation) {
+        return "track";
+      }
+      return "track:body=" + spec.body + "," + pose;
+    case CameraSpec::kFree:
+      break;
+  }
+  return "free:lookat=" + number(f.lookat[0]) + "," + number(f.lookat[1]) + "," +
+         number(f.lookat[2]) + "," + pose;
+}
+
 std::vector<CameraSpec> ParseCameraList(const std::string& spec, const mjModel* model) {
   // Regroup the comma-separated parts: a part holding '=' or a bare number continues the free
   // camera before it (its keys and lookat values); anything else, "free..." included, starts
@@ -151,9 +204,10 @@ std::vector<CameraSpec> ParseCameraList(const std::string& spec, const mjModel* 
   std::vector<std::string> tokens;
   for (const std::string& part : SplitCommaList(spec)) {  // "default, track" as "default,track"
     double unused;
-    bool continues = part.rfind("free", 0) != 0 &&
+    bool continues = part.rfind("free", 0) != 0 && part.rfind("track", 0) != 0 &&
                      (part.find('=') != std::string::npos || ParseNumber(part, &unused));
-    if (continues && !tokens.empty() && tokens.back().rfind("free:", 0) == 0) {
+    if (continues && !tokens.empty() &&
+        (tokens.back().rfind("free:", 0) == 0 || tokens.back().rfind("track:", 0) == 0)) {
       tokens.back() += "," + part;
     } else {
       tokens.push_back(part);
@@ -181,10 +235,9 @@ mjvCamera ToMjvCamera(const CameraSpec& spec, const mjModel* model) {
       return cam;
     case CameraSpec::kTrack:
       cam.type = mjCAMERA_TRACKING;
-      cam.trackbodyid = mj_name2id(model, mjOBJ_BODY, kTrackBody);
+      cam.trackbodyid = mj_name2id(model, mjOBJ_BODY, spec.body.c_str());
       if (cam.trackbodyid < 0) {
-        throw UsageError("camera 'track' follows body " + std::string(kTrackBody) +
-                         ", which this model lacks");
+        throw UsageError("camera 'track' follows body " + spec.body + ", which this model lacks");
       }
       break;
     case CameraSpec::kDefault:

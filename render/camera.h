@@ -3,11 +3,15 @@
 // Grammar (one or more cameras, separated by commas):
 //   spec   := camera ("," camera)*
 //   camera := "default" | "track" | "free" | "free:" key "=" value ("," key "=" value)*
+//           | "track:" tkey "=" value ("," tkey "=" value)*
 //           | NAME                                    (a camera named in the model)
 //   key    := lookat (three numbers x,y,z) | distance | azimuth | elevation (degrees)
-// A free spec's own commas are told apart from list commas by what follows: a comma-separated
-// token that holds '=' or is a number continues the free camera before it; any other token
-// starts the next camera, as does a token that begins with "free". So
+//   tkey   := body (a body of the model; robot0:gripper_link by default) | distance | azimuth
+//           | elevation
+// A free or track spec's own commas are told apart from list commas by what follows: a
+// comma-separated token that holds '=' or is a number continues the free (or track) camera
+// before it; any other token starts the next camera, as does a token that begins with "free" or
+// "track". So
 // "free:lookat=1,0.7,0.5,distance=2,external_camera_0" is two cameras. Missing free keys take the
 // default camera's values.
 #pragma once
@@ -36,10 +40,11 @@ struct CameraSpec {
     kDefault,  ///< Gymnasium's default free camera
     kNamed,    ///< a camera defined in the model (mjCAMERA_FIXED)
     kFree,     ///< a free camera with the given pose
-    kTrack,    ///< follows robot0:gripper_link (mjCAMERA_TRACKING)
+    kTrack,    ///< follows a body, robot0:gripper_link by default (mjCAMERA_TRACKING)
   } kind;
   std::string name;  ///< the camera name (kNamed) or the token as written
   FreeCamera free;   ///< pose for kDefault/kFree; distance/azimuth/elevation for kTrack
+  std::string body = "robot0:gripper_link";  ///< kTrack: the body followed
 };
 
 /// Parses a --camera value (grammar above). `model` supplies the camera names (may be null:
@@ -47,8 +52,14 @@ struct CameraSpec {
 /// accepted, listing the model's cameras when a name is unknown.
 std::vector<CameraSpec> ParseCameraList(const std::string& spec, const mjModel* model);
 
-/// The body a "track" camera follows.
+/// The body a "track" camera follows unless it names one.
 inline constexpr char kTrackBody[] = "robot0:gripper_link";
+
+/// The --camera text of one camera that ParseCameraList reads back as `spec` (numbers with
+/// up to 6 significant digits: "free:lookat=1.3,0.75,0.55,distance=2.5,azimuth=132,
+/// elevation=-14"; "default"; a named camera's name; "track" for the default tracking camera,
+/// else "track:body=NAME,distance=...").
+std::string CameraText(const CameraSpec& spec);
 
 /// Fills a MuJoCo camera for `spec` on `model` (which must hold the named camera/track body;
 /// ParseCameraList checked that). Throws UsageError otherwise.

@@ -553,6 +553,23 @@ void Renderer::FlipRows(const uint8_t* src, size_t row_bytes, uint8_t* dst) cons
   }
 }
 
+void Renderer::SetView(const std::vector<CameraSpec>& cameras, const OverlaySet& overlays) {
+  if (cameras.size() != cameras_.size()) {
+    throw UsageError(std::to_string(cameras.size()) + " camera(s) for a renderer of " +
+                     std::to_string(cameras_.size()) + " view(s)");
+  }
+  std::vector<mjvCamera> made;
+  for (const CameraSpec& spec : cameras) made.push_back(ToMjvCamera(spec, model_));
+  cameras_ = std::move(made);
+  options_.cameras = cameras;
+  options_.overlays = overlays;
+}
+
+void Renderer::SetTrail(const std::vector<std::array<double, 3>>& points) {
+  trail_.Clear();
+  for (size_t i = 0; i < points.size(); ++i) trail_.Add(static_cast<int>(i), points[i]);
+}
+
 void Renderer::Render(const mjData* data, const FrameInfo& info, uint8_t* rgb) {
   Draw(data, info, /*overlays=*/true);
   ReadRgb(rgb);

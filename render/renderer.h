@@ -49,6 +49,15 @@ struct SegmentObject {
   long pixels = 0;                 ///< pixels of this colour in the frame
 };
 
+/// What the segmentation layer shows at one pixel (Renderer::Pick): a body's geom, or a site.
+struct PickedObject {
+  std::string body;                ///< the body's name ("body N" if unnamed)
+  int body_id = -1;                ///< its id in the model
+  std::string geom;                ///< the geom's name ("geom N"); empty for a site
+  std::string site;                ///< the site's name; empty for a geom
+  std::array<uint8_t, 3> color{};  ///< its colour in the segmentation layer (SegmentationColor)
+};
+
 /// RenderOptions::msaa_samples: the model's offsamples (4 in the Fetch models, as Gymnasium).
 inline constexpr int kMsaaModel = -1;
 /// RenderOptions::msaa_samples: kMsaaModel on hardware GL, 0 on a software rasterizer, where
@@ -146,6 +155,22 @@ class Renderer {
   /// with the goal marker but without overlays.
   void RenderLayer(const mjData* data, const FrameInfo& info, Layer layer,
                    std::vector<uint8_t>* out);
+
+  /// What the segmentation layer of `data` shows at pixel (x, y) of the frame (row 0 = top):
+  /// the geom or site there and its body; nullopt for the background, an overlay or a pixel
+  /// outside the frame. Renders the layer (as RenderLayer does) to find it.
+  std::optional<PickedObject> Pick(const mjData* data, const FrameInfo& info, int x, int y);
+
+  /// Points the views at `cameras` (as many as the renderer was made with: the tiles stay) and
+  /// draws `overlays` from the next frame on (serve's live view, which moves both per frame).
+  /// Throws UsageError as the constructor does for a camera the model lacks, or for another
+  /// number of cameras.
+  void SetView(const std::vector<CameraSpec>& cameras, const OverlaySet& overlays);
+
+  /// The trail overlay's points before the next frame: `points[i]` at step i (the frame of
+  /// step points.size() adds its own), so that a frame rendered alone shows the trail record's
+  /// frame of that step showed.
+  void SetTrail(const std::vector<std::array<double, 3>>& points);
 
   /// The objects of the last segmentation layer rendered, by palette index (those with pixels).
   const std::vector<SegmentObject>& segmentation_legend() const { return legend_; }
@@ -248,6 +273,9 @@ class Renderer {
   std::vector<SegmentObject> legend_;
   // Turns the segid colours of a segmentation readback into palette colours; fills legend_.
   void ColourSegments(std::vector<uint8_t>* rgb);
+  // Draws the segmentation scene and reads its segid colours (segid + 1, 0 = none) into `out`.
+  void DrawSegmentIds(const mjData* data, const FrameInfo& info, std::vector<uint8_t>* out);
+  std::vector<uint8_t> pick_ids_;  // Pick's readback, reused
 };
 
 }  // namespace fetchscope

@@ -91,16 +91,7 @@ void Renderer::RenderLayer(const mjData* data, const FrameInfo& info, Layer laye
     return;
   }
   if (layer == Layer::kSegmentation) {
-    mjvScene* scene = scene_->get();
-    scene->flags[mjRND_SEGMENT] = 1;
-    scene->flags[mjRND_IDCOLOR] = 1;
-    drop_mocap_ = !options_.segment_mocap;
-    Draw(data, info, /*overlays=*/false);
-    drop_mocap_ = false;
-    scene->flags[mjRND_SEGMENT] = 0;
-    scene->flags[mjRND_IDCOLOR] = 0;
-    out->resize(pixels * 3);
-    ReadRgb(out->data());
+    DrawSegmentIds(data, info, out);
     ColourSegments(out);
     return;
   }
@@ -125,6 +116,52 @@ void Renderer::RenderLayer(const mjData* data, const FrameInfo& info, Layer laye
   out->resize(pixels * 2);
   FlipRows(reinterpret_cast<const uint8_t*>(millimetres.data()),
            static_cast<size_t>(frame_.width) * 2, out->data());
+}
+
+void Renderer::DrawSegmentIds(const mjData* data, const FrameInfo& info,
+                              std::vector<uint8_t>* out) {
+  mjvScene* scene = scene_->get();
+  scene->flags[mjRND_SEGMENT] = 1;
+  scene->flags[mjRND_IDCOLOR] = 1;
+  drop_mocap_ = !options_.segment_mocap;
+  Draw(data, info, /*overlays=*/false);
+  drop_mocap_ = false;
+  scene->flags[mjRND_SEGMENT] = 0;
+  scene->flags[mjRND_IDCOLOR] = 0;
+  out->resize(static_cast<size_t>(frame_.width) * frame_.height * 3);
+  ReadRgb(out->data());
+}
+
+std::optional<PickedObject> Renderer::Pick(const mjData* data, const FrameInfo& info, int x,
+                                           int y) {
+  if (x < 0 || y < 0 || x >= frame_.width || y >= frame_.height) return std::nullopt;
+  DrawSegmentIds(data, info, &pick_ids_);
+  const uint8_t* p = pick_ids_.data() + (static_cast<size_t>(y) * frame_.width + x) * 3;
+  const int id = p[0] + 256 * p[1] + 65536 * p[2];  // segid + 1; 0 = background
+  const mjvScene& scene = *scene_->get();
+  for (int i = 0; id > 0 && i < scene.ngeom; ++i) {
+    const mjvGeom& g = scene.geoms[i];
+    if (g.segid != id - 1) continue;
+    const auto name = [this](int type, int n) {
+      const char* s = mj_id2name(model_, type, n);
+      return s ? std::string(s) : std::string(mju_type2Str(type)) + " " + std::to_string(n);
+    };
+    PickedObject picked;
+    if (g.objtype == mjOBJ_GEOM && g.objid >= 0 && g.objid < model_->ngeom) {
+      picked.body_id = model_->geom_bodyid[g.objid];
+      picked.geom = name(mjOBJ_GEOM, g.objid);
+    } else if (g.objtype == mjOBJ_SITE && g.objid >= 0 && g.objid < model_->nsite) {
+      picked.body_id = model_->site_bodyid[g.objid];
+      picked.site = name(mjOBJ_SITE, g.objid);
+    } else {
+      return std::nullopt;
+    }
+    picked.body = name(mjOBJ_BODY, picked.body_id);
+    picked.color =
+        SegmentationColor(g.objtype == mjOBJ_SITE ? model_->nbody + g.objid : picked.body_id);
+    return picked;
+  }
+  return std::nullopt;
 }
 
 void Renderer::ColourSegments(std::vector<uint8_t>* rgb) {
