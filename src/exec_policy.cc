@@ -72,12 +72,7 @@ class ExecPolicy : public Policy {
     }
   }
 
-  ~ExecPolicy() override {
-    // close its input, give it a moment to exit on that, then make sure it is gone (the
-    // group: a shell's own children go too)
-    child_.channel().Close();
-    if (!child_.WaitFor(0.2)) child_.Kill();
-  }
+  ~ExecPolicy() override { End(); }
 
   Action Act(const Observation& obs, int t) override {
     nlohmann::json msg;
@@ -118,6 +113,13 @@ class ExecPolicy : public Policy {
            ": it must read one JSON line per step on stdin and print one action line (4 numbers)";
   }
 
+  // Closes its input, gives it a moment to exit on that (and its shell to reap it), then makes
+  // sure it is gone (the group: a shell's own children go too).
+  void End() {
+    child_.channel().Close();
+    if (!child_.WaitFor(0.2)) child_.Kill();
+  }
+
   std::string ReadLine(int t) {
     LineChannel& channel = child_.channel();
     const auto deadline =
@@ -136,11 +138,17 @@ class ExecPolicy : public Policy {
                        std::to_string(t) + " within " + JsonDouble(timeout_s_).dump() +
                        " s (raise --exec-timeout)");
       }
-      // the answer's wait: a stop request does not cut it short (the episode ends at the next
-      // step, as it always has)
+      // the answer's wait ends at once on SIGINT/SIGTERM: the child is ended (its group) and the
+      // episode ends at the step it reached, an interruption
       std::vector<pollfd> fds = {{channel.in_fd(), POLLIN, 0}};
       const int wait_ms = static_cast<int>(std::min<long long>(left, 1000));
-      if (WaitForInput(&fds, wait_ms, /*watch_stop=*/false) != WaitEnd::kReady) continue;
+      const WaitEnd end = WaitForInput(&fds, wait_ms, /*watch_stop=*/true);
+      if (end == WaitEnd::kStop || (stop_requested_ && stop_requested_())) {
+        End();
+        throw PolicyInterrupted("exec policy '" + command_ + "' was ended while it answered step " +
+                                std::to_string(t) + ": the run was being stopped");
+      }
+      if (end != WaitEnd::kReady) continue;
       if (!channel.ReadSome()) throw RunError(Died(t));
     }
   }
