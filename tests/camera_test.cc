@@ -198,6 +198,58 @@ TEST(CameraSpec, BecomesMujocoCameras) {
   EXPECT_DOUBLE_EQ(standard.elevation, -14.0);
 }
 
+// track:body=NAME follows any body, with the tracking camera's pose keys; it ends at the next
+// camera as a free camera does
+TEST(CameraSpec, TrackFollowsTheBodyItNames) {
+  std::vector<CameraSpec> cameras = ParseCameraList(
+      "track:body=robot0:gripper_link,distance=0.6,azimuth=10,elevation=-45,overhead", Model());
+  ASSERT_EQ(cameras.size(), 2u);
+  EXPECT_EQ(cameras[0].kind, K::kTrack);
+  EXPECT_EQ(cameras[0].body, "robot0:gripper_link");
+  EXPECT_DOUBLE_EQ(cameras[0].free.distance, 0.6);
+  EXPECT_DOUBLE_EQ(cameras[0].free.azimuth, 10);
+  EXPECT_DOUBLE_EQ(cameras[0].free.elevation, -45);
+  EXPECT_EQ(cameras[1].kind, K::kNamed);
+  const mjvCamera mj = ToMjvCamera(cameras[0], Model());
+  EXPECT_EQ(mj.type, mjCAMERA_TRACKING);
+  EXPECT_DOUBLE_EQ(mj.distance, 0.6);
+  for (const auto& [spec, says] : std::vector<std::pair<std::string, std::string>>{
+           {"track:body=robot0:gripper_lnk", "did you mean 'robot0:gripper_link'"},
+           {"track:body=", "body needs a body's name"},
+           {"track:lookat=1,2,3", "unknown key 'lookat' (keys: body, distance"},
+           {"free:body=world", "unknown key 'body' (keys: lookat, distance"}}) {
+    try {
+      ParseCameraList(spec, Model());
+      ADD_FAILURE() << spec << " was accepted";
+    } catch (const UsageError& e) {
+      EXPECT_NE(std::string(e.what()).find(says), std::string::npos) << spec << ": " << e.what();
+    }
+  }
+}
+
+// CameraText writes a camera as a --camera value that parses back to the same camera
+TEST(CameraSpec, CameraTextParsesBackToTheSameCamera) {
+  for (const std::string spec :
+       {"default", "track", "overhead",
+        "free:lookat=1.25,-0.5,0.6,distance=1.5,azimuth=-33.25,elevation=12",
+        "track:body=robot0:gripper_link,distance=0.75,azimuth=200,elevation=-89.5"}) {
+    const CameraSpec a = ParseCameraList(spec, Model())[0];
+    const std::string text = CameraText(a);
+    const std::vector<CameraSpec> back = ParseCameraList(text, Model());
+    ASSERT_EQ(back.size(), 1u) << text;
+    const CameraSpec& b = back[0];
+    EXPECT_EQ(a.kind, b.kind) << text;
+    EXPECT_EQ(a.body, b.body) << text;
+    for (int k = 0; k < 3; ++k) EXPECT_EQ(a.free.lookat[k], b.free.lookat[k]) << text;
+    EXPECT_EQ(a.free.distance, b.free.distance) << text;
+    EXPECT_EQ(a.free.azimuth, b.free.azimuth) << text;
+    EXPECT_EQ(a.free.elevation, b.free.elevation) << text;
+  }
+  EXPECT_EQ(CameraText(ParseCameraList("free:distance=2", Model())[0]),
+            "free:lookat=1.3,0.75,0.55,distance=2,azimuth=132,elevation=-14");
+  EXPECT_EQ(CameraText(ParseCameraList("track", Model())[0]), "track");
+}
+
 // --overlay
 struct OverlayCase {
   std::string spec;

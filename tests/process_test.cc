@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "base/stop_signal.h"
+#include "tests/test_util.h"
 
 namespace fetchscope {
 namespace {
@@ -178,6 +179,20 @@ TEST(Process, ChildDiesWithItsParent) {
   parent.Signal(SIGKILL);
   EXPECT_EQ(parent.Wait().signal, SIGKILL);
   EXPECT_TRUE(GoneWithin(child, 2)) << "the child outlived its parent";
+}
+
+// a printed command line pastes: every word comes back from the shell as it was
+TEST(Process, ShellQuoteGivesEachWordBackThroughTheShell) {
+  EXPECT_EQ(ShellQuote("record"), "record");
+  EXPECT_EQ(ShellQuote("--policy=replay:/tmp/a_b-1.json"), "--policy=replay:/tmp/a_b-1.json");
+  EXPECT_EQ(ShellQuote(""), "''");
+  EXPECT_EQ(ShellQuote("exec:python3 /x/hang.py"), "'exec:python3 /x/hang.py'");
+  for (const std::string& word : {std::string("it's"), std::string("a b\tc"), std::string("$HOME"),
+                                  std::string("`id`;rm -rf /"), std::string("*"),
+                                  std::string("new\nline"), std::string("\"quoted\"")}) {
+    const auto r = testing::RunCommand("printf '%s' " + ShellQuote(word));
+    EXPECT_EQ(r.output, word) << ShellQuote(word);
+  }
 }
 
 TEST(Process, ExitClassification) {

@@ -645,6 +645,38 @@ TEST_P(RendererTest, SegmentationNamesObjects) {
   EXPECT_TRUE(found_table);
 }
 
+// Pick names the geom or site under a pixel, as the segmentation layer colours it
+TEST_P(RendererTest, PickNamesWhatTheSegmentationLayerShows) {
+  auto gl = Context();
+  if (!gl) GTEST_SKIP();
+  Renderer renderer(*gl, model_.get(), Options("default"));
+  std::vector<uint8_t> layer;
+  renderer.RenderLayer(data_.get(), info_, Layer::kSegmentation, &layer);
+  const FreeCamera cam = DefaultFreeCamera();
+  const Pixel goal = Project(cam, info_.goal, kSize, kSize, Fovy());
+  const Pixel table = Project(cam, {1.2, 0.6, 0.4}, kSize, kSize, Fovy());
+  const std::optional<PickedObject> at_goal = renderer.Pick(data_.get(), info_, goal.col, goal.row);
+  ASSERT_TRUE(at_goal);
+  EXPECT_EQ(at_goal->site, "target0");
+  EXPECT_TRUE(at_goal->geom.empty());
+  const std::optional<PickedObject> at_table =
+      renderer.Pick(data_.get(), info_, table.col, table.row);
+  ASSERT_TRUE(at_table);
+  EXPECT_EQ(at_table->body, "table0");
+  EXPECT_FALSE(at_table->geom.empty());
+  EXPECT_TRUE(at_table->site.empty());
+  for (const Pixel p : {goal, table}) {  // the colour it reports is the layer's there
+    const Rgb c = At(layer, kSize, p);
+    const auto picked = renderer.Pick(data_.get(), info_, p.col, p.row);
+    EXPECT_EQ(picked->color[0], c.r);
+    EXPECT_EQ(picked->color[1], c.g);
+    EXPECT_EQ(picked->color[2], c.b);
+  }
+  EXPECT_FALSE(renderer.Pick(data_.get(), info_, 0, 0));  // the sky
+  EXPECT_FALSE(renderer.Pick(data_.get(), info_, -1, 5));
+  EXPECT_FALSE(renderer.Pick(data_.get(), info_, kSize, 5));
+}
+
 TEST(SegmentationPalette, FixedDistinctAndNeverBlack) {
   std::set<std::array<uint8_t, 3>> seen;
   for (int i = 0; i < 200; ++i) {
