@@ -33,6 +33,11 @@ nlohmann::json BenchNode(const AssetSource& assets, const std::string& backends,
 /// {jobs, worker_mode, msaa_requested, frames_per_s, flags: "--jobs 8 --worker-mode process",
 /// why}; {none: why} when no record run finished.
 nlohmann::json NodeRecommendation(const nlohmann::json& record_rows);
+/// serve's frame budget at `width` x `height` on `backend` (bench/serve.cc): render + encode per
+/// frame (JPEG and PNG), frames/s of one, two and four pages dragging over HTTP, a live key step,
+/// an episode's first view and a seek in it.
+nlohmann::json BenchServe(const AssetSource& assets, const std::string& backend, double budget_s,
+                          int width, int height);
 /// One record run of about `target_frames` frames at 640x480 on the first of `backends`, its
 /// resident set sampled every `interval_s`: whether memory stays flat over a long run.
 nlohmann::json BenchSoak(const AssetSource& assets, const std::string& backends, int target_frames,

@@ -27,6 +27,8 @@ struct BenchOptions {
   int soak_frames = 10000;
   int node_width = 480;
   int node_height = 480;
+  int serve_width = 640;
+  int serve_height = 480;
 };
 
 int RunBench(const BenchOptions& o) {
@@ -55,6 +57,10 @@ int RunBench(const BenchOptions& o) {
     }
   }
   if (o.what == "soak") j["soak"] = bench::BenchSoak(source, o.backends, o.soak_frames, 1.0);
+  if (o.what == "serve") {
+    const std::string first = o.backends.substr(0, o.backends.find(','));
+    j["serve"] = bench::BenchServe(source, first, o.seconds, o.serve_width, o.serve_height);
+  }
   j["peak_rss_mib"] = bench::PeakRssMiB();
   std::printf("peak RSS %.1f MiB\n", bench::PeakRssMiB());
   if (!o.json_out.empty()) {
@@ -80,9 +86,19 @@ Command AddBench(CLI::App& app) {
          "--worker-mode of the fastest record run, recommended); record also gives each "
          "stage's CPU time per frame (the manifest's timings_s.cpu_ms_per_frame); "
          "or soak: one long record run (--soak-frames, minutes) with its memory sampled "
-         "every second. node and soak are not part of all")
+         "every second; or serve: serve's frame budget on its own server (render + encode per "
+         "frame, frames/s of 1, 2 and 4 pages dragging, a live key step, a seek; on the first "
+         "of --backends, at --serve-width x --serve-height). node, soak and serve are not part "
+         "of all")
       ->capture_default_str()
-      ->check(CLI::IsMember({"sim", "render", "encode", "record", "all", "node", "soak"}));
+      ->check(
+          CLI::IsMember({"sim", "render", "encode", "record", "all", "node", "soak", "serve"}));
+  sub->add_option("--serve-width", o->serve_width, "--what serve: the live view's width")
+      ->capture_default_str()
+      ->check(CLI::Range(16, 4096));
+  sub->add_option("--serve-height", o->serve_height, "--what serve: the live view's height")
+      ->capture_default_str()
+      ->check(CLI::Range(16, 4096));
   sub->add_option("--soak-frames", o->soak_frames,
                   "Frames of the soak run (whole 51-frame episodes)")
       ->capture_default_str()

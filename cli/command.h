@@ -35,13 +35,14 @@ Command AddGolden(CLI::App& parent);
 Command AddListGpus(CLI::App& parent);
 Command AddReport(CLI::App& parent);
 Command AddCompare(CLI::App& parent);
+Command AddServe(CLI::App& parent);
 Command AddHelp(CLI::App& parent);
 
 /// Every subcommand, in the order `fetchscope --help` lists them.
 inline constexpr AddCommandFn kCommands[] = {
-    AddListEnvs,     AddDescribe,       AddRewardCheck, AddRandomEpisodes, AddAnatomy, AddRollout,
-    AddExport,       AddDatasets,       AddRender,      AddListCameras,    AddRecord,  AddBench,
-    AddProbeActions, AddMergeManifests, AddGolden,      AddListGpus,       AddReport,  AddCompare,
-    AddHelp};
+    AddListEnvs, AddDescribe, AddRewardCheck,  AddRandomEpisodes, AddAnatomy,
+    AddRollout,  AddExport,   AddDatasets,     AddRender,         AddListCameras,
+    AddRecord,   AddBench,    AddProbeActions, AddMergeManifests, AddGolden,
+    AddListGpus, AddReport,   AddCompare,      AddServe,          AddHelp};
 
 }  // namespace fetchscope::cli

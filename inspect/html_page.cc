@@ -6,6 +6,7 @@
 #include "web_page_css.h"
 #include "web_page_js.h"
 #include "web_report_js.h"
+#include "web_serve_js.h"
 #include "web_uplot_css.h"
 #include "web_uplot_js.h"
 #include "web_viewer_js.h"
@@ -70,16 +71,21 @@ std::string HtmlPage(PageKind kind, const std::string& title, const nlohmann::js
                      const std::vector<std::pair<std::string, std::string>>& blocks) {
   const std::string page_js = Text(kWebPageJs, kWebPageJs_size);
   const std::string viewer_js = Text(kWebViewerJs, kWebViewerJs_size);
-  const std::string kind_js = kind == PageKind::kReport ? Text(kWebReportJs, kWebReportJs_size)
-                                                        : Text(kWebCompareJs, kWebCompareJs_size);
+  const std::string kind_js = kind == PageKind::kReport    ? Text(kWebReportJs, kWebReportJs_size)
+                              : kind == PageKind::kCompare ? Text(kWebCompareJs, kWebCompareJs_size)
+                                                           : Text(kWebServeJs, kWebServeJs_size);
   std::string html;
   html += "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n";
   html += "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n";
-  // nothing is fetched from anywhere: the page's own files (videos, sheets) are all it loads
-  html +=
-      "<meta http-equiv=\"Content-Security-Policy\" content=\"default-src 'self'; "
-      "script-src 'unsafe-inline'; style-src 'unsafe-inline'; img-src 'self' data:; "
-      "media-src 'self'\">\n";
+  // nothing is fetched from anywhere: the page's own files (videos, sheets) are all it loads;
+  // serve's page asks its own server for frames (blob: images) and data
+  html += kind == PageKind::kServe
+              ? "<meta http-equiv=\"Content-Security-Policy\" content=\"default-src 'self'; "
+                "script-src 'unsafe-inline'; style-src 'unsafe-inline'; img-src 'self' blob: "
+                "data:; connect-src 'self'\">\n"
+              : "<meta http-equiv=\"Content-Security-Policy\" content=\"default-src 'self'; "
+                "script-src 'unsafe-inline'; style-src 'unsafe-inline'; img-src 'self' data:; "
+                "media-src 'self'\">\n";
   html += "<meta name=\"generator\" content=\"fetchscope " FETCHSCOPE_VERSION "\">\n";
   html += "<title>" + HtmlEscape(title) + "</title>\n";
   // an empty icon, so that a web server is not asked for /favicon.ico

@@ -12,7 +12,11 @@
 namespace fetchscope {
 
 /// Which script draws the page from its data.
-enum class PageKind { kReport, kCompare };
+enum class PageKind {
+  kReport,   ///< a run's index.html (web/src/report.js)
+  kCompare,  ///< compare's page (web/src/compare.js)
+  kServe,  ///< serve's live page (web/src/serve.js): it also loads frames and data from its server
+};
 
 /// The whole HTML text of a page titled `title` whose script renders `data`; each of `blocks`
 /// ({element id, JSON text}) is written as a JSON element that the page parses only when it

@@ -1,6 +1,7 @@
 #include "tests/test_util.h"
 
 #include <gtest/gtest.h>
+#include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -145,6 +146,48 @@ int WaitExit(pid_t pid) {
   }
   return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
 }
+
+ServeProcess::ServeProcess(const std::string& args, const std::filesystem::path& dir)
+    : log_path(dir / "serve.log") {
+  const std::filesystem::path token_file = dir / "token";
+  std::error_code ec;
+  std::filesystem::remove(log_path, ec);  // an earlier serve's URL is not this one's
+  pid = SpawnFetchscope("serve " + args + " --port 0 --token-file '" + token_file.string() + "'",
+                        log_path);
+  // the URL line, once the engine (GL context, environments) is up and the port bound
+  for (int i = 0; i < 600; ++i) {
+    const std::string text = log();
+    const size_t at = text.find("serve: open ");
+    if (at != std::string::npos && text.find("Ctrl-C stops it") != std::string::npos) {
+      const size_t end = text.find('\n', at);
+      url = text.substr(at + 12, end - at - 12);
+      port = std::stoi(url.substr(url.rfind(':') + 1));
+      token = ReadFile(token_file);
+      while (!token.empty() && token.back() == '\n') token.pop_back();
+      return;
+    }
+    int status = 0;
+    if (waitpid(pid, &status, WNOHANG) == pid) {
+      pid = -1;
+      return;
+    }
+    usleep(50 * 1000);
+  }
+}
+
+ServeProcess::~ServeProcess() {
+  if (pid > 0) Stop(SIGINT);
+}
+
+int ServeProcess::Stop(int sig) {
+  if (pid <= 0) return -1;
+  kill(pid, sig);
+  const int code = WaitExit(pid);
+  pid = -1;
+  return code;
+}
+
+std::string ServeProcess::log() const { return ReadFile(log_path); }
 
 nlohmann::json FfprobeJson(const std::filesystem::path& path, const std::string& show_entries) {
   const CommandResult probe = RunCommand("ffprobe -v error -count_frames -show_entries " +

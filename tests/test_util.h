@@ -90,6 +90,28 @@ int DecodedFrames(const std::filesystem::path& video);
 /// A python3 that imports h5py and numpy: the one on PATH, else Debian's; "" when none.
 std::string PythonWithH5py();
 
+/// A running `fetchscope serve ARGS --port 0 --token-file DIR/token` (output in DIR/serve.log),
+/// once it has printed its URL; stopped with SIGINT and waited for on destruction.
+class ServeProcess {
+ public:
+  ServeProcess(const std::string& args, const std::filesystem::path& dir);
+  ~ServeProcess();
+  ServeProcess(const ServeProcess&) = delete;
+  ServeProcess& operator=(const ServeProcess&) = delete;
+  /// Whether it printed its URL (else it exited: log() says why).
+  bool started() const { return port > 0; }
+  /// Sends `sig` and waits: its exit status, or 128 + the signal that ended it.
+  int Stop(int sig);
+  /// What it printed so far.
+  std::string log() const;
+
+  pid_t pid = -1;
+  int port = 0;
+  std::string token;  ///< read from DIR/token
+  std::string url;    ///< the URL it printed, with ?token=
+  std::filesystem::path log_path;
+};
+
 /// A Reach step on success, for the HUD and caption tests: the sparse reward is -0.0
 /// (Gymnasium's -(d > threshold)), and an action component is -0.001.
 FrameInfo ReachSuccessStep();

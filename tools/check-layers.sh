@@ -14,10 +14,11 @@ declare -A allowed=(
   [dataset]="base src"
   [run]="base src render encode dataset"
   [inspect]="base src render encode dataset run"
-  [bench]="base src render encode dataset run"
-  [cli]="base src render encode dataset run inspect bench"
+  [serve]="base src render encode dataset run inspect"
+  [bench]="base src render encode dataset run inspect serve"
+  [cli]="base src render encode dataset run inspect serve bench"
 )
-order=(base src render encode dataset run inspect bench cli)
+order=(base src render encode dataset run inspect serve bench cli)
 bad=0 checked=0
 for layer in "${order[@]}"; do
   [[ -d "$root/$layer" ]] || { echo "check-layers: no folder $layer/ in $root" >&2; exit 2; }

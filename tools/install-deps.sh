@@ -12,7 +12,7 @@ packages=(cmake g++ make pkg-config
   libegl-dev libegl1 libegl-mesa0 libgl1-mesa-dri libosmesa6-dev
   libeigen3-dev libpng-dev libavcodec-dev libavformat-dev libavutil-dev libswscale-dev
   libavfilter-dev libssl-dev libfreetype-dev libfontconfig-dev fonts-dejavu-core libhdf5-dev
-  libcli11-dev nlohmann-json3-dev libgtest-dev
+  libcli11-dev nlohmann-json3-dev libgtest-dev libcpp-httplib-dev libturbojpeg0-dev
   ffmpeg python3 python3-numpy python3-h5py
   binutils xz-utils ccache
   chromium)

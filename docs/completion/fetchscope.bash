@@ -28,6 +28,7 @@ _fetchscope() {
       ':list-gpus') cmd='list-gpus' ;;
       ':report') cmd='report' ;;
       ':compare') cmd='compare' ;;
+      ':serve') cmd='serve' ;;
       ':help') cmd='help' ;;
     esac
   done
@@ -49,12 +50,12 @@ _fetchscope() {
     --assets) COMPREPLY=($(compgen -W 'bundled auto' -- "$cur")); return ;;
     --gpu) COMPREPLY=($(compgen -W 'all cuda:0' -- "$cur")); return ;;
     --what) COMPREPLY=($(compgen -W 'sim render encode record all node soak' -- "$cur")); return ;;
-    --backends|--crf|--episodes|--exec-timeout|--fps|--from|--genuine-assets|--gif-fps|--gif-width|--golden-dir|--height|--hud-opacity|--jobs|--json-out|--magnitudes|--minari|--minari-author|--minari-author-email|--minari-root|--n-episodes|--n-steps|--only|--out|--output|--pixel-tolerance|--seconds|--seed|--shard|--shard-count|--sheet-every|--soak-frames|--steps|--tolerance|--width|-j|-o)
+    --backends|--crf|--episodes|--exec-timeout|--fps|--from|--genuine-assets|--gif-fps|--gif-width|--golden-dir|--height|--host|--hud-opacity|--idle-timeout|--jobs|--json-out|--magnitudes|--max-queued|--max-sessions|--minari|--minari-author|--minari-author-email|--minari-root|--n-episodes|--n-steps|--only|--out|--output|--pixel-tolerance|--port|--save-dir|--seconds|--seed|--serve-height|--serve-width|--shard|--shard-count|--sheet-every|--soak-frames|--steps|--token-file|--tolerance|--width|-j|-o)
       COMPREPLY=($(compgen -f -- "$cur")); return ;;
   esac
   local words=''
   case $cmd in
-    '') words='list-envs describe reward-check random-episodes anatomy rollout export datasets render list-cameras record bench probe-actions merge-manifests golden list-gpus report compare help --help --version' ;;
+    '') words='list-envs describe reward-check random-episodes anatomy rollout export datasets render list-cameras record bench probe-actions merge-manifests golden list-gpus report compare serve help --help --version' ;;
     'list-envs') words='--help -h --json' ;;
     'describe') words='--help -h --env-id --assets --json-out --overwrite' ;;
     'reward-check') words='--help -h --env-id --assets --seed --n-steps --json-out --overwrite' ;;
@@ -66,7 +67,7 @@ _fetchscope() {
     'render') words='--help -h --env-id --assets --seed --camera --overlay --width --height --hud-position --hud-opacity --backend --msaa --readback --gpu --steps --policy --layers --output -o --verbose -v' ;;
     'list-cameras') words='--help -h --env-id --assets' ;;
     'record') words='--help -h --env-id --assets --seed --camera --overlay --width --height --hud-position --hud-opacity --backend --msaa --readback --gpu --episodes --steps --policy --exec-timeout --replay-dtype --fps --codec --crf --preset --format --gif-fps --gif-width --layers --sheet-every --out --quiet -q --minari --minari-root --minari-author --minari-author-email --overwrite --resume --jobs -j --worker-mode --shard --shard-count --no-report --from --tolerance' ;;
-    'bench') words='--help -h --what --soak-frames --width --height --assets --seconds --backends --no-peers --json-out' ;;
+    'bench') words='--help -h --what --serve-width --serve-height --soak-frames --width --height --assets --seconds --backends --no-peers --json-out' ;;
     'probe-actions') words='--help -h --env-id --assets --seed --camera --overlay --width --height --hud-position --hud-opacity --backend --msaa --readback --gpu --steps --magnitudes --out --json-out' ;;
     'merge-manifests') words='--help -h --out --quiet -q --no-report' ;;
     'golden') words='check update --help -h' ;;
@@ -75,7 +76,8 @@ _fetchscope() {
     'list-gpus') words='--help -h --gpu --json' ;;
     'report') words='--help -h --quiet -q' ;;
     'compare') words='--help -h --out --tolerance --pixel-tolerance --states-only --quiet -q' ;;
-    'help') words='--help -h --markdown --man --bash-completion list-envs describe reward-check random-episodes anatomy rollout export datasets render list-cameras record bench probe-actions merge-manifests golden list-gpus report compare help' ;;
+    'serve') words='--help -h --env-id --assets --seed --policy --exec-timeout --replay-dtype --camera --overlay --width --height --hud-position --hud-opacity --backend --msaa --readback --gpu --minari-root --host --port --token-file --save-dir --max-sessions --max-queued --idle-timeout' ;;
+    'help') words='--help -h --markdown --man --bash-completion list-envs describe reward-check random-episodes anatomy rollout export datasets render list-cameras record bench probe-actions merge-manifests golden list-gpus report compare serve help' ;;
   esac
   if [[ $cur == -* || -n $words && $cmd == '' ]]; then
     COMPREPLY=($(compgen -W "$words" -- "$cur"))

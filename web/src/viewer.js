@@ -85,6 +85,9 @@ const FSViewer = (() => {
   }
 
   // One viewer in `parent`. options: {id, fps, threshold, has_object, gripper_command,
+  // onStep(episode, t) (called whenever the cursor moves), noLink (no "link to this moment"),
+  // keysAnywhere (its keys act wherever the page is scrolled: a page that is all viewer), play() and isPlaying() (a page that plays
+  // the steps itself, without videos: serve),
   // layout: {finger_width, object_height} (the observation indices the titles name), legend (an
   // element under the videos: the markers the frames show),
   // episodes: [{index, label, title, tracks: () => [{name, caption, video, format, signals, frames,
@@ -109,9 +112,9 @@ const FSViewer = (() => {
         stepLabel, slider);
     const hint = el('p', {class: 'caption'},
         '←/→ one step · space play/pause · Home/End first/last step · ↑/↓ previous/next episode · click or drag on a plot to seek. ' +
-        'The frame shown for step t is the one recorded after step t (t = 0: after reset). Link to this moment: ');
+        'The frame shown for step t is the one recorded after step t (t = 0: after reset).' + (options.noLink ? '' : ' Link to this moment: '));
     const link = el('a', {class: 'viewer-link', href: '#'}, '');
-    hint.append(link);
+    if (!options.noLink) hint.append(link);
     const plotsBox = el('div', {class: 'viewer-plots'});
     root.append(title, media, ...(options.legend ? [options.legend] : []), controls, hint, plotsBox);
     parent.append(root);
@@ -125,7 +128,9 @@ const FSViewer = (() => {
       return box.bottom > 0 && box.top < window.innerHeight;
     };
 
-    function playing() { return state.videos.some((v) => !v.paused && !v.ended); }
+    function playing() {
+      return options.isPlaying ? options.isPlaying() : state.videos.some((v) => !v.paused && !v.ended);
+    }
 
     // the cursor line of each plot and the values at the step
     function drawCursor() {
@@ -152,6 +157,7 @@ const FSViewer = (() => {
       link.textContent = hash;
       if (updateHash && options.linkable && location.hash !== hash) history.replaceState(null, '', hash);
       drawCursor();
+      if (options.onStep) options.onStep(state.episode, state.step);
     }
 
     // Shows step t: the cursor, and every video at the middle of frame t.
@@ -198,6 +204,7 @@ const FSViewer = (() => {
 
     let stoppedByUser = false;  // a pause from the play button or space: show the frame it stopped on
     function togglePlay() {
+      if (options.play) { options.play(); return; }  // a page that plays without videos (serve)
       if (!state.videos.length) return;
       if (playing()) {
         stoppedByUser = true;
@@ -217,6 +224,11 @@ const FSViewer = (() => {
       const grid = Math.min(1180, window.innerWidth) - 2 * 24 - 2 * 11;
       const columns = Math.max(1, Math.floor((grid + 10) / (520 + 10)));
       return Math.max(300, Math.floor((grid - 10 * (columns - 1)) / columns) - 2 * 7);
+    }
+
+    // a plot's data: the step axis, then each series' value at every step
+    function plotValues(spec, xs) {
+      return [xs, ...spec.series.map((s) => (s.values === 'threshold' ? xs.map(() => options.threshold) : xs.map((t) => at(s.values, t))))];
     }
 
     function buildPlots() {
@@ -242,18 +254,17 @@ const FSViewer = (() => {
         const target = targets[i];
         const hasCmd = spec.series.some((s) => s.scale === 'cmd');
         const series = [{label: 'step'}];
-        const values = [xs];
+        const values = plotValues(spec, xs);
         for (const s of spec.series) {
-          const list = s.values === 'threshold' ? xs.map(() => options.threshold) : xs.map((t) => at(s.values, t));
           series.push({label: s.label, stroke: s.stroke, dash: s.dash || undefined, width: s.width || 1.5, scale: s.scale || 'y',
                        points: {show: !!s.points || state.steps <= 60, size: s.points ? 5 : 3}, spanGaps: false});
-          values.push(list);
         }
         const chart = new uPlot({
           width, height: 150,
           legend: {show: true, live: false},
           cursor: {drag: {x: false, y: false, setScale: false}, sync: {key: `${root.id}-steps`}},
-          scales: {x: {time: false, range: [0, Math.max(1, state.steps)]}, ...(hasCmd ? {cmd: {range: [-1.05, 1.05]}} : {})},
+          // the x range follows the steps (they grow in serve's live episode: refresh)
+          scales: {x: {time: false, range: () => [0, Math.max(1, state.steps)]}, ...(hasCmd ? {cmd: {range: [-1.05, 1.05]}} : {})},
           axes: [{incrs: FS.integerSteps}, {label: spec.unit, size: 62},
                  ...(hasCmd ? [{scale: 'cmd', side: 1, size: 40, grid: {show: false}}] : [])],
           series,
@@ -321,7 +332,7 @@ const FSViewer = (() => {
     }
 
     document.addEventListener('keydown', (event) => {
-      if (!onScreen() || event.altKey || event.ctrlKey || event.metaKey || state.episode === null) return;
+      if (!(options.keysAnywhere || onScreen()) || event.altKey || event.ctrlKey || event.metaKey || state.episode === null) return;
       const target = event.target;
       if (target && (/^(INPUT|TEXTAREA|SELECT)$/.test(target.tagName) && target !== slider || target.isContentEditable)) return;
       const actions = {ArrowLeft: () => seek(state.step - 1), ArrowRight: () => seek(state.step + 1),
@@ -342,7 +353,29 @@ const FSViewer = (() => {
     }
     window.addEventListener('resize', fit);
 
-    const api = {element: root, open, seek, togglePlay, nextEpisode,
+    // The open episode's tracks read again (their signals grew or shrank: serve's live episode),
+    // the plots rebuilt, and the cursor put at step t (default: where it is, within the steps).
+    function refresh(t) {
+      if (state.episode === null) return;
+      const episode = options.episodes.find((e) => e.index === state.episode);
+      if (!episode) return;
+      state.tracks = episode.tracks();
+      state.steps = Math.max(0, ...state.tracks.map((tr) => (tr.signals ? tr.signals.frames : tr.frames || 1) - 1));
+      const specs = plotSpecs(state.tracks, options).filter((spec) => spec.series.some((s) => Array.isArray(s.values)));
+      const same = specs.length === state.specs.length && specs.length > 0 &&
+          specs.every((spec, i) => spec.id === state.specs[i].id && spec.series.length === state.specs[i].series.length);
+      if (same) {  // the same plots with more (or fewer) steps: new data, no new charts
+        const xs = Array.from({length: state.steps + 1}, (_, k) => k);
+        state.specs = specs;
+        for (const spec of specs) state.charts[spec.id].setData(plotValues(spec, xs));
+      } else {
+        buildPlots();
+        requestAnimationFrame(() => setTimeout(fit));
+      }
+      seek(t === undefined ? Math.min(state.step, state.steps) : t);
+    }
+
+    const api = {element: root, open, seek, togglePlay, nextEpisode, refresh,
                  get episode() { return state.episode; }, get step() { return state.step; },
                  get steps() { return state.steps; }, get charts() { return state.charts; },
                  get tracks() { return state.tracks; }, get videos() { return state.videos; }};

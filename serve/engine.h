@@ -1,0 +1,121 @@
+// serve's engine: one thread that owns the GL context, the environments, the renderers, the
+// replayed episodes and the pages' sessions, and runs every request that simulates or renders,
+// one at a time, in the order they came. Requests queue for it (at most max_queued waiting: a
+// page keeps one frame request in flight and sends the latest view when it returns, so a full
+// queue means too many pages, answered 503). Every frame comes from the renderer record uses, on
+// the exact state the environment held at that step (EnvCheckpoint), so a frame at a recorded
+// camera and size is the frame render gives for that state.
+#pragma once
+
+#include <chrono>
+#include <condition_variable>
+#include <deque>
+#include <filesystem>
+#include <functional>
+#include <future>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "render/view.h"
+#include "serve/request.h"
+#include "serve/sources.h"
+#include "src/policy.h"
+
+namespace fetchscope::serve {
+
+/// How the engine runs: the command line's view, policy and limits.
+struct EngineOptions {
+  ViewSetup view;  ///< backend, GPU, msaa, HUD, readback; the page's first view
+  std::string camera_text = "default";   ///< --camera as given: the page's first camera
+  std::string overlay_text = "default";  ///< --overlay as given: the page's first overlays
+  PolicySpec policy;                     ///< what "step the policy" plays (--policy)
+  std::filesystem::path save_dir = "serve-sessions";  ///< where a saved session goes
+  std::string assets_flag;      ///< the --assets a saved session's record command needs ("" none)
+  int max_sessions = 8;         ///< pages with a session at once
+  int max_queued = 16;          ///< requests waiting for the engine at once
+  double idle_timeout_s = 600;  ///< a session unused this long is freed
+  int episode_cache = 8;        ///< replayed episodes kept (their checkpoints and data)
+  int max_live_steps = 10000;   ///< steps a live episode may take
+};
+
+/// One encoded frame.
+struct Frame {
+  std::string bytes;         ///< the image file
+  std::string content_type;  ///< "image/jpeg" or "image/png"
+  std::string camera;        ///< the camera shown, as a --camera value
+  double render_ms = 0;      ///< restoring the state and rendering (GL, readback, HUD)
+  double encode_ms = 0;      ///< JPEG or PNG encoding
+};
+
+class Engine {
+ public:
+  /// Starts the engine's thread, which makes the GL context (view.backend, view.gpu) and an
+  /// environment per distinct env of `sources`. Throws what that throws (no GL: RunError).
+  Engine(std::vector<Source> sources, EngineOptions options);
+  /// Stops the thread: what is queued is refused (503), exec: children are ended.
+  ~Engine();
+  Engine(const Engine&) = delete;
+  Engine& operator=(const Engine&) = delete;
+
+  const std::vector<Source>& sources() const { return sources_; }
+  const EngineOptions& options() const { return options_; }
+  /// GL vendor, renderer and backend, for the page and bench.
+  nlohmann::json GlJson() const { return gl_json_; }
+
+  /// What the page shows before any request: the sources, the view options, each env's cameras
+  /// (names, and a free camera looking along each, for orbiting from it), the policy, the limits.
+  nlohmann::json PageData() const;
+
+  /// A new session for a page (at most max_sessions; idle ones are freed first). Its id.
+  std::string NewSession();
+  /// The frame of `request`'s view at its step (the session's live episode for source "live").
+  Frame RenderFrame(const std::string& session, const ViewRequest& request);
+  /// What is at a pixel of a view: {"body", "geom", "site", "color"} or {"body": null}.
+  nlohmann::json Pick(const std::string& session, const PickRequest& request);
+  /// A served episode's data for the viewer: steps, signals (inspect/viewer.h's EpisodeSignals),
+  /// its replay (exact, or a dataset's divergence) and the dtype of its actions.
+  nlohmann::json Episode(const std::string& session, const StepRef& episode);
+  /// The session's live episode: started from a live env's reset or a served step, stepped by an
+  /// action or the policy, one step back, saved (a replay trajectory and the record command that
+  /// re-renders it). Each returns the live episode's data ({"steps", "signals", ...}); Save adds
+  /// {"files", "command"}.
+  nlohmann::json StartLive(const std::string& session, const StartRequest& request);
+  nlohmann::json StepLive(const std::string& session, const StepRequest& request);
+  nlohmann::json BackLive(const std::string& session);
+  nlohmann::json SaveLive(const std::string& session, const ViewRequest& view);
+  /// Frees sessions idle for longer than idle_timeout_s; how many are open.
+  int ExpireIdleSessions();
+
+  /// Requests that wait for the engine now (for tests and bench).
+  int queued() const;
+
+ private:
+  struct State;  // everything the engine thread owns
+  // Runs `task` on the engine's thread and returns its result (or rethrows what it threw);
+  // RequestError(503) when max_queued requests already wait, or when stopping.
+  template <class T>
+  T Run(std::function<T(State&)> task);
+  void Loop();
+  // Draws the first view once, at start (the renderer made, llvmpipe's shaders compiled).
+  void Warm(State& state);
+  // Frees the sessions idle for longer than idle_timeout_s (on the engine thread).
+  void ExpireIdle(State& state) const;
+
+  std::vector<Source> sources_;
+  EngineOptions options_;
+  nlohmann::json gl_json_;
+  nlohmann::json cameras_json_;  // per source: its env's cameras (made on the engine thread)
+  mutable std::mutex mutex_;
+  std::condition_variable wake_;
+  std::deque<std::function<void(bool)>> queue_;  // each runs (true) or is refused (false)
+  bool stopping_ = false;
+  std::unique_ptr<State> state_;
+  std::thread thread_;
+};
+
+}  // namespace fetchscope::serve

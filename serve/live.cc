@@ -1,0 +1,252 @@
+// serve's live episodes (serve/engine.h): started from a live env's reset or a served step,
+// stepped by the page's keys or the command line's policy, stepped back, and saved as a replay
+// trajectory with the record command that re-renders it.
+#include <sys/stat.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <numeric>
+
+#include "base/atomic_file.h"
+#include "base/errors.h"
+#include "base/process.h"
+#include "base/stop_signal.h"
+#include "serve/engine_state.h"
+
+namespace fetchscope::serve {
+namespace {
+
+namespace fs = std::filesystem;
+
+// A number as the CSV replay reads it back exactly: shortest round-trip text.
+std::string RoundTrip(double v) {
+  char text[40];
+  for (int digits = 1; digits <= 17; ++digits) {
+    std::snprintf(text, sizeof(text), "%.*g", digits, v);
+    if (std::strtod(text, nullptr) == v) break;
+  }
+  return text;
+}
+
+TrajectoryStep RowAfterStep(const FetchEnv& env, const StepResult& r, const Action& action, int t) {
+  TrajectoryStep row;
+  row.t = t;
+  row.obs = r.obs;
+  row.action = action;
+  row.reward = r.reward;
+  row.is_success = r.is_success;
+  row.past_time_limit = t > env.spec().max_episode_steps;
+  return row;
+}
+
+}  // namespace
+
+nlohmann::json Engine::State::LiveData(const LiveEpisode& live) const {
+  const Source& src = sources[live.source];
+  nlohmann::json data = RowsData(*src.spec, live.steps, std::nullopt);
+  data["source"] = live.source;
+  data["episode"] = live.index;
+  data["prefix"] = live.prefix;
+  data["action_dtype"] = live.float32 ? "float32" : "float64";
+  data["can_save"] = live.reset_seed.has_value() && live.steps.size() > 1;
+  data["policy"] = options.policy.text;
+  return data;
+}
+
+nlohmann::json Engine::StartLive(const std::string& session, const StartRequest& r) {
+  return Run<nlohmann::json>([&](State& s) {
+    Session& ses = s.Touch(session);
+    LiveEpisode live;
+    if (r.env) {
+      const int source = *r.env;
+      if (source >= static_cast<int>(sources_.size()) ||
+          sources_[source].kind != SourceKind::kLive) {
+        throw RequestError(404, "no live env " + std::to_string(source) +
+                                    ": start one with serve --env-id ID --seed S");
+      }
+      const Source& src = sources_[source];
+      FetchEnv& env = *s.env_of_source[source];
+      TrajectoryStep row;
+      row.obs = env.Reset(src.seed);
+      row.is_success = env.IsSuccess(row.obs.achieved_goal, row.obs.desired_goal);
+      live.source = source;
+      live.reset_seed = src.seed;
+      live.float32 = std::holds_alternative<policy_spec::Random>(options_.policy.value) ||
+                     options_.policy.replay_dtype() == "float32";
+      live.steps.push_back(row);
+      live.checkpoints.push_back(env.Checkpoint());
+    } else {
+      const LoadedEpisode& e = s.Load(r.from.source, r.from.episode);
+      if (r.from.step >= static_cast<int>(e.steps.size())) {
+        throw RequestError(404, "step " + std::to_string(r.from.step) +
+                                    " is past the episode's end: it has " +
+                                    std::to_string(e.steps.size() - 1) + " steps");
+      }
+      live.source = r.from.source;
+      live.index = r.from.episode;
+      live.prefix = r.from.step;
+      live.reset_seed = e.reset_seed;
+      live.float32 = e.float32;
+      live.steps.assign(e.steps.begin(), e.steps.begin() + r.from.step + 1);
+      live.checkpoints.assign(e.checkpoints.begin(), e.checkpoints.begin() + r.from.step + 1);
+    }
+    ses.live = std::move(live);
+    return s.LiveData(*ses.live);
+  });
+}
+
+nlohmann::json Engine::StepLive(const std::string& session, const StepRequest& r) {
+  return Run<nlohmann::json>([&](State& s) {
+    Session& ses = s.Touch(session);
+    if (!ses.live) throw RequestError(409, "this session has no live episode: start one first");
+    LiveEpisode& live = *ses.live;
+    const int t = static_cast<int>(live.steps.size());
+    if (t > options_.max_live_steps) {
+      throw RequestError(409, "the live episode has " + std::to_string(t - 1) +
+                                  " steps, the most it may take (" +
+                                  std::to_string(options_.max_live_steps) + ")");
+    }
+    FetchEnv& env = *s.env_of_source[live.source];
+    env.Restore(live.checkpoints.back());
+    Action action;
+    if (r.action) {
+      action.value = *r.action;
+    } else {
+      try {
+        if (!live.policy) {
+          PolicyContext context;
+          context.seed = live.reset_seed.value_or(sources_[live.source].seed);
+          context.steps_per_episode = std::max(env.spec().max_episode_steps, t + 1);
+          context.episodes = live.index + 1;
+          context.stop_requested = [] { return StopSignal() != 0; };
+          live.policy = MakePolicy(options_.policy, env.spec(), context);
+          live.policy->BeginEpisode(live.index, live.steps.back().obs);
+          live.policy_from = t - 1;
+        }
+        action = live.policy->Act(live.steps.back().obs, t - 1);
+      } catch (const std::exception& e) {
+        live.policy.reset();  // a child that failed is started afresh next time
+        throw RequestError(
+            502, std::string("the policy ") + options_.policy.text + " failed: " + e.what());
+      }
+    }
+    if (live.float32) {
+      for (double& v : action.value) v = static_cast<float>(v);
+    }
+    action.is_float32 = live.float32;
+    const StepResult result = env.Step(action);
+    live.steps.push_back(RowAfterStep(env, result, action, t));
+    live.checkpoints.push_back(env.Checkpoint());
+    return s.LiveData(live);
+  });
+}
+
+nlohmann::json Engine::BackLive(const std::string& session) {
+  return Run<nlohmann::json>([&](State& s) {
+    Session& ses = s.Touch(session);
+    if (!ses.live) throw RequestError(409, "this session has no live episode: start one first");
+    LiveEpisode& live = *ses.live;
+    if (live.steps.size() <= 1) throw RequestError(409, "the live episode is at its reset");
+    live.steps.pop_back();
+    live.checkpoints.pop_back();
+    live.policy.reset();  // it acts from where the episode now stands, when asked again
+    if (static_cast<int>(live.steps.size()) - 1 < live.prefix) live.prefix = live.steps.size() - 1;
+    return s.LiveData(live);
+  });
+}
+
+nlohmann::json Engine::SaveLive(const std::string& session, const ViewRequest& view) {
+  return Run<nlohmann::json>([&](State& s) {
+    Session& ses = s.Touch(session);
+    if (!ses.live || ses.live->steps.size() <= 1) {
+      throw RequestError(409, "nothing to save: the live episode has taken no step");
+    }
+    const LiveEpisode& live = *ses.live;
+    const Source& src = sources_[live.source];
+    const FetchEnv& env = *s.env_of_source[live.source];
+    std::error_code ec;
+    fs::create_directories(options_.save_dir, ec);
+    const fs::path dir = fs::absolute(options_.save_dir);
+    std::string name;
+    for (int n = 1; n < 100000; ++n) {
+      char text[32];
+      std::snprintf(text, sizeof(text), "session_%03d", n);
+      if (!fs::exists(dir / (std::string(text) + ".json")) &&
+          !fs::exists(dir / (std::string(text) + ".csv")) && !fs::exists(dir / text)) {
+        name = text;
+        break;
+      }
+    }
+    const fs::path json_path = dir / (name + ".json");
+    const fs::path csv_path = dir / (name + ".csv");
+    // the trajectory, as record writes the episode it re-renders: the same writer, env, seed,
+    // policy text and assets, so that the two files are the same bytes
+    Trajectory trajectory;
+    trajectory.env_id = src.spec->id;
+    trajectory.seed = live.reset_seed.value_or(0);
+    trajectory.policy = "replay:" + json_path.string();
+    trajectory.assets = env.assets();
+    TrajectoryEpisode episode;
+    episode.index = live.index;
+    episode.steps = live.steps;
+    episode.episode_return = 0;
+    for (const TrajectoryStep& row : live.steps) {
+      if (row.reward) episode.episode_return += *row.reward;
+    }
+    trajectory.episodes = {episode};
+    std::string csv;
+    for (size_t t = 1; t < live.steps.size(); ++t) {
+      const Action& a = *live.steps[t].action;
+      for (int i = 0; i < 4; ++i) csv += (i ? "," : "") + RoundTrip(a.value[i]);
+      csv += "\n";
+    }
+    try {
+      WriteFileAtomically(json_path.string(), TrajectoryText(trajectory));
+      WriteFileAtomically(csv_path.string(), csv);
+    } catch (const RunError& e) {
+      throw RequestError(500, std::string("cannot save the session: ") + e.what());
+    }
+    ++ses.saves;
+    nlohmann::json out = s.LiveData(live);
+    out["files"] = {json_path.string(), csv_path.string()};
+    if (!live.reset_seed) {
+      out["command"] = nullptr;
+      out["why_no_command"] =
+          "this dataset episode has no seed (it was reset from its first observation or a "
+          "continued generator), so record cannot reset to it; the files hold its actions";
+      return out;
+    }
+    std::vector<std::string> argv = {"fetchscope", "record",
+                                     "--env-id",   src.spec->id,
+                                     "--seed",     std::to_string(*live.reset_seed),
+                                     "--policy",   trajectory.policy,
+                                     "--steps",    std::to_string(live.steps.size() - 1)};
+    if (!options_.assets_flag.empty() || env.assets().kind != "bundled") {
+      argv.push_back("--assets");
+      argv.push_back(env.assets().kind == "bundled" ? "bundled" : env.assets().root);
+    }
+    for (const std::string& flag : {std::string("--camera"), std::string("--overlay")}) {
+      argv.push_back(flag);
+      argv.push_back(flag == "--camera" ? view.camera : view.overlay_text);
+    }
+    argv.insert(argv.end(), {"--width", std::to_string(view.width), "--height",
+                             std::to_string(view.height), "--out", (dir / name).string()});
+    std::string command;
+    for (const std::string& arg : argv) command += (command.empty() ? "" : " ") + ShellQuote(arg);
+    out["command"] = command;
+    out["record_out"] = (dir / name).string();
+    out["episode_file"] = (dir / name /
+                           ("episode_" +
+                            [&] {
+                              char k[16];
+                              std::snprintf(k, sizeof(k), "%03d", live.index);
+                              return std::string(k);
+                            }() +
+                            ".json"))
+                              .string();
+    return out;
+  });
+}
+
+}  // namespace fetchscope::serve

@@ -1,0 +1,184 @@
+#include "serve/sources.h"
+
+#include <system_error>
+
+#include "base/errors.h"
+#include "inspect/report.h"
+#include "src/trajectory.h"
+
+namespace fetchscope::serve {
+namespace {
+
+namespace fs = std::filesystem;
+
+// The assets a recording names (its manifest's or file's "assets"), resolved on this machine.
+AssetSource RecordedAssets(const std::string& kind, const std::string& path) {
+  return ResolveAssets(kind.empty() || kind == "bundled" || path.empty() ? "bundled" : path);
+}
+
+std::string Plural(size_t n, const char* what) {
+  return std::to_string(n) + " " + what + (n == 1 ? "" : "s");
+}
+
+Source OpenRunFolder(const std::string& given) {
+  const RecordedRun run = ReadRunFolder(given);
+  const Manifest& m = run.manifest;
+  Source s;
+  s.kind = SourceKind::kRecording;
+  s.given = given;
+  s.spec = &FindEnvSpec(m.env_id);
+  s.assets = RecordedAssets(m.assets.value("kind", ""), m.assets.value("path", ""));
+  s.seed = m.seed;
+  s.policy = m.policy;
+  for (const auto& [k, entry] : run.recorded) {
+    if (entry.trajectory.empty()) continue;  // nothing to replay
+    ListedEpisode e;
+    e.index = k;
+    e.steps = entry.steps.value_or(entry.frames.value_or(1) - 1);
+    e.complete = entry.IsComplete(m.steps_per_episode);
+    e.success = entry.is_success;
+    e.episode_return = entry.episode_return;
+    s.episodes.push_back(e);
+    s.files[k] = (run.dir / entry.trajectory).string();
+  }
+  if (s.episodes.empty()) throw RunError("serve: " + given + " holds no recorded episode");
+  s.title = "run " + given + ": " + m.env_id + ", seed " + std::to_string(m.seed) + ", " +
+            m.policy + ", " + Plural(s.episodes.size(), "episode");
+  return s;
+}
+
+// Listed episodes of rows held in memory.
+void ListRows(Source* s) {
+  for (const auto& [k, episode] : s->rows->episodes) {
+    ListedEpisode e;
+    e.index = k;
+    e.steps = static_cast<int>(episode.steps.size()) - 1;
+    e.complete = episode.complete;
+    if (!episode.steps.empty()) e.success = episode.steps.back().is_success;
+    e.episode_return = episode.episode_return;
+    s->episodes.push_back(e);
+  }
+}
+
+Source OpenTrajectoryFile(const std::string& given) {
+  Source s;
+  s.kind = SourceKind::kRecording;
+  s.given = given;
+  s.rows = std::make_shared<TrajectorySource>(LoadTrajectorySource(given));
+  s.spec = &FindEnvSpec(s.rows->env_id);
+  s.assets = ResolveAssets(SourceAssets(*s.rows));
+  s.seed = s.rows->seed;
+  s.policy = s.rows->policy;
+  ListRows(&s);
+  s.title = "trajectory " + given + ": " + s.rows->env_id + ", seed " + std::to_string(s.seed) +
+            ", " + s.policy + ", " + Plural(s.episodes.size(), "episode");
+  return s;
+}
+
+Source OpenDataset(const std::string& given, const fs::path& root) {
+  MinariSourceRequest request;
+  request.what = given;
+  request.root = root;
+  MinariSource found;
+  try {
+    found = LoadMinariSource(request);
+  } catch (const UsageError& e) {
+    const std::string what = e.what();
+    if (what.rfind("no Minari dataset", 0) != 0) throw;
+    throw UsageError("serve: '" + given +
+                     "' is none of what serve accepts: a run folder of record, a trajectory JSON "
+                     "file, or a Minari dataset (" +
+                     what + ")");
+  }
+  Source s;
+  s.kind = SourceKind::kDataset;
+  s.given = given;
+  s.rows = std::make_shared<TrajectorySource>(std::move(found.source));
+  s.spec = &FindEnvSpec(s.rows->env_id);
+  // a dataset the genuine env made: its assets, where a gymnasium_robotics is installed
+  const AssetSource automatic = found.genuine_env ? ResolveAssets("auto") : AssetSource{};
+  s.assets = automatic.kind == "dir" ? automatic : ResolveAssets(SourceAssets(*s.rows));
+  s.policy = s.rows->policy;
+  ListRows(&s);
+  s.title = "dataset " + found.found;
+  return s;
+}
+
+}  // namespace
+
+Source OpenSource(const std::string& given, const fs::path& minari_root) {
+  std::error_code ec;
+  if (fs::is_directory(given, ec) && fs::exists(fs::path(given) / "manifest.json", ec)) {
+    return OpenRunFolder(given);
+  }
+  if (fs::is_regular_file(given, ec) && IsTrajectoryPath(given)) return OpenTrajectoryFile(given);
+  return OpenDataset(given, minari_root);
+}
+
+Source LiveSource(const EnvSpec& spec, const AssetSource& assets, uint64_t seed) {
+  Source s;
+  s.kind = SourceKind::kLive;
+  s.given = spec.id;
+  s.spec = &spec;
+  s.assets = assets;
+  s.seed = seed;
+  s.title = "live " + spec.id + ", seed " + std::to_string(seed);
+  return s;
+}
+
+TrajectoryEpisode EpisodeRows(const Source& source, int index) {
+  if (source.rows) {
+    const auto it = source.rows->episodes.find(index);
+    if (it == source.rows->episodes.end()) {
+      throw RunError(source.given + " has no episode " + std::to_string(index));
+    }
+    return it->second;
+  }
+  const auto file = source.files.find(index);
+  if (file == source.files.end()) {
+    throw RunError(source.given + " has no episode " + std::to_string(index));
+  }
+  Trajectory t = ReadTrajectory(file->second);
+  if (t.episodes.size() != 1 || t.episodes[0].index != index) {
+    throw RunError(file->second + ": holds no single episode " + std::to_string(index));
+  }
+  TrajectoryEpisode e = std::move(t.episodes[0]);
+  e.file = file->second;
+  return e;
+}
+
+const ListedEpisode* FindEpisode(const Source& source, int index) {
+  for (const ListedEpisode& e : source.episodes) {
+    if (e.index == index) return &e;
+  }
+  return nullptr;
+}
+
+nlohmann::json SourcesJson(const std::vector<Source>& sources) {
+  nlohmann::json list = nlohmann::json::array();
+  for (size_t i = 0; i < sources.size(); ++i) {
+    const Source& s = sources[i];
+    nlohmann::json episodes = nlohmann::json::array();
+    for (const ListedEpisode& e : s.episodes) {
+      episodes.push_back(
+          {{"index", e.index},
+           {"steps", e.steps},
+           {"complete", e.complete},
+           {"success", e.success ? nlohmann::json(*e.success) : nullptr},
+           {"return", e.episode_return ? nlohmann::json(*e.episode_return) : nullptr}});
+    }
+    static const char* kKinds[] = {"recording", "dataset", "live"};
+    list.push_back({{"source", i},
+                    {"kind", kKinds[static_cast<int>(s.kind)]},
+                    {"title", s.title},
+                    {"env_id", s.spec->id},
+                    {"seed", s.seed},
+                    {"policy", s.policy},
+                    {"has_object", s.spec->has_object},
+                    {"threshold", s.spec->distance_threshold},
+                    {"episodes", std::move(episodes)}});
+  }
+  return list;
+}
+
+}  // namespace fetchscope::serve
