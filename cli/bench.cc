@@ -91,8 +91,7 @@ Command AddBench(CLI::App& app) {
          "of --backends, at --serve-width x --serve-height). node, soak and serve are not part "
          "of all")
       ->capture_default_str()
-      ->check(
-          CLI::IsMember({"sim", "render", "encode", "record", "all", "node", "soak", "serve"}));
+      ->check(CLI::IsMember({"sim", "render", "encode", "record", "all", "node", "soak", "serve"}));
   sub->add_option("--serve-width", o->serve_width, "--what serve: the live view's width")
       ->capture_default_str()
       ->check(CLI::Range(16, 4096));

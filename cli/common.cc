@@ -17,6 +17,7 @@
 #include "base/atomic_file.h"
 #include "base/errors.h"
 #include "base/json_util.h"
+#include "base/suggest.h"
 
 namespace fetchscope::cli {
 
@@ -105,6 +106,23 @@ void AddDatasetAuthorOptions(CLI::App* sub, DatasetAuthor* author) {
                   "The dataset's metadata `author` (default fetchscope)");
   sub->add_option("--minari-author-email", author->email,
                   "The dataset's metadata `author_email` (default: none)");
+}
+
+void AddSignalsOption(CLI::App* sub, std::string* signals) {
+  sub->add_option("--signals", *signals,
+                  "Per-step signals added to each step of the trajectory JSON: none, or contacts "
+                  "(the left and right finger's normal force on the object in N, whether the "
+                  "object touches the table, and every active contact with its geoms, position, "
+                  "normal force and penetration; the state after the step, as MuJoCo's d->contact "
+                  "holds it). Recording them never changes the simulation")
+      ->capture_default_str();
+}
+
+bool ParseContactSignals(const std::string& signals) {
+  if (signals == "none") return false;
+  if (signals == "contacts") return true;
+  throw UsageError("--signals '" + signals + "' is not known" +
+                   DidYouMean(signals, {"none", "contacts"}) + "; accepted: none, contacts");
 }
 
 }  // namespace fetchscope::cli

@@ -73,6 +73,13 @@ struct DatasetAuthor {
 };
 void AddDatasetAuthorOptions(CLI::App* sub, DatasetAuthor* author);
 
+/// Adds --signals (record, rollout): "none" (the default) or "contacts".
+void AddSignalsOption(CLI::App* sub, std::string* signals);
+
+/// --signals parsed: whether the trajectory's steps carry their contacts. Throws UsageError naming
+/// the value and the accepted ones.
+bool ParseContactSignals(const std::string& signals);
+
 /// The --help formatter of every command: a placeholder named after the option instead of
 /// CLI11's type names ("--seed SEED", not "--seed TEXT=0"), defaults in the description, no
 /// "{false}" after negated flags. Set on the app before the subcommands are added (they inherit

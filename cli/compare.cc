@@ -41,6 +41,18 @@ int RunCompare(CompareOptions o) {
       const std::string returns = r["a"]["return"].dump() + "/" + r["b"]["return"].dump();
       std::printf("%-8s %-16s %-14s %-12s %-12s %s\n", r["label"].get<std::string>().c_str(),
                   diverge.c_str(), state, pixel.c_str(), success.c_str(), returns.c_str());
+      // --signals contacts in both runs: where the contact sequences part
+      const json& contacts = r.value("first_contact_difference", json());
+      if (contacts.is_object() && !contacts["step"].is_null()) {
+        const auto list = [](const json& keys) {
+          std::string text;
+          for (const json& k : keys) text += (text.empty() ? "" : ", ") + k.get<std::string>();
+          return text.empty() ? std::string("none") : text;
+        };
+        std::printf("         contacts first differ at step %d: only in A %s; only in B %s\n",
+                    contacts["step"].get<int>(), list(contacts["only_a"]).c_str(),
+                    list(contacts["only_b"]).c_str());
+      }
     }
     std::printf(
         "compare: %s: %d of %zu episode(s) differ (state tolerance %g, pixel tolerance %d) -> %s\n",

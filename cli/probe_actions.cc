@@ -15,6 +15,7 @@
 #include "cli/view_options.h"
 #include "encode/contact_sheet.h"
 #include "encode/png_io.h"
+#include "inspect/grasp_probe.h"
 #include "inspect/probe.h"
 #include "render/renderer.h"
 #include "src/assets.h"
@@ -64,6 +65,10 @@ int RunProbeActions(const ProbeOptions& o) {
   ProbeResult result =
       ProbeActions(env, seed, o.steps, magnitudes, renderer ? &*renderer : nullptr);
   nlohmann::json& report = result.report;
+  // the grasp: after a close from above the object, which fingers touch it and does it lift
+  report["grasp"] = GraspProbe(env, seed, renderer ? &*renderer : nullptr, &result.tiles);
+  std::printf("grasp: %s\n",
+              report["grasp"].value("answer", report["grasp"].value("why", "")).c_str());
   report["versions"] = VersionsJson();
   if (renderer) {
     char title[160];

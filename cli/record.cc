@@ -69,18 +69,19 @@ struct RecordOptions {
   bool quiet = false;
   int jobs = 1;  // workers; 0 = one per core
   std::string worker_mode = "process";
-  std::string shard;            // "I/N"; empty: from the environment, else the whole run
-  int shard_count = 0;          // with JOB_COMPLETION_INDEX; 0 = not given
-  bool overwrite = false;       // replace the run already in --out
-  bool resume = false;          // continue the run already in --out
-  bool episodes_given = false;  // --episodes was on the command line
-  bool no_report = false;       // no index.html (inspect/report.h)
-  std::string from;             // record --from: a run folder or trajectory JSON
-  std::string layers = "rgb";   // --layers: rgb plus depth, segmentation
-  std::string minari;           // --minari: also write the run as this Minari dataset
-  std::string minari_root;      // --minari-root
-  DatasetAuthor author;         // --minari-author, --minari-author-email
-  double tolerance = 1e-6;      // --tolerance: record --from DATASET
+  std::string shard;             // "I/N"; empty: from the environment, else the whole run
+  int shard_count = 0;           // with JOB_COMPLETION_INDEX; 0 = not given
+  bool overwrite = false;        // replace the run already in --out
+  bool resume = false;           // continue the run already in --out
+  bool episodes_given = false;   // --episodes was on the command line
+  bool no_report = false;        // no index.html (inspect/report.h)
+  std::string from;              // record --from: a run folder or trajectory JSON
+  std::string layers = "rgb";    // --layers: rgb plus depth, segmentation
+  std::string signals = "none";  // --signals: none, contacts
+  std::string minari;            // --minari: also write the run as this Minari dataset
+  std::string minari_root;       // --minari-root
+  DatasetAuthor author;          // --minari-author, --minari-author-email
+  double tolerance = 1e-6;       // --tolerance: record --from DATASET
 };
 
 // record --from: the recorded episodes' indices, ascending.
@@ -151,6 +152,7 @@ void ResolveRecordVideo(const RecordOptions& o, RecordPlan* plan) {
   plan->video.gif_width = o.gif_width;
   plan->formats = ParseVideoFormats(o.formats);
   plan->layers = ParseRecordLayers(o.layers);
+  plan->contact_signals = ParseContactSignals(o.signals);
   ValidateVideoOptions(plan->video);
 }
 
@@ -263,6 +265,7 @@ void AddRecordVideoOptions(CLI::App* sub, RecordOptions* o) {
          "the GIF's HUD is sized for this width, and left out where a view would show smaller "
          "than 320x240")
       ->capture_default_str();
+  AddSignalsOption(sub, &o->signals);
   sub->add_option("--layers", o->layers,
                   "Comma list of rgb (always recorded), depth, segmentation: each extra layer is "
                   "one more video per episode and --format, episode_NNN_depth.mp4 (grey: white "

@@ -32,7 +32,8 @@ struct RolloutOptions {
   std::string minari_root;  // --minari-root
   bool overwrite =
       false;  // replace an existing Minari dataset, or a --json-out file of another env or seed
-  DatasetAuthor author;  // --minari-author, --minari-author-email
+  DatasetAuthor author;          // --minari-author, --minari-author-email
+  std::string signals = "none";  // --signals
 };
 
 // parse (AddRollout) -> resolve -> run (RunRolloutJob) -> print.
@@ -60,6 +61,7 @@ int RunRollout(const RolloutOptions& o) {
   job.policy = request.policy;
   job.policy_context = &run.policy_context;
   job.steps = o.steps;
+  job.contact_signals = ParseContactSignals(o.signals);
   job.episodes = run.episodes;
   job.jobs = ResolveJobs(o.jobs, count);
   job.mode = mode;
@@ -108,6 +110,7 @@ Command AddRollout(CLI::App& app) {
       ->capture_default_str()
       ->check(CLI::Range(1, kMaxSteps));
   AddPolicyOptions(sub, &o->policy);
+  AddSignalsOption(sub, &o->signals);
   sub->add_option("--json-out", o->json_out,
                   "Write F (.json), F/rollout.json if F ends in /, or F_rollout.json; without it "
                   "JSON goes to stdout");

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <iterator>
 #include <optional>
 
 #include "base/atomic_file.h"
@@ -130,6 +131,40 @@ std::vector<uint8_t> LabelStrip(const std::string (&labels)[3], int w, int h, in
   return strip;
 }
 
+// A step's contacts as a sequence compares them: the pairs of geoms in touch, sorted.
+std::vector<std::string> ContactKeys(const ContactSignals& c) {
+  std::vector<std::string> keys;
+  for (const Contact& k : c.contacts) {
+    keys.push_back(std::string(ContactPairName(k.pair)) + " " + std::min(k.geom1, k.geom2) + "|" +
+                   std::max(k.geom1, k.geom2));
+  }
+  std::sort(keys.begin(), keys.end());
+  keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+  return keys;
+}
+
+// Where the two runs' contact sequences first differ (--signals contacts in both): the step, and
+// which pairs of geoms touch in one run and not in the other; null where both carry contacts and
+// they agree, or where either run has none (then "why").
+json FirstContactDifference(const std::vector<TrajectoryStep>& a,
+                            const std::vector<TrajectoryStep>& b) {
+  const auto has = [](const std::vector<TrajectoryStep>& steps) {
+    return !steps.empty() && steps.front().contacts.has_value();
+  };
+  if (!has(a) || !has(b)) return nullptr;
+  for (size_t t = 0; t < std::min(a.size(), b.size()); ++t) {
+    if (!a[t].contacts || !b[t].contacts) continue;
+    const std::vector<std::string> ka = ContactKeys(*a[t].contacts),
+                                   kb = ContactKeys(*b[t].contacts);
+    if (ka == kb) continue;
+    json only_a = json::array(), only_b = json::array();
+    std::set_difference(ka.begin(), ka.end(), kb.begin(), kb.end(), std::back_inserter(only_a));
+    std::set_difference(kb.begin(), kb.end(), ka.begin(), ka.end(), std::back_inserter(only_b));
+    return {{"step", t}, {"only_a", only_a}, {"only_b", only_b}};
+  }
+  return {{"step", nullptr}};
+}
+
 struct EpisodeComparison {
   json row;  // for compare.json and the page
   bool same = true;
@@ -170,6 +205,7 @@ EpisodeComparison CompareStates(const CompareOptions& o, const RecordedRun& a, c
     if (!first && d > o.tolerance) first = t;
   }
   if (!first && ta.size() != tb.size()) first = common;
+  row["first_contact_difference"] = FirstContactDifference(ta, tb);
   row["steps_a"] = static_cast<int>(ta.size()) - 1;
   row["steps_b"] = static_cast<int>(tb.size()) - 1;
   row["first_divergence_step"] = first ? json(*first) : json(nullptr);

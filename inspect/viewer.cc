@@ -7,6 +7,7 @@
 
 #include "base/errors.h"
 #include "encode/contact_sheet.h"
+#include "render/overlay.h"
 #include "src/fetch_env.h"
 #include "src/hindsight.h"
 #include "src/observation_layout.h"
@@ -92,6 +93,24 @@ json EpisodeSignals(const EnvSpec& spec, const std::vector<TrajectoryStep>& step
   if (spec.has_object) {
     signals["object_height"] = std::move(height);
     signals["object_goal_distance"] = std::move(object_goal);
+  }
+  // record/rollout --signals contacts: the fingers' forces on the object, N, and the grasp
+  if (std::any_of(steps.begin(), steps.end(), [](const TrajectoryStep& s) { return s.contacts; })) {
+    json left = json::array(), right = json::array(), grasped = json::array(),
+         on_table = json::array();
+    for (const TrajectoryStep& s : steps) {
+      left.push_back(s.contacts ? Plotted(s.contacts->left_finger_force) : json());
+      right.push_back(s.contacts ? Plotted(s.contacts->right_finger_force) : json());
+      grasped.push_back(s.contacts ? json(s.contacts->grasped()) : json());
+      on_table.push_back(s.contacts ? json(s.contacts->object_on_table) : json());
+    }
+    signals["contacts"] = {{"left_finger_force", std::move(left)},
+                           {"right_finger_force", std::move(right)},
+                           {"grasped", std::move(grasped)},
+                           {"object_on_table", std::move(on_table)},
+                           {"colors",
+                            {{"finger-object", ContactPairColor(ContactPair::kFingerObject)},
+                             {"object-table", ContactPairColor(ContactPair::kObjectTable)}}}};
   }
   if (hindsight_seed && !steps.empty()) {
     std::vector<std::array<double, 3>> goals;

@@ -32,7 +32,10 @@ inline constexpr double kActionScale = 0.05;
 /// "object_goal_distance" (object_pos to the desired goal) with an object; the indices are
 /// src/observation_layout.h's; "her" when `hindsight_seed` is given: per transition the kHindsightK
 /// relabelled rewards ("rewards", k lists) and how many count as success ("successes"), as record's
-/// hindsight overlay samples them for that seed (HindsightSeed(run seed, episode)).
+/// hindsight overlay samples them for that seed (HindsightSeed(run seed, episode)); "contacts"
+/// where the steps carry them (--signals contacts): "left_finger_force" and "right_finger_force"
+/// (N, on the object), "grasped" (both press it) and "object_on_table", one per step, and the
+/// pairs' "colors" as the contacts overlay draws them.
 nlohmann::json EpisodeSignals(const EnvSpec& spec, const std::vector<TrajectoryStep>& steps,
                               std::optional<uint64_t> hindsight_seed = std::nullopt);
 

@@ -18,7 +18,7 @@ namespace {
 
 constexpr char kAcceptedOverlays[] =
     "accepted: default, none, all, or a comma list of goal, achieved, hud, action, trail, labels, "
-    "hindsight, ghost";
+    "hindsight, ghost, contacts";
 
 // Colours (rgba).
 constexpr float kGoalRed[4] = {1.0f, 0.0f, 0.0f, 1.0f};       // as target0
@@ -30,6 +30,27 @@ constexpr float kTrailCyan[4] = {0.0f, 0.75f, 1.0f, 1.0f};
 // a dataset's own achieved goal: opaque blue, a hue no other marker uses (not the goal's red or
 // its pink shell, the trail's cyan, HER's green and red)
 constexpr float kGhostBlue[4] = {0.15f, 0.25f, 1.0f, 1.0f};
+// the contacts, by pair: hues none of the markers above uses (magenta, near-black, purple, grey)
+constexpr float kContactFingerObject[4] = {1.0f, 0.1f, 0.75f, 1.0f};
+constexpr float kContactObjectTable[4] = {0.08f, 0.08f, 0.08f, 1.0f};
+constexpr float kContactFingerTable[4] = {0.55f, 0.2f, 0.85f, 1.0f};
+constexpr float kContactOther[4] = {0.6f, 0.6f, 0.6f, 1.0f};
+constexpr double kContactRadius = 0.006;      // m: the contact point
+constexpr double kContactArrowWidth = 0.004;  // m
+
+const float* ContactRgba(ContactPair pair) {
+  switch (pair) {
+    case ContactPair::kFingerObject:
+      return kContactFingerObject;
+    case ContactPair::kObjectTable:
+      return kContactObjectTable;
+    case ContactPair::kFingerTable:
+      return kContactFingerTable;
+    case ContactPair::kOther:
+      break;
+  }
+  return kContactOther;
+}
 
 constexpr double kTargetRadius = 0.02;     // target0's size in the Fetch XMLs
 constexpr double kAchievedRadius = 0.012;  // opaque core
@@ -144,14 +165,16 @@ OverlaySet ParseOverlays(const std::string& spec) {
       set.hindsight = true;
     } else if (token == "ghost") {
       set.ghost = true;
+    } else if (token == "contacts") {
+      set.contacts = true;
     } else if (token == "default") {
       set.goal = set.achieved = set.hud = set.labels = set.ghost = true;
     } else if (token == "all") {
-      set = OverlaySet{true, true, true, true, true, true, true, true};
+      set = OverlaySet{true, true, true, true, true, true, true, true, true};
     } else {
       const std::string suggestion =
           DidYouMean(token, {"goal", "achieved", "hud", "action", "trail", "labels", "hindsight",
-                             "ghost", "default", "none", "all"});
+                             "ghost", "contacts", "default", "none", "all"});
       throw UsageError("overlay '" + token + "' in '" + spec + "' is not known" + suggestion +
                        "; " + kAcceptedOverlays);
     }
@@ -176,6 +199,20 @@ std::string CssColor(const float rgba[4]) {
 
 }  // namespace
 
+std::string ContactPairColor(ContactPair pair) { return CssColor(ContactRgba(pair)); }
+
+void SetContactInfo(const ContactSignals& signals, bool has_object, FrameInfo* info) {
+  info->contacts.clear();
+  for (const Contact& c : signals.contacts) {
+    if (static_cast<int>(info->contacts.size()) >= kMaxContactMarks) break;
+    info->contacts.push_back({c.position, c.push, c.normal_force, c.pair});
+  }
+  info->left_finger_force = signals.left_finger_force;
+  info->right_finger_force = signals.right_finger_force;
+  info->object_on_table = signals.object_on_table;
+  info->has_object = has_object;
+}
+
 std::vector<OverlayLegendEntry> OverlayLegend(const OverlaySet& overlays, bool replay) {
   std::vector<OverlayLegendEntry> out;
   out.push_back({"goal", CssColor(kGoalRed), "the goal (the model's target0 sphere)"});
@@ -199,6 +236,17 @@ std::vector<OverlayLegendEntry> OverlayLegend(const OverlaySet& overlays, bool r
         {"HER success", CssColor(kHindsightGreen), "a relabelled goal that counts as success"});
     out.push_back(
         {"HER failure", CssColor(kHindsightRed), "a relabelled goal that does not count"});
+  }
+  if (overlays.contacts) {
+    const char* scale = "; arrows: the normal force, 1 cm = 20 N (at most 15 cm)";
+    out.push_back({"contact finger-object", CssColor(kContactFingerObject),
+                   std::string("a gripper finger touching the object") + scale});
+    out.push_back({"contact object-table", CssColor(kContactObjectTable),
+                   std::string("the object resting on the table") + scale});
+    out.push_back({"contact finger-table", CssColor(kContactFingerTable),
+                   std::string("a gripper finger touching the table") + scale});
+    out.push_back({"contact other", CssColor(kContactOther),
+                   std::string("any other active contact (the robot's links, the floor)") + scale});
   }
   if (overlays.ghost && replay) {
     out.push_back({"ghost", CssColor(kGhostBlue),
@@ -296,6 +344,18 @@ void AddOverlayGeoms(const OverlaySet& overlays, const FrameInfo& info,
       AddConnector(scene, mjGEOM_CAPSULE, kGhostBar, from, to, kGhostBlue);
     }
     AddConnector(scene, mjGEOM_LINE, kLineWidth, g, info.achieved, kGhostBlue);
+  }
+  if (overlays.contacts) {
+    for (const ContactMark& c : info.contacts) {
+      AddSphere(scene, c.position, kContactRadius, ContactRgba(c.pair));
+      const double length = std::min(kContactArrowMax, c.force * kContactMetresPerNewton);
+      if (length < kContactRadius) continue;  // within the point: no arrow
+      // the arrow ends at the contact point, on the side the force comes from
+      const std::array<double, 3> tail = {c.position[0] - length * c.push[0],
+                                          c.position[1] - length * c.push[1],
+                                          c.position[2] - length * c.push[2]};
+      AddConnector(scene, mjGEOM_ARROW, kContactArrowWidth, tail, c.position, ContactRgba(c.pair));
+    }
   }
   if (overlays.achieved) {
     const float halo[4] = {achieved_rgba[0], achieved_rgba[1], achieved_rgba[2], 0.35f};
@@ -511,9 +571,14 @@ bool DrawHud(uint8_t* rgb, int width, int height, const PixelRect& tile, const H
   return true;
 }
 
-bool DrawTileLabel(uint8_t* rgb, int width, int height, const PixelRect& tile,
-                   const std::string& label, double opacity, const std::optional<PixelRect>& avoid,
-                   ShownScale scale) {
+namespace {
+
+// A one-line label on a box centred in `tile`: at its top (its bottom where `bottom_first`),
+// moved to the other edge where it would overlap `avoid`, left out where it still would or the
+// tile is too small for it.
+bool DrawLabel(uint8_t* rgb, int width, int height, const PixelRect& tile, const std::string& label,
+               double opacity, const std::optional<PixelRect>& avoid, ShownScale scale,
+               bool bottom_first) {
   const int pixels = FrameTextPixels(tile.width, tile.height, scale);
   const TextMetrics m = FrameText(label, pixels);
   const int pad = std::max(2, pixels / 4);
@@ -522,13 +587,41 @@ bool DrawTileLabel(uint8_t* rgb, int width, int height, const PixelRect& tile,
   box.height = m.height + 2 * pad;
   if (box.width + 2 * pad > tile.width || 4 * box.height > tile.height) return false;
   box.x = tile.x + (tile.width - box.width) / 2;
-  box.y = tile.y + pad;
-  if (avoid && Overlaps(box, *avoid)) box.y = tile.y + tile.height - pad - box.height;
+  const int top = tile.y + pad, bottom = tile.y + tile.height - pad - box.height;
+  box.y = bottom_first ? bottom : top;
+  if (avoid && Overlaps(box, *avoid)) box.y = bottom_first ? top : bottom;
   if (avoid && Overlaps(box, *avoid)) return false;
   Canvas canvas(rgb, width, height);
   DrawBox(&canvas, box, opacity);
   BoxedText(&canvas, box.x + pad, box.y + pad, label, pixels, kHudValueColor, opacity);
   return true;
+}
+
+}  // namespace
+
+bool DrawTileLabel(uint8_t* rgb, int width, int height, const PixelRect& tile,
+                   const std::string& label, double opacity, const std::optional<PixelRect>& avoid,
+                   ShownScale scale) {
+  return DrawLabel(rgb, width, height, tile, label, opacity, avoid, scale, /*bottom_first=*/false);
+}
+
+std::string ContactLabel(const FrameInfo& info) {
+  char text[160];
+  std::snprintf(text, sizeof(text), "L %.0f N  R %.0f N%s%s  |  1 cm = 20 N",
+                info.left_finger_force, info.right_finger_force,
+                info.left_finger_force > 0 && info.right_finger_force > 0 ? "  grasp" : "",
+                !info.has_object       ? ""
+                : info.object_on_table ? "  on table"
+                                       : "  off table");
+  return text;
+}
+
+bool DrawContactLabel(uint8_t* rgb, int width, int height, const PixelRect& tile,
+                      const FrameInfo& info, double opacity, const std::optional<PixelRect>& avoid,
+                      ShownScale scale) {
+  if (HudTextPixels(tile.width, tile.height, scale) == 0) return false;  // as small as no HUD
+  return DrawLabel(rgb, width, height, tile, ContactLabel(info), opacity, avoid, scale,
+                   /*bottom_first=*/true);
 }
 
 }  // namespace fetchscope

@@ -13,6 +13,8 @@
 #include <string>
 #include <vector>
 
+#include "src/contacts.h"
+
 namespace fetchscope {
 
 /// Which overlays to draw. Default: goal, achieved, hud. The goal marker itself (the model's
@@ -30,6 +32,10 @@ struct OverlaySet {
   /// blue cross with a line to the replayed one, and a HUD row with their distance; on with
   /// `achieved` (so by default) or alone as `ghost`
   bool ghost = true;
+  /// the active contacts: a point each, an arrow along its normal force (kContactCmPerNewton),
+  /// coloured by pair (finger-object, object-table, finger-table, other), and a HUD row with the
+  /// fingers' forces on the object; off by default, on with `contacts` or `all`
+  bool contacts = false;
 };
 
 /// Where the HUD box sits in the frame (in the tile at that corner).
@@ -40,10 +46,25 @@ const char* HudPositionName(HudPosition position);
 
 /// Throws UsageError naming the bad token and listing the accepted ones.
 /// Parses --overlay: "default", "none", "all", or a comma list of
-/// goal|achieved|hud|action|trail|labels|hindsight|ghost|default|all (spaces around items are
-/// ignored). Throws UsageError naming the bad token, the nearest accepted one and listing the
-/// accepted ones.
+/// goal|achieved|hud|action|trail|labels|hindsight|ghost|contacts|default|all (spaces around
+/// items are ignored). Throws UsageError naming the bad token, the nearest accepted one and listing
+/// the accepted ones.
 OverlaySet ParseOverlays(const std::string& spec);
+
+/// One contact as the contacts overlay draws it.
+struct ContactMark {
+  std::array<double, 3> position{};  ///< m, world
+  std::array<double, 3> push{};      ///< unit: the direction of the force drawn (Contact::push)
+  double force = 0;                  ///< N, the normal force
+  ContactPair pair = ContactPair::kOther;
+};
+
+/// The contacts overlay's scale: an arrow is this many metres long per newton (1 cm = 20 N),
+/// up to kContactArrowMax.
+inline constexpr double kContactMetresPerNewton = 0.01 / 20.0;
+inline constexpr double kContactArrowMax = 0.15;  ///< m: longer forces are drawn this long
+/// The most contacts the overlay draws (MuJoCo's d->contact order; Fetch states have 3 to 15).
+inline constexpr int kMaxContactMarks = 24;
 
 /// What the overlays show for one frame (the environment fills it).
 struct FrameInfo {
@@ -70,7 +91,16 @@ struct FrameInfo {
   /// The env's max_episode_steps when `step` is past it (--steps beyond the TimeLimit): the
   /// HUD's step row says so; 0 for every step within it.
   int past_time_limit = 0;
+  /// The contacts overlay: the renderer fills these from the state it draws (ContactsInfo).
+  std::vector<ContactMark> contacts;
+  double left_finger_force = 0;   ///< N, on the object
+  double right_finger_force = 0;  ///< N, on the object
+  bool object_on_table = false;
+  bool has_object = false;  ///< the task has an object (its HUD row says where it is)
 };
+
+/// Fills `info`'s contact fields from `signals` (the state's ReadContacts).
+void SetContactInfo(const ContactSignals& signals, bool has_object, FrameInfo* info);
 
 /// The env moves the mocap by 0.05 m per unit action; the arrow is drawn this many times
 /// longer than that displacement so that it shows beside the gripper.
@@ -134,8 +164,13 @@ struct OverlayLegendEntry {
 std::vector<OverlayLegendEntry> OverlayLegend(const OverlaySet& overlays, bool replay);
 
 /// Geoms the overlays may add at most (so the scene can reserve room for them): 3 per
-/// hindsight pin, up to 16 pins.
-inline constexpr int kMaxOverlayGeoms = 10 + 3 * 16 + static_cast<int>(Trail::kMaxPoints);
+/// hindsight pin, up to 16 pins; 2 per contact.
+inline constexpr int kMaxOverlayGeoms =
+    10 + 3 * 16 + static_cast<int>(Trail::kMaxPoints) + 2 * kMaxContactMarks;
+
+/// The contacts overlay's colour of `pair`, as CSS ("#rrggbb"): the legend's, the HUD's and the
+/// report's.
+std::string ContactPairColor(ContactPair pair);
 
 /// Moves the scene geom of site `site_id` (the target0 marker) to `goal`, as Gymnasium's
 /// _render_callback does through site_pos + mj_forward, but without touching mjData.
@@ -230,5 +265,16 @@ bool DrawHud(uint8_t* rgb, int width, int height, const PixelRect& tile, const H
 bool DrawTileLabel(uint8_t* rgb, int width, int height, const PixelRect& tile,
                    const std::string& label, double opacity, const std::optional<PixelRect>& avoid,
                    ShownScale scale = {});
+
+/// The contacts overlay's line: the left and right fingers' forces on the object, the grasp, where
+/// the object is, and the arrows' scale ("L 747 N  R 781 N  grasp  off table  |  1 cm = 20 N").
+std::string ContactLabel(const FrameInfo& info);
+
+/// Draws ContactLabel(info) at the bottom centre of `tile` (the top where that would overlap
+/// `avoid`, the HUD box) on a box of `opacity`; nothing in a view too small for the HUD
+/// (HudTextPixels) or too narrow for the line. Returns whether it was drawn.
+bool DrawContactLabel(uint8_t* rgb, int width, int height, const PixelRect& tile,
+                      const FrameInfo& info, double opacity, const std::optional<PixelRect>& avoid,
+                      ShownScale scale = {});
 
 }  // namespace fetchscope

@@ -231,6 +231,7 @@ Renderer::Renderer(GlContext& gl, mjModel* model, const RenderOptions& options)
   mjv_defaultOption(&option_);
   mjv_defaultPerturb(&perturb_);
   target_site_ = mj_name2id(model_, mjOBJ_SITE, "target0");
+  contact_bodies_ = FindContactBodies(model_);
   grip_site_ = mj_name2id(model_, mjOBJ_SITE, "robot0:grip");
 
   // MuJoCo sizes its offscreen buffer from the model, and only in mjr_makeContext.
@@ -360,12 +361,13 @@ void Renderer::Submit(const mjData* data, const FrameInfo& info, uint8_t* rgb) {
   Submit(data, info, rgb, nullptr, ShownScale{});
 }
 
-void Renderer::Submit(const mjData* data, const FrameInfo& info, uint8_t* rgb, uint8_t* copy,
+void Renderer::Submit(const mjData* data, const FrameInfo& frame_info, uint8_t* rgb, uint8_t* copy,
                       ShownScale copy_scale) {
   if (pending() >= pipeline_depth()) {
     throw RunError("internal error: Renderer::Submit with " + std::to_string(pending()) +
                    " frames pending; Collect first");
   }
+  const FrameInfo& info = WithContacts(data, frame_info);
   Draw(data, info, /*overlays=*/true);
   if (!async_) {
     ReadRgb(rgb);
@@ -570,12 +572,21 @@ void Renderer::SetTrail(const std::vector<std::array<double, 3>>& points) {
   for (size_t i = 0; i < points.size(); ++i) trail_.Add(static_cast<int>(i), points[i]);
 }
 
-void Renderer::Render(const mjData* data, const FrameInfo& info, uint8_t* rgb) {
+void Renderer::Render(const mjData* data, const FrameInfo& frame_info, uint8_t* rgb) {
+  const FrameInfo& info = WithContacts(data, frame_info);
   Draw(data, info, /*overlays=*/true);
   ReadRgb(rgb);
   CpuLap lap;
   DrawText2d(info, rgb);
   lap.Into(&cpu_.hud);
+}
+
+const FrameInfo& Renderer::WithContacts(const mjData* data, const FrameInfo& info) {
+  if (!options_.overlays.contacts) return info;
+  contact_info_ = info;
+  SetContactInfo(ReadContacts(model_, data, contact_bodies_), contact_bodies_.object >= 0,
+                 &contact_info_);
+  return contact_info_;
 }
 
 void Renderer::DrawText2d(const FrameInfo& info, uint8_t* rgb, ShownScale scale) const {
@@ -598,6 +609,10 @@ void Renderer::DrawText2d(const FrameInfo& info, uint8_t* rgb, ShownScale scale)
     const PixelRect tile = TopDown(tiles_[hud_tile], frame_.height);
     hud_box = PlaceHud(hud, tile, pos, scale);
     DrawHud(rgb, frame_.width, frame_.height, tile, hud, pos, options_.hud_opacity, scale);
+  }
+  if (o.contacts) {  // the fingers' forces, in the HUD's tile (the first view without a HUD)
+    DrawContactLabel(rgb, frame_.width, frame_.height, TopDown(tiles_[hud_tile], frame_.height),
+                     info, options_.hud_opacity, hud_box, scale);
   }
   if (o.labels && tiles_.size() > 1) {
     for (size_t i = 0; i < tiles_.size(); ++i) {

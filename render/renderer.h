@@ -210,6 +210,8 @@ class Renderer {
   int ResolveMsaa(int max_samples);
   // Updates the scene for `data` and draws every tile into the offscreen buffer.
   void Draw(const mjData* data, const FrameInfo& info, bool overlays);
+  // `info`, or (with the contacts overlay) a copy with the contacts of `data` filled in.
+  const FrameInfo& WithContacts(const mjData* data, const FrameInfo& info);
   // Reads the rgb of the whole frame, row 0 at the top.
   void ReadRgb(uint8_t* rgb);
   // Picks synchronous or asynchronous readback and makes the pixel buffers; sets
@@ -236,8 +238,10 @@ class Renderer {
   bool drop_mocap_ = false;        // Draw leaves out the mocap bodies' geoms (segmentation)
   mjvOption option_;
   mjvPerturb perturb_;
-  int target_site_ = -1;  // target0, the goal marker
-  int grip_site_ = -1;    // robot0:grip, where the action arrow starts
+  int target_site_ = -1;          // target0, the goal marker
+  ContactBodies contact_bodies_;  // the bodies that name the contact pairs
+  FrameInfo contact_info_;        // WithContacts's copy, its memory reused
+  int grip_site_ = -1;            // robot0:grip, where the action arrow starts
   int msaa_samples_ = 0;
   std::string msaa_reason_;
   std::optional<Profile> profile_;  // set when FETCHSCOPE_PROFILE is

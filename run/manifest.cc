@@ -79,6 +79,8 @@ const std::vector<ParameterRow>& ParameterTable() {
       FETCHSCOPE_PARAMETER("--gif-width", gif_width, HasGif, false),
       FETCHSCOPE_PARAMETER(
           "--layers", layers, [](const RunParameters& p) { return p.layers != "rgb"; }, false),
+      FETCHSCOPE_PARAMETER(
+          "--signals", signals, [](const RunParameters& p) { return p.signals != "none"; }, false),
   };
   return table;
 }

@@ -64,6 +64,7 @@ struct RunParameters {
   int gif_fps = 10;                            ///< --gif-fps (stored with gif among the formats)
   int gif_width = 320;                         ///< --gif-width (likewise)
   std::string layers = "rgb";                  ///< --layers ("rgb" and the extra layers in order)
+  std::string signals = "none";                ///< --signals ("none" is not stored)
   /// False for a manifest written before "parameters" existed: then only env_id, seed and steps are
   /// known (from the manifest's own members).
   bool recorded = true;

@@ -113,6 +113,7 @@ RunParameters RecordParameters(const RecordJob& job) {
   p.gif_fps = plan.video.gif_fps;
   p.gif_width = plan.video.gif_width;
   p.layers = LayersLabel(plan.layers);
+  p.signals = plan.contact_signals ? "contacts" : "none";
   return p;
 }
 

@@ -55,7 +55,9 @@ RecordRunner::RecordRunner(const RecordPlan& plan, int worker)
           std::make_unique<FetchEnv>(*plan.spec, plan.assets),
           // --from replays recorded actions: the policy that made them is not run
           MakePolicy(plan.from ? PolicySpec::Zero() : plan.policy, *plan.spec, plan.policy_context),
-          plan.seed, plan.steps) {}
+          plan.seed, plan.steps) {
+  if (plan.contact_signals) sequence_.env().EnableContactSignals();
+}
 
 RecordRunner::~RecordRunner() {
   encoders_.clear();  // aborts and joins whatever is still running (a failure elsewhere)
@@ -210,7 +212,10 @@ EpisodeRecord RecordRunner::PlayEpisode(int k, const StepCallback& on_step,
   }
   if (plan_.hindsight) hindsight_ = SampleEpisodeHindsight(k, *script);
   if (!replayer_) {
-    if (!plan_.from) replay_env_ = std::make_unique<FetchEnv>(*plan_.spec, plan_.assets);
+    if (!plan_.from) {
+      replay_env_ = std::make_unique<FetchEnv>(*plan_.spec, plan_.assets);
+      if (plan_.contact_signals) replay_env_->EnableContactSignals();
+    }
     replayer_ =
         std::make_unique<EpisodeReplayer>(plan_.from ? sequence_.env() : *replay_env_, plan_.seed);
   }

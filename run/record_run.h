@@ -51,8 +51,9 @@ struct RecordPlan {
   int encoders = 1;                         ///< episodes a worker encodes at once
   /// record --from: the episodes to replay (not owned); null: the policy plays them
   const TrajectorySource* from = nullptr;
-  bool hindsight = false;     ///< the hindsight overlay: run the episode first, then render it
-  std::vector<Layer> layers;  ///< --layers beyond rgb (depth, segmentation), in the order given
+  bool hindsight = false;        ///< the hindsight overlay: run the episode first, then render it
+  std::vector<Layer> layers;     ///< --layers beyond rgb (depth, segmentation), in the order given
+  bool contact_signals = false;  ///< --signals contacts: each step's contacts in the trajectory
 };
 
 /// The episode sinks' options for `plan`.

@@ -18,9 +18,11 @@ namespace {
 class RolloutRunner : public EpisodeRunner {
  public:
   RolloutRunner(const EnvSpec& spec, const AssetSource& assets, const PolicySpec& policy,
-                const PolicyContext& context, int steps)
+                const PolicyContext& context, int steps, bool contact_signals)
       : sequence_(std::make_unique<FetchEnv>(spec, assets), MakePolicy(policy, spec, context),
-                  context.seed, steps) {}
+                  context.seed, steps) {
+    if (contact_signals) sequence_.env().EnableContactSignals();
+  }
   void Run(int k, WorkerChannel& channel) override {
     const EpisodeRecord episode = sequence_.Play(
         k, [&](const StepRecord&, const StepResult*) { return !channel.StopRequested(); });
@@ -71,7 +73,7 @@ RolloutResult RunRolloutJob(const RolloutJob& job) {
   schedule.mode = job.mode;
   const ScheduleResult result = RunEpisodes(schedule, [&](int) {
     return std::make_unique<RolloutRunner>(*job.spec, job.assets, job.policy, *job.policy_context,
-                                           job.steps);
+                                           job.steps, job.contact_signals);
   });
   RolloutResult r;
   if (!result.failures.empty()) {

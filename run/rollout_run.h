@@ -31,6 +31,7 @@ struct RolloutJob {
   int jobs = 1;                                   ///< workers (ResolveJobs)
   WorkerMode mode = WorkerMode::kProcess;         ///< --worker-mode
   EpisodeOutput* output = nullptr;                ///< where the episodes go (null: nowhere)
+  bool contact_signals = false;  ///< --signals contacts: each step's contacts in the trajectory
 };
 
 /// What a rollout made.

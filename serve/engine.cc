@@ -53,6 +53,7 @@ Engine::State::State(const std::vector<Source>& sources_in, const EngineOptions&
     if (!env) {
       env = std::make_unique<FetchEnv>(*s.spec, s.assets);
       env->EnableCheckpoints();
+      env->EnableContactSignals();  // the plots show the fingers' forces; never changes a step
       env->Reset(s.seed);
     }
     env_of_source.push_back(env.get());

@@ -37,6 +37,7 @@ TrajectoryStep RowAfterStep(const FetchEnv& env, const StepResult& r, const Acti
   row.reward = r.reward;
   row.is_success = r.is_success;
   row.past_time_limit = t > env.spec().max_episode_steps;
+  row.contacts = env.Contacts();
   return row;
 }
 
@@ -70,6 +71,7 @@ nlohmann::json Engine::StartLive(const std::string& session, const StartRequest&
       TrajectoryStep row;
       row.obs = env.Reset(src.seed);
       row.is_success = env.IsSuccess(row.obs.achieved_goal, row.obs.desired_goal);
+      row.contacts = env.Contacts();
       live.source = source;
       live.reset_seed = src.seed;
       live.float32 = std::holds_alternative<policy_spec::Random>(options_.policy.value) ||
@@ -221,7 +223,8 @@ nlohmann::json Engine::SaveLive(const std::string& session, const ViewRequest& v
                                      "--env-id",   src.spec->id,
                                      "--seed",     std::to_string(*live.reset_seed),
                                      "--policy",   trajectory.policy,
-                                     "--steps",    std::to_string(live.steps.size() - 1)};
+                                     "--steps",    std::to_string(live.steps.size() - 1),
+                                     "--signals",  "contacts"};  // its trajectory has them
     if (!options_.assets_flag.empty() || env.assets().kind != "bundled") {
       argv.push_back("--assets");
       argv.push_back(env.assets().kind == "bundled" ? "bundled" : env.assets().root);

@@ -12,6 +12,7 @@ EpisodeRecord RunEpisode(FetchEnv& env, Policy& policy, int index, std::optional
   StepRecord first;
   first.obs = env.Reset(seed);
   first.is_success = env.IsSuccess(first.obs.achieved_goal, first.obs.desired_goal);
+  first.contacts = env.Contacts();
   episode.steps.push_back(first);
   policy.BeginEpisode(index, first.obs);
   episode.complete = steps == 0;
@@ -31,6 +32,7 @@ EpisodeRecord RunEpisode(FetchEnv& env, Policy& policy, int index, std::optional
     record.reward = result.reward;
     record.is_success = result.is_success;
     record.past_time_limit = record.t > env.spec().max_episode_steps;
+    record.contacts = env.Contacts();
     episode.episode_return += result.reward;
     episode.steps.push_back(std::move(record));
     if (t + 1 == steps) episode.complete = true;

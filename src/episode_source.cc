@@ -169,6 +169,7 @@ EpisodeRecord EpisodeReplayer::ReplayFrom(int k, const Observation& reset,
   StepRecord row;
   row.obs = reset;
   row.is_success = env_.IsSuccess(row.obs.achieved_goal, row.obs.desired_goal);
+  row.contacts = env_.Contacts();
   auto verify = [&](const StepRecord& replayed, size_t t) {
     if (check.empty()) return;
     const std::string d = FirstDifference(replayed, recorded[t]);
@@ -195,6 +196,7 @@ EpisodeRecord EpisodeReplayer::ReplayFrom(int k, const Observation& reset,
     r.reward = result.reward;
     r.is_success = result.is_success;
     r.past_time_limit = r.t > env_.spec().max_episode_steps;
+    r.contacts = env_.Contacts();
     verify(r, t);
     episode.episode_return += result.reward;
     episode.steps.push_back(std::move(r));

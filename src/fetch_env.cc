@@ -109,6 +109,7 @@ void FetchEnv::Setup() {
     object_site_ = RequireId(m, mjOBJ_SITE, "object0", model_path_);
     object_qpos_ = m->jnt_qposadr[RequireId(m, mjOBJ_JOINT, "object0:joint", model_path_)];
   }
+  contact_bodies_ = FindContactBodies(m);
   jacp_.assign(3 * m->nv, 0.0);
   jacr_.assign(3 * m->nv, 0.0);
 
@@ -278,6 +279,11 @@ StepResult FetchEnv::Step(const Action& action) {
   result.reward = ComputeReward(result.obs.achieved_goal, goal_);
   result.truncated = elapsed_steps_ >= spec_.max_episode_steps;
   return result;
+}
+
+std::optional<ContactSignals> FetchEnv::Contacts() const {
+  if (!contact_signals_) return std::nullopt;
+  return ReadContacts(model_.get(), data_.get(), contact_bodies_);
 }
 
 void FetchEnv::StepCallback() {

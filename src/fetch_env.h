@@ -13,6 +13,7 @@
 
 #include "src/action.h"
 #include "src/assets.h"
+#include "src/contacts.h"
 #include "src/env_spec.h"
 #include "src/mj_handles.h"
 #include "src/rng.h"
@@ -96,6 +97,14 @@ class FetchEnv {
   /// data, goal, step count and generator are then exactly as they were.
   void Restore(const EnvCheckpoint& checkpoint);
 
+  /// Makes Contacts() read the state's contacts from now on (record/rollout --signals contacts):
+  /// the episodes' rows then carry them. Reading never changes the simulation.
+  void EnableContactSignals() { contact_signals_ = true; }
+  /// The contacts of the current state (ReadContacts), or nullopt unless EnableContactSignals.
+  std::optional<ContactSignals> Contacts() const;
+  /// The bodies that name the contact pairs in this model.
+  const ContactBodies& contact_bodies() const { return contact_bodies_; }
+
   /// compute_reward(achieved_goal, desired_goal): pure function of the two goals.
   double ComputeReward(const std::array<double, 3>& achieved,
                        const std::array<double, 3>& desired) const;
@@ -152,6 +161,8 @@ class FetchEnv {
   int elapsed_steps_ = 0;
   bool has_reset_ = false;
   bool checkpoints_ = false;
+  bool contact_signals_ = false;
+  ContactBodies contact_bodies_;
   std::vector<double> call_state_;  // KeepCallState's copy, empty until a reset keeps one
   bool call_is_step_ = false;
   mutable std::vector<double> jacp_, jacr_;

@@ -171,6 +171,59 @@ class TrajectoryReader {
     return action;
   }
 
+  ContactSignals Contacts(const json& c, const std::string& step_key) const {
+    const std::string key = step_key + ".contacts";
+    if (!c.is_object()) Fail(key, "expected an object");
+    ContactSignals out;
+    const auto number = [&](const json& where, const char* member, const std::string& at) {
+      const json* v = Find(where, member);
+      if (!v) Fail(at + "." + member, "expected a number");
+      return Number(*v, at + "." + member, "a number");
+    };
+    const auto boolean = [&](const json& where, const char* member, const std::string& at) {
+      const json* v = Find(where, member);
+      if (!v || !v->is_boolean()) Fail(at + "." + member, "expected true or false");
+      return v->get<bool>();
+    };
+    out.left_finger_force = number(c, "left_finger_force", key);
+    out.right_finger_force = number(c, "right_finger_force", key);
+    out.object_on_table = boolean(c, "object_on_table", key);
+    const json* list = Find(c, "list");
+    if (!list || !list->is_array()) Fail(key + ".list", "expected a list");
+    for (size_t i = 0; i < list->size(); ++i) {
+      const json& k = (*list)[i];
+      const std::string at = key + ".list[" + std::to_string(i) + "]";
+      if (!k.is_object()) Fail(at, "expected an object");
+      Contact contact;
+      contact.index = static_cast<int>(i);
+      const auto text = [&](const char* member) {
+        const json* v = Find(k, member);
+        if (!v || !v->is_string()) Fail(at + "." + member, "expected a string");
+        return v->get<std::string>();
+      };
+      const std::string pair = text("pair");
+      bool known = false;
+      for (ContactPair p : {ContactPair::kFingerObject, ContactPair::kObjectTable,
+                            ContactPair::kFingerTable, ContactPair::kOther}) {
+        if (pair == ContactPairName(p)) {
+          contact.pair = p;
+          known = true;
+        }
+      }
+      if (!known) Fail(at + ".pair", "unknown pair '" + pair + "'");
+      contact.geom1 = text("geom1");
+      contact.geom2 = text("geom2");
+      contact.body1 = text("body1");
+      contact.body2 = text("body2");
+      contact.position = Vector3(k, "position", at);
+      contact.normal = Vector3(k, "normal", at);
+      contact.normal_force = number(k, "normal_force", at);
+      contact.penetration = number(k, "penetration", at);
+      out.contacts.push_back(std::move(contact));
+    }
+    return out;
+  }
+
   TrajectoryStep Step(const json& s, size_t t, const std::string& key, bool float32) const {
     if (!s.is_object()) Fail(key, "expected an object");
     TrajectoryStep step;
@@ -201,6 +254,7 @@ class TrajectoryReader {
       if (!past->is_boolean()) Fail(key + ".past_time_limit", "expected true or false");
       step.past_time_limit = past->get<bool>();
     }
+    if (const json* contacts = Find(s, "contacts")) step.contacts = Contacts(*contacts, key);
     return step;
   }
 
@@ -259,6 +313,26 @@ nlohmann::json AssetsJson(const AssetSource& assets) {
           {"origin", assets.origin}};
 }
 
+nlohmann::json ContactsJson(const ContactSignals& c) {
+  json list = json::array();
+  for (const Contact& k : c.contacts) {
+    list.push_back({{"pair", ContactPairName(k.pair)},
+                    {"geom1", k.geom1},
+                    {"geom2", k.geom2},
+                    {"body1", k.body1},
+                    {"body2", k.body2},
+                    {"position", JsonVector(k.position.data(), 3)},
+                    {"normal", JsonVector(k.normal.data(), 3)},
+                    {"normal_force", JsonDouble(k.normal_force)},
+                    {"penetration", JsonDouble(k.penetration)}});
+  }
+  return {{"left_finger_force", JsonDouble(c.left_finger_force)},
+          {"right_finger_force", JsonDouble(c.right_finger_force)},
+          {"grasped", c.grasped()},
+          {"object_on_table", c.object_on_table},
+          {"list", std::move(list)}};
+}
+
 nlohmann::json StepsJson(const TrajectoryEpisode& episode) {
   json steps = json::array();
   for (const TrajectoryStep& s : episode.steps) {
@@ -271,6 +345,7 @@ nlohmann::json StepsJson(const TrajectoryEpisode& episode) {
     row["reward"] = s.reward ? JsonDouble(*s.reward) : json(nullptr);
     row["is_success"] = s.is_success;
     if (s.past_time_limit) row["past_time_limit"] = true;
+    if (s.contacts) row["contacts"] = ContactsJson(*s.contacts);
     steps.push_back(std::move(row));
   }
   return steps;

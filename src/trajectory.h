@@ -8,6 +8,10 @@
 //    "episodes": [{"index", "length", "complete", "return", "is_success", "action_dtype",
 //                  "steps": [{"t", "observation", "achieved_goal", "desired_goal", "action",
 //                             "reward", "is_success"}, ...]}, ...]}
+// With --signals contacts each step also carries "contacts": {"left_finger_force",
+// "right_finger_force", "grasped", "object_on_table", "list": [{"pair", "geom1", "geom2", "body1",
+// "body2", "position", "normal", "normal_force", "penetration"}]} (an addition: older readers,
+// which skip members they do not know, read such files as before, so the version is unchanged).
 // Step 0 is the reset (action and reward null). Steps past the env's TimeLimit (--steps above
 // max_episode_steps) carry "past_time_limit": true, their episode "past_time_limit":
 // {"max_episode_steps", "first_step", "steps"} and the file a "note"; files without such steps
@@ -46,6 +50,10 @@ struct TrajectoryStep {
   /// t > the env's max_episode_steps: a step Gymnasium's TimeLimit would not give before a
   /// reset (--steps beyond it); written as "past_time_limit": true, and only then
   bool past_time_limit = false;
+  /// The contacts of the state after this step (record/rollout --signals contacts); written as
+  /// "contacts" and only then (docs/reference/file-formats.md: an addition older readers skip,
+  /// so the schema version stays)
+  std::optional<ContactSignals> contacts;
 };
 
 /// One episode: its reset and its steps.
@@ -82,6 +90,9 @@ std::string ActionDtype(const TrajectoryEpisode& episode);
 
 /// {"kind", "origin", "path", "sha256"} of `assets`, as every output records them.
 nlohmann::json AssetsJson(const AssetSource& assets);
+
+/// A step's "contacts" member (ContactSignals as the trajectory writes it).
+nlohmann::json ContactsJson(const ContactSignals& contacts);
 
 /// The step rows of one episode (t, observation, achieved_goal, desired_goal, action, reward,
 /// is_success), as in the trajectory JSON; golden state files hold the same rows.

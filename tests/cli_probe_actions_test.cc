@@ -155,13 +155,13 @@ TEST(ProbeActionsTest, OutWritesReportAndSheet) {
   EXPECT_EQ(j["sheet"], "probe_actions_sheet.png");
   const size_t probes = j["probes"].size();
   EXPECT_EQ(probes, 10u);  // 6 axes, 2 grip, 2 magnitudes
-  // one row per probe: first and last frame
+  // one row per probe (first and last frame), and one for the grasp (closed, lifted)
   const Image sheet = ReadPng((out / "probe_actions_sheet.png").string());
   EXPECT_EQ(sheet.width, kSheetMargin + 2 * (96 + kSheetMargin));
   const SheetLayout layout = ContactSheetLayout(96);
   EXPECT_EQ(sheet.height,
             layout.title_bar_height +
-                static_cast<int>(probes) * (kSheetMargin + 96 + layout.label_bar_height) +
+                static_cast<int>(probes + 1) * (kSheetMargin + 96 + layout.label_bar_height) +
                 kSheetMargin);
   // no stray files beside the two
   int files = 0;

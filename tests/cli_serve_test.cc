@@ -325,7 +325,7 @@ TEST(ServeTest, ASavedSessionReRendersByteForByteWithThePrintedCommand) {
   EXPECT_EQ(ReadFile(saved["episode_file"].get<std::string>()), ReadFile(session_json));
   // the CSV beside it replays the same actions from the same reset
   const auto csv = RunFetchscope(
-      "rollout --env-id FetchPickAndPlace-v4 --seed 3 --steps 8 "
+      "rollout --env-id FetchPickAndPlace-v4 --seed 3 --steps 8 --signals contacts "
       "--policy 'replay:" +
       saved["files"][1].get<std::string>() + "'");
   ASSERT_EQ(csv.exit_code, 0) << csv.output;

@@ -104,6 +104,7 @@ Manifest SampleManifest() {
   m.parameters.formats = {"mp4", "gif"};
   m.parameters.gif_fps = 7;
   m.parameters.layers = "rgb,depth,segmentation";
+  m.parameters.signals = "contacts";
   m.parameters.shard_index = 1;
   m.parameters.shard_count = 3;
   m.resumed = true;
@@ -336,7 +337,9 @@ INSTANTIATE_TEST_SUITE_P(
                       },
                       "mp4", "webm,mp4"},
         ParameterCase{"--layers", [](RunParameters* p) { p->layers = "rgb,depth"; }, "rgb",
-                      "rgb,depth"}));
+                      "rgb,depth"},
+        ParameterCase{"--signals", [](RunParameters* p) { p->signals = "contacts"; }, "none",
+                      "contacts"}));
 
 TEST(SameRunTest, GifOptionsCountOnlyWithGifs) {
   RunParameters a = Parameters(), b = Parameters();
@@ -385,7 +388,7 @@ TEST(SameRunTest, ScopesForShardsAndForCompare) {
 TEST(SameRunTest, NamesEveryParameterOnce) {
   const std::vector<std::string> names = RunParameterNames();
   EXPECT_EQ(names.front(), "--env-id");
-  EXPECT_EQ(names.size(), 22u);
+  EXPECT_EQ(names.size(), 23u);
   const json stored = ManifestToJson(SampleManifest())["parameters"];
   for (const std::string& name : names) EXPECT_TRUE(stored.contains(name)) << name;
 }

@@ -9,6 +9,8 @@
 # never moves), the scripted run's report and the comparison of the two. Headless Chromium
 # (through playwright-core, as in the browser tests: web/test/check_page.mjs) photographs each
 # whole page once its videos are loaded and shown at 70 % of their length.
+# docs/contacts.png and docs/contacts_plot.png: a scripted FetchPickAndPlace grasp at step 16 with
+# --overlay default,contacts, and the viewer's finger-force plot of that episode.
 # Needs a build (build/fetchscope), Debian's chromium and web/node_modules (tools/install-deps.sh).
 #   tools/docs-screenshots.sh [BUILD_DIR] [OUT_DIR (default docs)]
 set -euo pipefail
@@ -51,4 +53,15 @@ fi
   --overlay goal,achieved,hud,action,trail --width 480 --height 480 -o "$out/pick_and_place.png" >/dev/null
 "$bin" render --env-id FetchPush-v4 --policy scripted --seed 0 --steps 8 \
   --camera default,external_camera_0,track --width 320 --height 320 -o "$out/push_three_views.png" >/dev/null
-echo "docs-screenshots: $out/report.png $out/compare.png $out/viewer.png $out/pick_and_place.png $out/push_three_views.png"
+# contacts: a scripted grasp with --overlay contacts, and the viewer's finger-force plot
+camera="track:body=object0,distance=0.6,azimuth=150,elevation=-20"
+"$bin" render --env-id FetchPickAndPlace-v4 --policy scripted --seed 0 --steps 16 \
+  --overlay default,contacts --camera "$camera" --width 480 --height 360 -o "$out/contacts.png" >/dev/null
+"$bin" record --env-id FetchPickAndPlace-v4 --policy scripted --episodes 1 --steps 30 \
+  --width 240 --height 240 --signals contacts --overlay default,contacts --camera "$camera" \
+  --quiet --out "$work/contacts"
+node web/test/shoot_element.mjs --page "$work/contacts/index.html#episode=0&t=16" \
+  --selector "#vplot-contacts" --out "$out/contacts_plot.png" --chromium "$chromium" >"$work/plot.json"
+grep -q '"console_errors":\[\],"page_errors":\[\]' "$work/plot.json" ||
+  { cat "$work/plot.json" >&2; echo "docs-screenshots: the contacts plot has errors" >&2; exit 1; }
+echo "docs-screenshots: $out/report.png $out/compare.png $out/viewer.png $out/pick_and_place.png $out/push_three_views.png $out/contacts.png $out/contacts_plot.png"

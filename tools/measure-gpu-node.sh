@@ -10,7 +10,12 @@
 #   webm     16 FetchPush episodes at 480x480, --jobs 8, mp4 against webm, alternating, twice
 #   minari   10,000 scripted FetchPush episodes with `rollout --jobs 16`, trajectory JSON against
 #            a Minari dataset, alternating, twice
-# PARTS="golden minari" runs only those parts (default: all five).
+#   record16 `record --jobs 16`, 64 FetchPush episodes at 480x480 (libx264), this binary against
+#            $OLD_FETCHSCOPE (another build's launcher, e.g. the binary before a change),
+#            alternating, twice; then this binary with --overlay default,contacts and
+#            --signals contacts once
+#   serve    `bench --what serve --backends egl` at 640x480 and 1280x720: serve's frame budget
+# PARTS="golden minari" runs only those parts (default: node golden jobs webm minari).
 set -uo pipefail
 fs=$1
 out=$2
@@ -79,6 +84,37 @@ for round in 1 2; do
       --minari fetchscope/FetchPush/scripted-v0 --overwrite >/dev/null; } 2>&1
 done
 ls -l "$work/push10k.json" "$MINARI_DATASETS_PATH/fetchscope/FetchPush/scripted-v0/data/"
+fi
+if want record16; then
+log "record16"
+old=${OLD_FETCHSCOPE:-}
+for round in 1 2; do
+  for which in new old; do
+    bin=$fs
+    if [[ $which == old ]]; then [[ -n $old ]] || continue; bin=$old; fi
+    echo -n "round $round $which: "
+    { time "$bin" record --env-id FetchPush-v4 --episodes 64 --jobs 16 --codec libx264 \
+        --width 480 --height 480 --quiet --no-report --out "$work/r16_${which}_$round" \
+        >/dev/null; } 2>&1
+  done
+done
+echo -n "contacts (overlay and signals): "
+{ time "$fs" record --env-id FetchPush-v4 --episodes 64 --jobs 16 --codec libx264 --width 480 \
+    --height 480 --overlay default,contacts --signals contacts --quiet --no-report \
+    --out "$work/r16_contacts" >/dev/null; } 2>&1
+if [[ -n $old ]]; then
+  (cd "$work/r16_new_1" && sha256sum episode_*) >"$work/new.sum"
+  (cd "$work/r16_old_1" && sha256sum episode_*) >"$work/old.sum"
+  cmp -s "$work/new.sum" "$work/old.sum" && echo "record16: old and new wrote identical bytes" ||
+    echo "record16: old and new bytes DIFFER"
+fi
+fi
+
+if want serve; then
+log "serve"
+"$fs" bench --what serve --backends egl --seconds 9 --json-out "$out/serve.json" 2>&1 | grep serve
+"$fs" bench --what serve --backends egl --seconds 6 --serve-width 1280 --serve-height 720 \
+  --json-out "$out/serve720.json" 2>&1 | grep serve
 fi
 log "done"
 rm -rf "$work"

@@ -93,6 +93,17 @@
     {label: 'final distance A / B (m)', value: (r) => number(r.a.final_distance), render: (r) => pair(r, (x) => x.final_distance, 4), numeric: true},
     {label: 'steps A / B', value: (r) => r.steps_a, render: (r) => `${r.steps_a} / ${r.steps_b}`, numeric: true},
   ];
+  // runs recorded with --signals contacts: where their contact sequences first differ
+  if (data.episodes.some((r) => r.first_contact_difference)) {
+    columns.splice(3, 0,
+    {label: 'contacts first differ', value: (r) => (r.first_contact_difference ? number(r.first_contact_difference.step) : null),
+     render: (r) => {
+       const c = r.first_contact_difference;
+       if (!c) return '—';  // a run without --signals contacts
+       if (c.step === null) return 'never';
+       return el('span', {title: `only in A: ${c.only_a.join(', ') || 'none'}; only in B: ${c.only_b.join(', ') || 'none'}`}, `step ${c.step}`);
+     }, numeric: true});
+  }
   const table = FS.sortableTable(columns, rows, null, (r) => ({'data-episode': r.index}));
   table.id = 'episode-table';
   page.append(FS.scrolling(table));

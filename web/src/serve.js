@@ -13,7 +13,7 @@
   const data = FS.data;
   const page = document.getElementById('page');
   const DEFAULT_FREE = {lookat: [1.3, 0.75, 0.55], distance: 2.5, azimuth: 132, elevation: -14};
-  const OVERLAYS = ['goal', 'achieved', 'hud', 'action', 'trail', 'labels', 'hindsight', 'ghost'];
+  const OVERLAYS = ['goal', 'achieved', 'hud', 'action', 'trail', 'labels', 'hindsight', 'ghost', 'contacts'];
   const KEYS = {w: [0, 1], s: [0, -1], a: [1, 1], d: [1, -1], r: [2, 1], f: [2, -1], o: [3, 1], c: [3, -1]};
 
   const state = {

@@ -67,6 +67,17 @@ const FSViewer = (() => {
           {label: named(tr, 'object–goal distance'), stroke: '#c51b7d', dash: trackDash[i], values: s.object_goal_distance}]),
         readout: readouts((s, t) => `height ${fmt(at(s.object_height, t), 4)} m, to goal ${fmt(at(s.object_goal_distance, t), 4)} m`)});
     }
+    if (tracks.some((tr) => tr.signals && tr.signals.contacts)) {  // --signals contacts
+      const first = tracks.find((tr) => tr.signals && tr.signals.contacts).signals.contacts;
+      specs.push({id: 'contacts', unit: 'N',
+        title: 'Finger forces on the object (normal, N); shaded where both fingers press it (grasped)',
+        band: first.grasped, bandColor: 'rgba(255, 26, 191, 0.12)',
+        series: each((tr, s, i) => (s.contacts ? [
+          {label: named(tr, 'left finger'), stroke: s.contacts.colors['finger-object'], dash: trackDash[i], values: s.contacts.left_finger_force},
+          {label: named(tr, 'right finger'), stroke: '#7a0a5c', dash: trackDash[i] || [5, 3], values: s.contacts.right_finger_force}] : [])),
+        readout: readouts((s, t) => (s.contacts ? `left ${fmt(at(s.contacts.left_finger_force, t), 1)} N, right ${fmt(at(s.contacts.right_finger_force, t), 1)} N` +
+          (at(s.contacts.grasped, t) ? ', grasped' : '') + (at(s.contacts.object_on_table, t) ? ', object on the table' : '') : '—'))});
+    }
     if (tracks.some((tr) => tr.signals && tr.signals.replay_error)) {  // record --from DATASET
       specs.push({id: 'replay', title: 'Replayed vs recorded: how far the replay is from the dataset (the ghost)', unit: 'mm',
         series: each((tr, s, i) => (s.replay_error ? [
@@ -226,6 +237,22 @@ const FSViewer = (() => {
       return Math.max(300, Math.floor((grid - 10 * (columns - 1)) / columns) - 2 * 7);
     }
 
+    // shades the steps where the plot's band (state.specs, so that a refresh's data shows) holds
+    function drawBand(u, id) {
+      const spec = state.specs.find((sp) => sp.id === id);
+      if (!spec || !spec.band) return;
+      const {ctx, bbox} = u;
+      ctx.save();
+      ctx.fillStyle = spec.bandColor;
+      for (let t = 0; t < spec.band.length; t++) {
+        if (!spec.band[t]) continue;
+        const a = u.valToPos(t - 0.5, 'x', true), b = u.valToPos(t + 0.5, 'x', true);
+        const left = Math.max(bbox.left, a), right = Math.min(bbox.left + bbox.width, b);
+        if (right > left) ctx.fillRect(left, bbox.top, right - left, bbox.height);
+      }
+      ctx.restore();
+    }
+
     // a plot's data: the step axis, then each series' value at every step
     function plotValues(spec, xs) {
       return [xs, ...spec.series.map((s) => (s.values === 'threshold' ? xs.map(() => options.threshold) : xs.map((t) => at(s.values, t))))];
@@ -268,6 +295,8 @@ const FSViewer = (() => {
           axes: [{incrs: FS.integerSteps}, {label: spec.unit, size: 62},
                  ...(hasCmd ? [{scale: 'cmd', side: 1, size: 40, grid: {show: false}}] : [])],
           series,
+          // a band (the grasp): the steps where it holds, shaded under the curves
+          hooks: spec.band ? {drawClear: [(u) => drawBand(u, spec.id)]} : {},
         }, values, target);
         const line = el('div', {class: 'viewer-cursor'});
         chart.over.append(line);
