@@ -115,6 +115,44 @@ std::string ShellQuote(const std::string& arg) {
   return quoted + "'";
 }
 
+std::optional<std::vector<std::string>> SplitShellWords(const std::string& line) {
+  std::vector<std::string> words;
+  std::string word;
+  bool in_word = false;
+  for (size_t i = 0; i < line.size(); ++i) {
+    const char c = line[i];
+    if (c == ' ' || c == '\t' || c == '\n') {
+      if (in_word) words.push_back(std::move(word));
+      word.clear();
+      in_word = false;
+    } else if (c == '\'') {
+      const size_t end = line.find('\'', i + 1);
+      if (end == std::string::npos) return std::nullopt;
+      word += line.substr(i + 1, end - i - 1);
+      i = end;
+      in_word = true;
+    } else if (c == '"') {
+      size_t j = i + 1;
+      for (; j < line.size() && line[j] != '"'; ++j) {
+        // inside double quotes a backslash escapes only $ ` " \ and a newline
+        if (line[j] == '\\' && j + 1 < line.size() && std::strchr("$`\"\\\n", line[j + 1])) ++j;
+        word += line[j];
+      }
+      if (j >= line.size()) return std::nullopt;
+      i = j;
+      in_word = true;
+    } else if (c == '\\') {
+      if (i + 1 < line.size()) word += line[++i];
+      in_word = true;
+    } else {
+      word += c;
+      in_word = true;
+    }
+  }
+  if (in_word) words.push_back(std::move(word));
+  return words;
+}
+
 // ---- line channels ----
 
 bool LineChannel::WriteLine(const std::string& line) {

@@ -63,6 +63,11 @@ std::string SignalName(int sig);
 /// that a command line we print can be pasted.
 std::string ShellQuote(const std::string& arg);
 
+/// The words of a command line as a POSIX shell splits them (blanks between words; single
+/// quotes, double quotes and backslashes as the shell reads them; no expansions): the inverse of
+/// joining ShellQuote'd words with spaces. nullopt for an unterminated quote.
+std::optional<std::vector<std::string>> SplitShellWords(const std::string& line);
+
 /// Lines both ways over descriptors (a pipe pair, or one socket): writes whole lines, reads
 /// into a buffer and hands out complete lines. One JSON object per line for the JSON calls.
 class LineChannel {
@@ -90,9 +95,10 @@ class LineChannel {
   /// Closes both sides.
   void Close();
 
-  int in_fd() const { return in_.get(); }             ///< for poll sets
-  int out_fd() const { return out_.get(); }           ///< the writing descriptor
-  size_t buffered() const { return buffer_.size(); }  ///< bytes read and not yet taken
+  int in_fd() const { return in_.get(); }                 ///< for poll sets
+  int out_fd() const { return out_.get(); }               ///< the writing descriptor
+  size_t buffered() const { return buffer_.size(); }      ///< bytes read and not yet taken
+  const std::string& pending() const { return buffer_; }  ///< those bytes (a line not ended yet)
 
  private:
   UniqueFd in_, out_;

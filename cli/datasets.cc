@@ -34,6 +34,13 @@ std::string SizeMb(const fs::path& data) {
 
 int RunDatasets(const DatasetsOptions& o) {
   const fs::path root = MinariRoot(o.minari_root);
+  std::error_code ec;
+  const bool exists = fs::exists(root, ec);
+  if (exists) {
+    fs::directory_iterator(root, ec);
+    if (ec)
+      throw RunError("cannot list the datasets root '" + root.string() + "': " + ec.message());
+  }
   const std::vector<std::string> ids = ListLocalMinariIds(root);
   nlohmann::json out = nlohmann::json::array();
   std::vector<std::vector<std::string>> rows = {
@@ -71,7 +78,8 @@ int RunDatasets(const DatasetsOptions& o) {
     return 0;
   }
   if (ids.empty()) {
-    std::printf("no Minari datasets under %s\n", root.c_str());
+    std::printf("no Minari datasets under %s%s\n", root.c_str(),
+                exists ? "" : " (the folder does not exist yet)");
     return 0;
   }
   std::printf("Minari datasets under %s:\n%s", root.c_str(), AlignColumns(rows).c_str());

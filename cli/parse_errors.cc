@@ -151,9 +151,12 @@ std::string ParseErrorMessage(const CLI::App& app, const CLI::ParseError& error,
     const std::string value = what.substr(value_at + 8, range_at - value_at - 8);
     char* end = nullptr;
     std::strtod(value.c_str(), &end);
-    if (value.empty() || *end != '\0') {
-      return option + " needs " + ValueKind(FindOption(command, option)) + ", not '" + value + "'" +
-             help;
+    const std::string kind = ValueKind(FindOption(command, option));
+    const bool whole =
+        !value.empty() && value.find_first_not_of("-+0123456789") == std::string::npos;
+    // "2.5" is a number, but not the whole number an int option takes
+    if (value.empty() || *end != '\0' || (kind == "a whole number" && !whole)) {
+      return option + " needs " + kind + ", not '" + value + "'" + help;
     }
   }
   if (dynamic_cast<const CLI::ConversionError*>(&error) &&

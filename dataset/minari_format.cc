@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <cstdlib>
+#include <cstring>
 #include <regex>
 
 #include "base/errors.h"
@@ -66,14 +67,20 @@ void ValidateMinariDatasetId(const std::string& id) {
 }
 
 std::filesystem::path MinariRoot(const std::string& flag) {
-  if (!flag.empty()) return flag;
-  if (const char* env = std::getenv("MINARI_DATASETS_PATH")) {
-    if (!*env) {
-      throw UsageError(
-          "MINARI_DATASETS_PATH is set but empty: name a folder, or unset it for the default "
-          "~/.minari/datasets (or give --minari-root DIR)");
+  // a root that is a file is named with where it came from; one that does not exist yet is
+  // fine (writers make it, readers find no datasets there)
+  auto checked = [](const std::filesystem::path& root, const std::string& from) {
+    std::error_code ec;
+    if (std::filesystem::exists(root, ec) && !std::filesystem::is_directory(root, ec)) {
+      throw UsageError(from + " '" + root.string() +
+                       "' is a file, not a folder: the datasets root must be a folder");
     }
-    return env;
+    return root;
+  };
+  if (!flag.empty()) return checked(flag, "--minari-root");
+  // set but empty counts as unset, as for every variable fetchscope reads
+  if (const char* env = std::getenv("MINARI_DATASETS_PATH"); env && *env) {
+    return checked(env, "MINARI_DATASETS_PATH");
   }
   const char* home = std::getenv("HOME");
   if (!home || !*home) {
@@ -164,6 +171,25 @@ std::optional<double> PythonJsonNumber(const nlohmann::json& value) {
   return std::nullopt;
 }
 
-void SilenceHdf5Errors() { H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr); }
+void SilenceHdf5Errors() {
+  H5dont_atexit();  // before libhdf5 initialises itself; ignored (an error) after that
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+}
+
+std::string Hdf5SystemReason() {
+  // the sec2 driver's description reads "... errno = 28, error message = 'No space left on
+  // device' ...": the errno is the part we trust, its text comes from strerror here
+  int found = 0;
+  auto visit = [](unsigned, const H5E_error2_t* e, void* data) -> herr_t {
+    const char* at = e->desc ? std::strstr(e->desc, "errno = ") : nullptr;
+    if (at) {
+      const int code = std::atoi(at + 8);
+      if (code > 0) *static_cast<int*>(data) = code;
+    }
+    return 0;
+  };
+  H5Ewalk2(H5E_DEFAULT, H5E_WALK_DOWNWARD, visit, &found);
+  return found > 0 ? std::string(std::strerror(found)) : std::string();
+}
 
 }  // namespace fetchscope

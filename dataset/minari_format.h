@@ -81,7 +81,15 @@ nlohmann::json ParsePythonJson(const std::string& text);
 std::optional<double> PythonJsonNumber(const nlohmann::json& value);
 
 /// Makes libhdf5 print nothing on its own (its default handler prints a stack of errors on
-/// stderr for every failed call): our callers turn failures into one line. Idempotent.
+/// stderr for every failed call): our callers turn failures into one line. Also keeps libhdf5
+/// from closing files at exit: a file whose close failed (a full disk) stays in libhdf5's list,
+/// and its clean-up at exit() then crashed (SIGSEGV in H5F__close_cb); every file is closed by
+/// its owner (dataset/hdf5_handles.h), and the kernel closes what a failed close left. Idempotent.
 void SilenceHdf5Errors();
+
+/// The operating system's reason behind the last failed libhdf5 call, read from libhdf5's error
+/// stack ("No space left on device" where its file driver recorded errno 28), or "" when the
+/// stack names none. Call it right after the failure: the next libhdf5 call clears the stack.
+std::string Hdf5SystemReason();
 
 }  // namespace fetchscope

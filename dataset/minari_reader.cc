@@ -1,6 +1,7 @@
 #include "dataset/minari_reader.h"
 
 #include <algorithm>
+#include <cmath>
 #include <fstream>
 #include <sstream>
 
@@ -252,6 +253,24 @@ MinariEpisode ReadEpisode(const std::string& label, hid_t file, int64_t index, i
     r.ExpectRows("infos/is_success", rows, t + 1, obs_why);
     e.is_success = r.Numbers<float>(s, "infos/is_success", rows, H5T_NATIVE_FLOAT);
   }
+  // a NaN or an infinity would be stepped into MuJoCo ("unstable") and written to JSON as a
+  // string: refused here, naming where it is (rows of observations: the reset, then one per step)
+  auto check = [&](const char* field, const auto& values, hsize_t cols, bool has_reset) {
+    for (size_t i = 0; i < values.size(); ++i) {
+      if (std::isfinite(static_cast<double>(values[i]))) continue;
+      const size_t row = i / cols, col = i % cols;
+      const std::string at = has_reset
+                                 ? (row == 0 ? "the reset" : "step " + std::to_string(row - 1))
+                                 : "step " + std::to_string(row);
+      std::ostringstream value;
+      value << values[i];
+      r.Fail(at + ": " + field + (cols > 1 ? "[" + std::to_string(col) + "]" : "") + " is " +
+             value.str() + "; a replay needs finite numbers");
+    }
+  };
+  for (const Obs& o : obs) check(o.name, *o.out, o.cols, true);
+  check("actions", e.actions, 4, false);
+  check("rewards", e.rewards, 1, false);
   if (const auto steps = r.Unsigned("total_steps"); steps && *steps != t) {
     r.Fail("episodes of the wrong length: attribute total_steps is " + std::to_string(*steps) +
            " but 'rewards' has " + std::to_string(t) + " rows");
@@ -294,7 +313,9 @@ std::vector<std::string> ListLocalMinariIds(const fs::path& root) {
       it.disable_recursion_pending();  // temporary folders of writes; a dataset's own data/
       continue;
     }
-    if (fs::is_regular_file(p / "data" / "metadata.json", ec)) {
+    // a dataset's folder holds data/; one without its metadata.json is listed too (a reader
+    // then says what is wrong with it) rather than left out
+    if (fs::is_directory(p / "data", ec)) {
       ids.push_back(fs::relative(p, root, ec).generic_string());
       it.disable_recursion_pending();
     }

@@ -5,6 +5,7 @@
 #include <stdio.h>  // renameat2
 #include <unistd.h>
 
+#include <cctype>
 #include <cerrno>
 #include <chrono>
 #include <cmath>
@@ -64,12 +65,21 @@ H5Datatype BoolType() {
   return type;
 }
 
+// One line for a failed libhdf5 write: the system's reason first where libhdf5 recorded one
+// ("no space left on device writing FILE"), else what libhdf5 could not do.
+std::string Hdf5WriteError(const std::string& file, const std::string& what) {
+  std::string reason = Hdf5SystemReason();
+  if (reason.empty()) return file + ": libhdf5 " + what;
+  reason[0] = static_cast<char>(std::tolower(static_cast<unsigned char>(reason[0])));
+  return reason + " writing " + file + " (libhdf5 " + what + ")";
+}
+
 class EpisodeWriter {
  public:
   explicit EpisodeWriter(std::string file) : file_(std::move(file)) {}
 
   void Fail(const std::string& what) const {
-    throw RunError(file_ + ": libhdf5 could not write " + what);
+    throw RunError(Hdf5WriteError(file_, "could not write " + what));
   }
 
   H5Group Group(hid_t parent, const char* name) const {
@@ -217,6 +227,9 @@ MinariWriter::MinariWriter(const MinariWriteOptions& options)
   if (!options_.spec) throw RunError("MinariWriter: no env spec");
   SilenceHdf5Errors();
   ThrowIfStopped(options_.dataset_id);
+  lock_ = FolderLock::OnLockFile(
+      final_path_.parent_path() / ("." + final_path_.filename().string() + ".lock"),
+      "Minari dataset", options_.dataset_id);
   CheckMinariDestination(options_);
   for (const fs::path& stale : RemoveStaleMinariTemps(final_path_)) {
     std::fprintf(stderr, "removed %s, left by an interrupted dataset write\n", stale.c_str());
@@ -348,7 +361,7 @@ std::string MinariWriter::MetadataJson(double dataset_size_mb) const {
 fs::path MinariWriter::Commit() {
   const fs::path data = temp_path_ / "data";
   if (!file_ || !file_.Close()) {
-    throw RunError((data / "main_data.hdf5").string() + ": libhdf5 could not finish the file");
+    throw RunError(Hdf5WriteError((data / "main_data.hdf5").string(), "could not finish the file"));
   }
   std::error_code ec;
   const auto hdf5_bytes = fs::file_size(data / "main_data.hdf5", ec);

@@ -10,6 +10,7 @@
 
 #include "base/atomic_file.h"
 #include "base/errors.h"
+#include "base/folder_lock.h"
 #include "dataset/hdf5_handles.h"
 #include "dataset/minari_format.h"
 #include "src/env_spec.h"
@@ -85,6 +86,8 @@ class MinariWriter {
   std::filesystem::path final_path_;
   std::filesystem::path temp_path_;
   ParentFolders parents_;  // namespace folders created for it, removed again if not committed
+  // .NAME.lock beside the dataset: one writer per id at a time (released before parents_ goes)
+  FolderLock lock_;
   bool temp_exists_ = false;
   H5File file_;
   int obs_dim_ = 0;

@@ -1,5 +1,7 @@
 #include "encode/video_files.h"
 
+#include <unistd.h>
+
 #include <fstream>
 #include <iterator>
 
@@ -37,8 +39,9 @@ void CheckOutputFolder(const fs::path& final_path) {
 }
 
 fs::path TemporaryPathFor(const fs::path& final_path, std::string_view extension) {
-  return final_path.parent_path() /
-         ("." + final_path.stem().string() + ".partial." + std::string(extension));
+  // the writer's PID in the name: two processes writing one folder never share a temporary file
+  return final_path.parent_path() / ("." + final_path.stem().string() + ".partial-" +
+                                     std::to_string(::getpid()) + "." + std::string(extension));
 }
 
 std::string GifComment(const std::vector<std::pair<std::string, std::string>>& metadata) {

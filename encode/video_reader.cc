@@ -4,6 +4,7 @@
 
 #include "base/errors.h"
 #include "encode/av_handles.h"
+#include "encode/av_log.h"
 
 extern "C" {
 #include <libavutil/error.h>
@@ -86,6 +87,7 @@ struct VideoReader::Impl {
 VideoReader::VideoReader(const std::string& path) : impl_(std::make_unique<Impl>()) {
   Impl& s = *impl_;
   s.path = path;
+  InstallAvLogCapture();  // FFmpeg's complaints about a damaged file stay off the terminal
   AVFormatContext* raw = nullptr;
   int rc = avformat_open_input(&raw, path.c_str(), nullptr, nullptr);
   if (rc < 0) s.Fail("open video", rc);

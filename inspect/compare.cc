@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <iterator>
 #include <optional>
+#include <set>
 
 #include "base/atomic_file.h"
 #include "base/errors.h"
@@ -420,7 +421,63 @@ fs::path WriteComparison(const CompareOptions& o, const RecordedRun& a, const Re
 
 }  // namespace
 
+namespace {
+
+// compare's --out must not be one of the runs or hold a run of its own: its index.html is the
+// run's report, and compare would replace it.
+void RefuseRunFolderAsOut(const CompareOptions& o) {
+  std::error_code ec;
+  for (const std::string& run : {o.run_a, o.run_b}) {
+    if (fs::equivalent(o.out, run, ec)) {
+      throw UsageError("--out '" + o.out + "' is the run '" + run +
+                       "' being compared: compare writes index.html there; choose a new folder");
+    }
+  }
+  if (fs::exists(fs::path(o.out) / "manifest.json", ec)) {
+    throw UsageError("--out '" + o.out +
+                     "' holds a record run (manifest.json): compare would replace its "
+                     "index.html; choose a new folder");
+  }
+}
+
+// What one comparison wrote, removed again unless it finished: a failure leaves nothing behind.
+class OutputsGuard {
+ public:
+  explicit OutputsGuard(const fs::path& out) : out_(out) {
+    std::error_code ec;
+    created_ = !fs::exists(out, ec);
+    if (!created_) {
+      for (const auto& entry : fs::directory_iterator(out, ec)) before_.insert(entry.path());
+    }
+  }
+  ~OutputsGuard() {
+    if (done_) return;
+    std::error_code ec;
+    if (created_) {
+      fs::remove_all(out_, ec);
+      return;
+    }
+    std::vector<fs::path> added;
+    for (const auto& entry : fs::directory_iterator(out_, ec)) {
+      if (!before_.count(entry.path())) added.push_back(entry.path());
+    }
+    for (const fs::path& p : added) fs::remove_all(p, ec);
+  }
+  OutputsGuard(const OutputsGuard&) = delete;
+  OutputsGuard& operator=(const OutputsGuard&) = delete;
+  void Done() { done_ = true; }
+
+ private:
+  fs::path out_;
+  bool created_ = false;
+  bool done_ = false;
+  std::set<fs::path> before_;
+};
+
+}  // namespace
+
 CompareResult CompareRuns(const CompareOptions& o) {
+  RefuseRunFolderAsOut(o);
   const RecordedRun a = ReadRunFolder(o.run_a);
   const RecordedRun b = ReadRunFolder(o.run_b);
   const std::vector<int> ka = CommonEpisodes(o, a, b);
@@ -433,6 +490,7 @@ CompareResult CompareRuns(const CompareOptions& o) {
   }
 
   std::error_code ec;
+  OutputsGuard guard(o.out);
   fs::create_directories(o.out, ec);
   if (!fs::is_directory(o.out)) {
     throw UsageError("cannot create output folder '" + o.out +
@@ -451,6 +509,7 @@ CompareResult CompareRuns(const CompareOptions& o) {
     rows.push_back(std::move(c.row));
   }
   const fs::path html = WriteComparison(o, a, b, rows, same, differing);
+  guard.Done();
   return {std::move(rows), same, differing, html};
 }
 

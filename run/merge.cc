@@ -5,6 +5,7 @@
 #include <optional>
 
 #include "base/errors.h"
+#include "base/folder_lock.h"
 #include "run/manifest.h"
 #include "run/run_files.h"
 
@@ -257,6 +258,18 @@ void CheckComplete(const std::vector<std::pair<const ShardManifest*, const Manif
 }  // namespace
 
 MergeResult MergeShardManifests(const MergeRequest& request) {
+  MergeResult result;
+  result.manifest = request.out.empty() ? fs::path(request.dirs.front()) / kManifestFileName
+                                        : fs::path(request.out);
+  const fs::path out_dir =
+      result.manifest.parent_path().empty() ? fs::path(".") : result.manifest.parent_path();
+  // shards still recording hold the folder (shared): the merge waits for none of them, it refuses
+  std::error_code ec;
+  FolderLock lock;
+  if (fs::is_directory(out_dir, ec)) {
+    lock =
+        FolderLock(out_dir, FolderLock::Kind::kExclusive, "merge-manifests: the folder of --out");
+  }
   std::vector<ShardManifest> manifests;
   for (const std::string& dir : request.dirs) {
     for (ShardManifest& m : ReadManifests(dir)) manifests.push_back(std::move(m));
@@ -278,11 +291,6 @@ MergeResult MergeShardManifests(const MergeRequest& request) {
       EpisodesOfShards(manifests, &by_shard, &problems);
   CheckComplete(episode_at, by_shard, count, problems);
 
-  MergeResult result;
-  result.manifest = request.out.empty() ? fs::path(request.dirs.front()) / kManifestFileName
-                                        : fs::path(request.out);
-  const fs::path out_dir =
-      result.manifest.parent_path().empty() ? fs::path(".") : result.manifest.parent_path();
   const Manifest merged = Merged(first.data, by_shard, episode_at, out_dir, request);
   WriteManifest(result.manifest, merged);
   result.shards = static_cast<int>(by_shard.size());

@@ -105,14 +105,16 @@ bool IsManifestFileName(const std::string& name) {
 std::optional<RunFileName> ParseRunFileName(const std::string& name) {
   if (name.empty()) return std::nullopt;
   if (name[0] != '.') return ParseVisible(name);
-  // .STEM.partial.EXT (VideoWriter) and .NAME.tmp-XXXX (WriteFileAtomically)
+  // .STEM.partial-PID.EXT (VideoWriter; .STEM.partial.EXT before the PID was added) and
+  // .NAME.tmp-XXXX (WriteFileAtomically)
   std::string inner = name.substr(1);
   const size_t tmp = inner.find(".tmp-");
-  const size_t partial = inner.rfind(".partial.");
+  const size_t partial = inner.rfind(".partial");
+  const size_t extension = partial == std::string::npos ? partial : inner.find('.', partial + 8);
   if (tmp != std::string::npos) {
     inner = inner.substr(0, tmp);
-  } else if (partial != std::string::npos) {
-    inner = inner.substr(0, partial) + inner.substr(partial + 8);
+  } else if (extension != std::string::npos) {
+    inner = inner.substr(0, partial) + inner.substr(extension);
   } else {
     return std::nullopt;
   }

@@ -200,13 +200,20 @@ RunFolder::RunFolder(const RunFolderRequest& request) : request_(request) {
     if (p == p.parent_path()) break;
   }
   Listing listing;
-  if (created_dirs_.empty()) listing = ListFolder(out, quoted);
+  if (created_dirs_.empty()) {
+    if (fs::is_directory(out, ec)) lock_ = FolderLock(out, LockKind(), "--out");
+    listing = ListFolder(out, quoted);
+  }
   FindAside(out, quoted);
   CheckOtherManifests(out, quoted, listing.manifests, &listing.run_files);
   std::vector<std::string> remove;
   todo_ = request.episodes;
   if (!PlanRemovals(out, quoted, listing, &remove)) return;  // --resume of a whole run
   PrepareFolder(out, quoted, remove);
+}
+
+FolderLock::Kind RunFolder::LockKind() const {
+  return request_.sharded ? FolderLock::Kind::kShared : FolderLock::Kind::kExclusive;
 }
 
 RunFolder::Listing RunFolder::ListFolder(const fs::path& out, const std::string& quoted) const {
@@ -413,6 +420,16 @@ void RunFolder::PrepareFolder(const fs::path& out, const std::string& quoted,
     throw RunError("cannot create output folder '" + request_.out +
                    "': " + (ec ? ec.message() : std::string("a file is in the way")));
   }
+  if (!lock_.held()) {
+    // made just now, by this run or by another one racing it: the lock decides, and the loser
+    // leaves the folders alone (the winner may be writing in them)
+    try {
+      lock_ = FolderLock(out, LockKind(), "--out");
+    } catch (...) {
+      created_dirs_.clear();
+      throw;
+    }
+  }
   if (!created_dirs_.empty()) {
     try {
       CheckWritable(out, quoted);
@@ -426,6 +443,29 @@ void RunFolder::PrepareFolder(const fs::path& out, const std::string& quoted,
   }
 }
 
+namespace {
+
+// A manifest that is not JSON at all (cut short, or damaged) is not a user's file under our name:
+// say so, with where the JSON breaks, rather than "not written by fetchscope".
+void RefuseBrokenManifest(const fs::path& path, const std::string& quoted) {
+  std::ifstream in(path, std::ios::binary);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  try {
+    const nlohmann::json parsed = nlohmann::json::parse(text);
+    (void)parsed;
+  } catch (const nlohmann::json::parse_error& e) {
+    const bool cut = e.byte >= text.size();
+    throw UsageError(quoted + " holds " + path.filename().string() + ", which is " +
+                     (cut ? "truncated (its JSON ends at byte " + std::to_string(text.size()) +
+                                " before it is complete)"
+                          : "not valid JSON (at byte " + std::to_string(e.byte) + " of " +
+                                std::to_string(text.size()) + ")") +
+                     ": restore it, remove it to start afresh, or choose another --out");
+  }
+}
+
+}  // namespace
+
 void RunFolder::RefuseForeignFiles(const fs::path& out, const std::string& quoted,
                                    std::vector<std::string>* run_files,
                                    const std::vector<std::string>& manifests) const {
@@ -436,7 +476,10 @@ void RunFolder::RefuseForeignFiles(const fs::path& out, const std::string& quote
   for (const std::string& name : names) {
     if (!IsManifestFileName(name)) continue;
     const std::optional<Manifest> m = ReadManifestOrNull(out / name);
-    if (!m) continue;
+    if (!m) {
+      RefuseBrokenManifest(out / name, quoted);
+      continue;
+    }
     listed.insert(name);
     for (const ManifestEpisode& e : m->episodes) {
       for (const std::string& file : e.FileNames()) listed.insert(file);

@@ -12,6 +12,10 @@
 // whatever the mode. A killed attempt's files are recorded again: by --resume (unsharded, only
 // when they are of the same env, seed and policy) and --overwrite, and by a shard's plain rerun.
 //
+// Two processes never write one folder at once: the run holds an advisory lock on --out
+// (base/folder_lock.h; shared among the shards of a sharded run) from before it looks at the
+// folder to its end, and a second run is refused at once, naming the first one's PID.
+//
 // The folder is also refused when it is, holds or lies inside a source the run reads (record
 // --from, a replay file), paths and symlinks resolved, and when nothing can be written in it; both
 // before anything is rendered.
@@ -32,6 +36,7 @@
 #include <utility>
 #include <vector>
 
+#include "base/folder_lock.h"
 #include "run/manifest.h"
 
 namespace fetchscope {
@@ -99,6 +104,7 @@ class RunFolder {
     std::vector<std::string> manifests;  // other manifests
   };
   bool Ours(const std::string& name) const;
+  FolderLock::Kind LockKind() const;
   // Lists an existing --out, refusing a file in the way, a folder that cannot be listed or
   // written, and files under a run's names that fetchscope did not write.
   Listing ListFolder(const std::filesystem::path& out, const std::string& quoted) const;
@@ -134,6 +140,7 @@ class RunFolder {
   void SetAside(const std::filesystem::path& out, const std::vector<std::string>& names);
 
   RunFolderRequest request_;
+  FolderLock lock_;  // held from the first look at the folder to the end of the run
   std::vector<std::filesystem::path> created_dirs_;  // deepest first
   std::set<std::string> before_;                     // names present before the run
   std::vector<int> todo_;

@@ -1,7 +1,10 @@
 #include "run/run_summary.h"
 
 #include <cstdio>
-#include <sstream>
+#include <optional>
+#include <vector>
+
+#include "base/process.h"
 
 namespace fetchscope {
 namespace {
@@ -30,13 +33,14 @@ EpisodeCounts CountEpisodes(const std::vector<ManifestEpisode>& episodes) {
 }
 
 std::string ResumeCommand(const std::string& command_line) {
-  std::istringstream in(command_line);
-  std::string word, out;
+  // the manifest's command line is shell-quoted (cli/main.cc); an older one split at blanks
+  const std::optional<std::vector<std::string>> words = SplitShellWords(command_line);
+  std::string out;
   bool resume = false;
-  while (in >> word) {
+  for (const std::string& word : words.value_or(std::vector<std::string>{command_line})) {
     if (word == "--overwrite") continue;
     resume = resume || word == "--resume";
-    out += (out.empty() ? "" : " ") + word;
+    out += (out.empty() ? "" : " ") + (words ? ShellQuote(word) : word);
   }
   return resume ? out : out + " --resume";
 }

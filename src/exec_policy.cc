@@ -120,6 +120,27 @@ class ExecPolicy : public Policy {
     if (!child_.WaitFor(0.2)) child_.Kill();
   }
 
+  // Why step t got no answer in time, as far as can be seen from here: an answer without its
+  // newline, the child's input closed, or silence.
+  std::string NoAnswer(int t) {
+    LineChannel& channel = child_.channel();
+    const std::string within = " within " + JsonDouble(timeout_s_).dump() + " s";
+    const std::string who = "exec policy '" + command_ + "'";
+    if (channel.buffered() > 0) {
+      return who + " answered '" + Shorten(channel.pending()) + "' for step " + std::to_string(t) +
+             " but no newline followed" + within +
+             ": end each answer with a newline and flush it (Python: print(..., flush=True))";
+    }
+    // the write end of a pipe whose reader has gone reports POLLERR
+    pollfd out{channel.out_fd(), 0, 0};
+    if (poll(&out, 1, 0) == 1 && (out.revents & (POLLERR | POLLHUP)) != 0) {
+      return who + " closed its input (stdin) and gave no answer for step " + std::to_string(t) +
+             within + ": it must keep reading one JSON line per step until fetchscope closes it";
+    }
+    return who + " gave no answer for step " + std::to_string(t) + within +
+           " (raise --exec-timeout)";
+  }
+
   std::string ReadLine(int t) {
     LineChannel& channel = child_.channel();
     const auto deadline =
@@ -133,11 +154,7 @@ class ExecPolicy : public Policy {
       const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
                             deadline - std::chrono::steady_clock::now())
                             .count();
-      if (left <= 0) {
-        throw RunError("exec policy '" + command_ + "' gave no answer for step " +
-                       std::to_string(t) + " within " + JsonDouble(timeout_s_).dump() +
-                       " s (raise --exec-timeout)");
-      }
+      if (left <= 0) throw RunError(NoAnswer(t));
       // the answer's wait ends at once on SIGINT/SIGTERM: the child is ended (its group) and the
       // episode ends at the step it reached, an interruption
       std::vector<pollfd> fds = {{channel.in_fd(), POLLIN, 0}};

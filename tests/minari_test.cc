@@ -690,14 +690,44 @@ TEST(MinariCommands, TimeLimitAuthorAndPermalinkOfRolloutAndRecord) {
 }
 
 // MINARI_DATASETS_PATH= (set, empty) is an error, as in Minari, not a fallback to ~/.minari.
-TEST(MinariCommands, EmptyDatasetsPathIsAnError) {
+// MINARI_DATASETS_PATH set but empty counts as unset (the rule for every variable fetchscope
+// reads, FETCHSCOPE_ASSETS too): the default root under HOME is used. Set to a file, it is
+// refused naming the variable.
+TEST(MinariCommands, AnEmptyDatasetsPathIsUnsetAndAFileIsRefusedNamingTheVariable) {
   TempDir tmp;
-  const auto r = RunCommand("HOME=" + tmp.path().string() +
-                            " MINARI_DATASETS_PATH= " FETCHSCOPE_BIN
-                            " rollout --env-id FetchReach-v4 --steps 3 --minari e/x-v0 2>&1");
+  auto r = RunCommand("HOME=" + tmp.path().string() +
+                      " MINARI_DATASETS_PATH= " FETCHSCOPE_BIN
+                      " rollout --env-id FetchReach-v4 --steps 3 --minari up/empty-v0 2>&1");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(fs::exists(tmp.path() / ".minari" / "datasets" / "up" / "empty-v0" / "data" /
+                         "main_data.hdf5"))
+      << r.output;
+  WriteText(tmp.path() / "file", "not a folder");
+  r = RunCommand("MINARI_DATASETS_PATH=" + (tmp.path() / "file").string() +
+                 " " FETCHSCOPE_BIN " datasets 2>&1");
   EXPECT_EQ(r.exit_code, 2) << r.output;
-  EXPECT_NE(r.output.find("MINARI_DATASETS_PATH is set but empty"), std::string::npos) << r.output;
-  EXPECT_TRUE(fs::is_empty(tmp.path()));
+  EXPECT_NE(r.output.find("MINARI_DATASETS_PATH '" + (tmp.path() / "file").string() +
+                          "' is a file, not a folder"),
+            std::string::npos)
+      << r.output;
+}
+
+// datasets: a folder with data/ but no metadata.json is listed as unreadable, not left out; a
+// root that cannot be listed is an error, not "no datasets"
+TEST(MinariCommands, DatasetsListsABrokenDatasetAndRefusesAnUnlistableRoot) {
+  TempDir tmp;
+  const fs::path root = tmp.path() / "root";
+  fs::create_directories(root / "ns" / "broken-v0" / "data");
+  auto r = RunFetchscope("datasets --minari-root " + root.string() + " 2>&1");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("ns/broken-v0"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("unreadable"), std::string::npos) << r.output;
+  if (getuid() == 0) GTEST_SKIP() << "root can list a folder without permissions";
+  fs::permissions(root, fs::perms::none);
+  r = RunFetchscope("datasets --minari-root " + root.string() + " 2>&1");
+  fs::permissions(root, fs::perms::owner_all);
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("cannot list the datasets root"), std::string::npos) << r.output;
 }
 
 // export of a run cut off by an interrupt: the partial episode is refused, named; with
@@ -840,8 +870,11 @@ TEST(MinariCommands, RecordChecksTheDatasetUpFrontAndOverwriteReplacesIt) {
       out.string() + " ";
   auto r = RunFetchscope(record + "--minari-root " + (tmp.path() / "file").string() +
                          " --minari up/front-v0");
-  EXPECT_EQ(r.exit_code, 1) << r.output;
-  EXPECT_NE(r.output.find((tmp.path() / "file").string()), std::string::npos) << r.output;
+  EXPECT_EQ(r.exit_code, 2) << r.output;  // a bad path on the command line: a usage error
+  EXPECT_NE(r.output.find("--minari-root '" + (tmp.path() / "file").string() +
+                          "' is a file, not a folder"),
+            std::string::npos)
+      << r.output;
   EXPECT_FALSE(fs::exists(out / "episode_000.mp4")) << "rendered before checking the dataset";
   const fs::path root = tmp.path() / "datasets";
   r = RunFetchscope(record + "--seed 1 --minari-root " + root.string() + " --minari up/front-v0");

@@ -81,6 +81,8 @@ TEST(RunFileName, NamesRecordWritesAndNothingElse) {
            {".episode_003.partial.mp4", 3, true},
            {".episode_003.partial.webm", 3, true},
            {".episode_005_depth.partial.gif", 5, true},
+           {".episode_006.partial-4321.mp4", 6, true},
+           {".episode_007_depth.partial-12.webm", 7, true},
            {".episode_004.json.tmp-ab12", 4, true},
            {".episode_004_segmentation_legend.json.tmp-1-2", 4, true}}) {
     const auto parsed = ParseRunFileName(name);

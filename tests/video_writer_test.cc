@@ -301,7 +301,10 @@ TEST(VideoWriterTest, UnfinishedWriterLeavesNothingBehind) {
     for (int k = 0; k < 5; ++k) writer.AddFrame(BandFrame(k, 64, 48).data());
     // While writing, only the hidden temporary exists.
     EXPECT_FALSE(fs::exists(path));
-    EXPECT_EQ(FolderEntries(dir.path()), std::vector<std::string>{".episode_000.partial.mp4"});
+    // the temporary name holds the writer's PID: two processes never share one
+    EXPECT_EQ(
+        FolderEntries(dir.path()),
+        std::vector<std::string>{".episode_000.partial-" + std::to_string(getpid()) + ".mp4"});
   }
   EXPECT_TRUE(FolderEntries(dir.path()).empty());
 }
@@ -588,7 +591,8 @@ TEST(VideoWriterTest, UnfinishedWebmAndGifLeaveNothingBehind) {
     {
       VideoWriter writer((dir.path() / ("x." + format)).string(), options);
       writer.AddFrame(BandFrame(1, 32, 32).data());
-      EXPECT_EQ(FolderEntries(dir.path()), std::vector<std::string>{".x.partial." + format})
+      EXPECT_EQ(FolderEntries(dir.path()),
+                std::vector<std::string>{".x.partial-" + std::to_string(getpid()) + "." + format})
           << format;
     }
     EXPECT_TRUE(FolderEntries(dir.path()).empty()) << format;
