@@ -1,11 +1,13 @@
 #include "base/folder_lock.h"
 
 #include <fcntl.h>
+#include <pthread.h>
 #include <sys/file.h>
 #include <sys/stat.h>
 #include <sys/sysmacros.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <cerrno>
 #include <cstring>
 #include <fstream>
@@ -44,6 +46,40 @@ std::optional<pid_t> FlockHolder(const std::filesystem::path& path) {
 
 namespace {
 
+// The descriptors of the locks this process holds. A forked child (a worker process) closes its
+// copies at once: a flock belongs to the open file description, so a child that kept one would
+// keep the folder locked after its parent died (SIGKILL), and the --resume run that follows
+// would be refused. Closing the child's copy leaves the parent's lock as it is.
+constexpr int kMaxHeld = 16;
+std::atomic<int> held_fds[kMaxHeld];
+
+void CloseHeldInChild() {
+  for (std::atomic<int>& slot : held_fds) {
+    const int fd = slot.exchange(-1);
+    if (fd >= 0) close(fd);
+  }
+}
+
+void Remember(int fd) {
+  static const bool registered = [] {
+    for (std::atomic<int>& slot : held_fds) slot.store(-1);
+    pthread_atfork(nullptr, nullptr, CloseHeldInChild);
+    return true;
+  }();
+  (void)registered;
+  for (std::atomic<int>& slot : held_fds) {
+    int expected = -1;
+    if (slot.compare_exchange_strong(expected, fd)) return;
+  }
+}
+
+void Forget(int fd) {
+  for (std::atomic<int>& slot : held_fds) {
+    int expected = fd;
+    if (slot.compare_exchange_strong(expected, -1)) return;
+  }
+}
+
 // flock without waiting; true when taken, false when another process holds it
 bool TryFlock(int fd, int op, const std::filesystem::path& path) {
   int rc;
@@ -75,7 +111,10 @@ FolderLock::FolderLock(const std::filesystem::path& folder, Kind kind, const std
     throw RunError("cannot open folder '" + folder.string() +
                    "' to lock it: " + std::strerror(errno));
   }
-  if (TryFlock(fd_, kind == Kind::kShared ? LOCK_SH : LOCK_EX, folder)) return;
+  if (TryFlock(fd_, kind == Kind::kShared ? LOCK_SH : LOCK_EX, folder)) {
+    Remember(fd_);
+    return;
+  }
   close(fd_);
   fd_ = -1;
   ThrowHeld(folder, what, folder.string(), "folder");
@@ -101,6 +140,7 @@ FolderLock FolderLock::OnLockFile(const std::filesystem::path& file, const std::
       FolderLock lock;
       lock.fd_ = fd;
       lock.remove_ = file;
+      Remember(fd);
       return lock;
     }
     close(fd);
@@ -111,7 +151,8 @@ FolderLock FolderLock::OnLockFile(const std::filesystem::path& file, const std::
 FolderLock::~FolderLock() {
   if (fd_ < 0) return;
   if (!remove_.empty()) unlink(remove_.c_str());  // while still held: see OnLockFile
-  close(fd_);                                     // closing the last descriptor drops the lock
+  Forget(fd_);
+  close(fd_);  // closing the last descriptor drops the lock
 }
 
 FolderLock::FolderLock(FolderLock&& other) noexcept
@@ -123,6 +164,7 @@ FolderLock& FolderLock::operator=(FolderLock&& other) noexcept {
   if (this != &other) {
     if (fd_ >= 0) {
       if (!remove_.empty()) unlink(remove_.c_str());
+      Forget(fd_);
       close(fd_);
     }
     fd_ = std::exchange(other.fd_, -1);

@@ -57,23 +57,23 @@ CommandResult OnAFullDisk(const SmallDisk& disk, const std::string& args, std::s
     return RunCommand(Bin() + " " + args);
   }
   *expect = "file too large";
-  return RunCommand("trap '' XFSZ; ulimit -f 256; " + Bin() + " " + args);
+  return RunCommand("trap '' XFSZ; ulimit -f 128; " + Bin() + " " + args);
 }
 
-// Fills the small disk but for about 256 KiB (about 20 FetchPush episodes of a dataset).
-void FillBut256KiB(const SmallDisk& disk, const fs::path& at) {
+// Fills the small disk but for `kib` KiB (128: about 10 FetchPush episodes of a dataset).
+void FillBut(const SmallDisk& disk, const fs::path& at, int kib) {
   if (!disk.mounted()) return;
-  std::ofstream(at / "filler", std::ios::binary) << std::string((3 << 20) - (256 << 10), 'x');
+  std::ofstream(at / "filler", std::ios::binary) << std::string((3 << 20) - (kib << 10), 'x');
 }
 
 TEST(FullDisk, EveryMinariWriteFailsWithOneLineAndLeavesNothing) {
   TempDir tmp;
   const fs::path disk_dir = tmp.path() / "full";
   const SmallDisk disk(disk_dir);
-  FillBut256KiB(disk, disk_dir);
+  FillBut(disk, disk_dir, 128);
   // a run to export from, on the real disk
   const fs::path run = tmp.path() / "push.json";
-  ASSERT_EQ(RunFetchscope("rollout --env-id FetchPush-v4 --episodes 40 --json-out " + run.string() +
+  ASSERT_EQ(RunFetchscope("rollout --env-id FetchPush-v4 --episodes 20 --json-out " + run.string() +
                           " >/dev/null")
                 .exit_code,
             0);
@@ -83,11 +83,11 @@ TEST(FullDisk, EveryMinariWriteFailsWithOneLineAndLeavesNothing) {
     std::string args;
   };
   const std::vector<Case> cases = {
-      {"rollout --minari", "rollout --env-id FetchPush-v4 --episodes 40 --minari-root " + root +
+      {"rollout --minari", "rollout --env-id FetchPush-v4 --episodes 20 --minari-root " + root +
                                " --minari fs/roll-v0"},
       {"export", "export " + run.string() + " --minari-root " + root + " --minari fs/exp-v0"},
       {"record --minari",
-       "record --env-id FetchPush-v4 --episodes 40 --width 16 --height 16 "
+       "record --env-id FetchPush-v4 --episodes 20 --width 16 --height 16 "
        "--no-report --quiet --out " +
            (tmp.path() / "rec").string() + " --minari-root " + root + " --minari fs/rec-v0"},
   };
@@ -143,10 +143,11 @@ TEST(FullDisk, JsonOnStdoutCutShortByAFullDiskFails) {
   const fs::path disk_dir = tmp.path() / "full";
   const SmallDisk disk(disk_dir);
   if (!disk.mounted()) GTEST_SKIP() << "cannot mount a tmpfs here (not root)";
-  // 200 FetchPush episodes of JSON are about 14 MB: cut at the disk's 3 MiB
+  // 20 FetchPush episodes of JSON are about 1.4 MB: cut where 128 KiB are left
+  FillBut(disk, disk_dir, 128);
   const fs::path err = tmp.path() / "err";
   const CommandResult r =
-      RunCommand("{ " + Bin() + " rollout --env-id FetchPush-v4 --episodes 200 >" +
+      RunCommand("{ " + Bin() + " rollout --env-id FetchPush-v4 --episodes 20 >" +
                  (disk_dir / "out.json").string() + " 2>" + err.string() + "; }");
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_EQ(Errors(ReadFile(err)),
@@ -164,8 +165,8 @@ TEST(TwoWriters, OnlyOneRunWritesAFolder) {
   for (int round = 0; round < 20; ++round) {
     const fs::path out = tmp.path() / ("race" + std::to_string(round));
     const std::string args =
-        "record --env-id FetchReach-v4 --episodes 2 --steps 6 --width 48 "
-        "--height 48 --jobs 2 --quiet --out " +
+        "record --env-id FetchReach-v4 --episodes 2 --steps 2 --width 32 "
+        "--height 32 --jobs 2 --quiet --out " +
         out.string();
     const fs::path log_a = tmp.path() / "a.log", log_b = tmp.path() / "b.log";
     const pid_t a = SpawnFetchscope(args, log_a);
@@ -279,9 +280,9 @@ TEST(TwoWriters, AHeldFolderOrDatasetIdIsRefusedNamingTheHolder) {
 // dataset already there), and the dataset is whole.
 TEST(TwoWriters, OnlyOneRunWritesADatasetId) {
   TempDir tmp;
-  const std::string args = "rollout --env-id FetchReach-v4 --episodes 30 --minari-root " +
+  const std::string args = "rollout --env-id FetchReach-v4 --episodes 10 --minari-root " +
                            (tmp.path() / "ds").string() + " --minari fs/race-v0";
-  for (int round = 0; round < 5; ++round) {
+  for (int round = 0; round < 3; ++round) {
     std::error_code ec;
     fs::remove_all(tmp.path() / "ds", ec);
     const fs::path log_a = tmp.path() / "a.log", log_b = tmp.path() / "b.log";
@@ -345,6 +346,8 @@ TEST(SilentPolicy, CtrlCEndsTheWaitAtOnceAndThePrintedCommandPastes) {
   ASSERT_EQ(m["episodes"].size(), 2u) << m["episodes"].dump();
   EXPECT_FALSE(m["episodes"][1]["complete"].get<bool>()) << "the episode in progress is kept";
   EXPECT_EQ(m["incomplete_episodes"], nlohmann::json::array({1}));
+  // the interrupted episode is kept but never counted as done in the progress lines
+  EXPECT_EQ(text.find("progress 2/3 episodes"), std::string::npos) << text;
   // the printed command, pasted into a shell as it is, records the rest
   const std::string marker = "record: to record the rest, run: ";
   const size_t at = text.find(marker);
