@@ -13,4 +13,9 @@ namespace fetchscope {
 /// that a picture never shows "-0". NaN and infinities print as printf prints them.
 std::string PictureNumber(const char* format, double value);
 
+/// `part` of `whole` as a percentage a reader can trust: "100%" only when part == whole, "0%"
+/// only when part is 0, whole numbers where exact, else one decimal (rounded) that never reads
+/// 100 or 0 ("66.7%", "99.7%", "99.9%" for 9999 of 10000, "0.1%"). "100%" when whole is 0.
+std::string PercentText(long part, long whole);
+
 }  // namespace fetchscope

@@ -27,7 +27,7 @@
 #include "run/run_files.h"
 #include "src/episode.h"
 #include "src/fetch_env.h"
-#include "src/policy.h"
+#include "src/policy_spec.h"
 #include "src/versions.h"
 
 namespace fetchscope::bench {

@@ -25,6 +25,7 @@
 #include "serve/token.h"
 #include "src/episode.h"
 #include "src/fetch_env.h"
+#include "src/policy.h"
 #include "src/trajectory.h"
 
 namespace fetchscope::bench {

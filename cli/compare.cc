@@ -55,6 +55,10 @@ int RunCompare(CompareOptions o) {
       }
     }
     std::printf(
+        "         (|dstate|: the largest difference of any observation or goal component, in its "
+        "unit: m for positions and finger widths, m per step for velocities, rad for angles; "
+        "|dpixel|: 0 to 255 per channel)\n");
+    std::printf(
         "compare: %s: %d of %zu episode(s) differ (state tolerance %g, pixel tolerance %d) -> %s\n",
         same ? "same" : "different", differing, rows.size(), o.tolerance, o.pixel_tolerance,
         html.c_str());

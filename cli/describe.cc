@@ -18,14 +18,18 @@ int RunDescribe(const DescribeOptions& o) {
   CheckJsonOutReplaces(path, {{"env_id", env.spec->id}}, o.overwrite);
   FetchEnv fetch(*env.spec, env.assets);
   const nlohmann::json j = DescribeJson(fetch);
+  // the differences are said on a line each either way: on stdout beside "wrote", on stderr
+  // when stdout carries the JSON (which holds them too, under "chapter_differences")
+  FILE* notes = stdout;
   if (o.json_out.empty()) {
-    std::printf("%s\n", DumpJson(j).c_str());  // the JSON alone: its "chapter_differences" say it
+    std::printf("%s\n", DumpJson(j).c_str());
+    notes = stderr;
   } else {
     WriteJson(path, j);
     std::printf("wrote %s\n", path.c_str());
-    for (const auto& line : j["chapter_differences"]) {
-      std::printf("differs from the chapter: %s\n", line.get<std::string>().c_str());
-    }
+  }
+  for (const auto& line : j["chapter_differences"]) {
+    std::fprintf(notes, "differs from the chapter: %s\n", line.get<std::string>().c_str());
   }
   return 0;
 }

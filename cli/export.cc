@@ -16,6 +16,7 @@
 #include "dataset/minari_format.h"
 #include "run/episode_output.h"
 #include "run/minari_output.h"
+#include "run/progress.h"
 #include "src/env_spec.h"
 #include "src/trajectory.h"
 
@@ -117,9 +118,13 @@ int RunExport(const ExportOptions& o) {
   MinariOutput output(
       {o.minari, MinariRoot(o.minari_root), o.overwrite, o.author.name, o.author.email});
   std::string path;
+  ProgressReporter progress =
+      ProgressReporter::ForLongRuns("export", static_cast<int>(t.episodes.size()), 1, "episodes");
   try {
-    path = WriteEpisodes(t, run, output);
+    path = WriteEpisodes(t, run, output, [&] { progress.EpisodeDone(1); });
+    progress.Clear();
   } catch (const MinariInterrupted& e) {
+    progress.Clear();
     std::fprintf(stderr, "export: %s; nothing written%s\n", e.what(),
                  o.overwrite ? ", the existing dataset is unchanged" : "");
     return 128 + e.signal;

@@ -18,8 +18,9 @@ struct GoldenCommandOptions {
 
 void AddOptions(CLI::App* sub, GoldenCommandOptions* command) {
   GoldenOptions* o = &command->golden;
-  sub->add_option("--golden-dir", o->golden_dir, "Folder holding manifest.json and the goldens")
-      ->capture_default_str();
+  sub->add_option("--golden-dir", o->golden_dir,
+                  "Folder holding manifest.json and the goldens (default: ./golden; for check, "
+                  "where there is none, the goldens installed beside the binary)");
   sub->add_option("--backend", command->backend,
                   "auto (EGL, then OSMesa), egl or osmesa; default: $MUJOCO_GL, else auto");
   sub->add_option("--gpu", o->gpu,

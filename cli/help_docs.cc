@@ -17,8 +17,13 @@
 #include "cli/command.h"
 #include "cli/common.h"
 #include "cli/resolve.h"
+#include "encode/video_format.h"
+#include "render/layers.h"
+#include "render/overlay.h"
+#include "src/assets.h"
 #include "src/env_spec.h"
 #include "src/fetch_env.h"
+#include "src/policy_spec.h"
 
 namespace fetchscope::cli {
 namespace {
@@ -28,6 +33,7 @@ struct HelpOptions {
   bool markdown = false;
   bool man = false;
   bool bash_completion = false;
+  bool examples_dir = false;
 };
 
 /// One subcommand with its path from the top ("golden check").
@@ -232,13 +238,18 @@ std::string Join(const std::vector<std::string>& words) {
 std::vector<std::pair<std::string, std::string>> CompletionValues() {
   std::vector<std::string> env_ids = {"auto"};
   for (const EnvSpec& spec : AllEnvSpecs()) env_ids.push_back(spec.id);
+  std::vector<std::string> formats;
+  for (const VideoFormat& format : VideoFormats()) formats.emplace_back(format.name);
   return {
       {"--env-id", Join(env_ids)},
       {"--camera", Join(CameraNames())},
-      {"--policy", "random zero scripted replay: exec:"},
-      {"--overlay", "default none all goal achieved hud labels action trail hindsight ghost"},
-      {"--layers", "rgb depth segmentation"},
-      {"--format", "mp4 webm gif"},
+      // each from the one list its parser reads
+      {"--policy",
+       Join(std::vector<std::string>(std::begin(kPolicyNames), std::end(kPolicyNames)))},
+      {"--overlay", Join(OverlayNames())},
+      {"--layers",
+       Join({LayerName(Layer::kRgb), LayerName(Layer::kDepth), LayerName(Layer::kSegmentation)})},
+      {"--format", Join(formats)},
       {"--backend", "auto egl osmesa"},
       {"--readback", "auto sync async"},
       {"--msaa", "auto 0 1 2 4 8 16"},
@@ -310,12 +321,40 @@ std::string BashCompletion(const CLI::App& app) {
   }
   sh << "    esac\n  done\n"
      << "  case $prev in\n";
+  // comma lists: the word after the last comma is completed, the list before it kept
+  const std::set<std::string> lists = {"--camera", "--overlay", "--layers", "--format"};
   for (const auto& [option, words] : values) {
-    sh << "    " << option << ") COMPREPLY=($(compgen -W '" << words
-       << "' -- \"$cur\")); return ;;\n";
+    if (lists.count(option)) {
+      sh << "    " << option << ")\n"
+         << "      local pre=''; [[ $cur == *,* ]] && pre=${cur%,*},\n"
+         << "      COMPREPLY=($(compgen -P \"$pre\" -W '" << words
+         << "' -- \"${cur##*,}\")); compopt -o nospace 2>/dev/null; return ;;\n";
+    } else {
+      sh << "    " << option << ") COMPREPLY=($(compgen -W '" << words
+         << "' -- \"$cur\")); return ;;\n";
+    }
   }
-  // every other option that takes a value: a file or folder name
-  const std::vector<std::string> names = FileOptions(f, entries, values);
+  // folders: --out (but merge-manifests' --out names the manifest file) and the roots
+  sh << "    --out)\n"
+     << "      if [[ $cmd == merge-manifests ]]; then COMPREPLY=($(compgen -f -- \"$cur\"));\n"
+     << "      else COMPREPLY=($(compgen -d -- \"$cur\")); fi; return ;;\n"
+     << "    --golden-dir|--minari-root|--save-dir|--genuine-assets)\n"
+     << "      COMPREPLY=($(compgen -d -- \"$cur\")); return ;;\n";
+  // --from: a run folder, a trajectory file, or the id of a local Minari dataset
+  sh << "    --from)\n"
+     << "      local root=${MINARI_DATASETS_PATH:-$HOME/.minari/datasets} ids=''\n"
+     << "      [[ -d $root ]] && ids=$(cd \"$root\" && find . -path '*/data/metadata.json' "
+        "2>/dev/null | sed 's|^\\./||; s|/data/metadata.json$||')\n"
+     << "      COMPREPLY=($(compgen -W \"$ids\" -- \"$cur\") $(compgen -f -- \"$cur\")); return "
+        ";;\n";
+  // every other option that takes a value: a file name
+  std::vector<std::string> names = FileOptions(f, entries, values);
+  names.erase(std::remove_if(names.begin(), names.end(),
+                             [](const std::string& n) {
+                               return n == "--out" || n == "--golden-dir" || n == "--minari-root" ||
+                                      n == "--save-dir" || n == "--genuine-assets" || n == "--from";
+                             }),
+              names.end());
   if (!names.empty()) {
     sh << "    " << Replace(Join(names), " ", "|") << ")\n"
        << "      COMPREPLY=($(compgen -f -- \"$cur\")); return ;;\n";
@@ -327,8 +366,30 @@ std::string BashCompletion(const CLI::App& app) {
   for (const Entry& e : entries) {
     sh << "    '" << e.path << "') words='" << Join(CommandWords(e, top)) << "' ;;\n";
   }
+  // file names only where a command takes paths as its own arguments (report DIR, compare A B,
+  // export, merge-manifests, serve): never for golden, help or the commands without any
+  std::vector<std::string> path_commands;
+  for (const Entry& e : entries) {
+    if (e.path == "help") continue;
+    for (const CLI::Option* opt : e.app->get_options()) {
+      if (opt->get_positional()) {
+        path_commands.push_back(e.path);
+        break;
+      }
+    }
+  }
   sh << "  esac\n"
-     << "  if [[ $cur == -* || -n $words && $cmd == '' ]]; then\n"
+     << "  local paths=''\n"
+     << "  case $cmd in\n";
+  if (!path_commands.empty()) {
+    std::string alternatives;
+    for (const std::string& c : path_commands) {
+      alternatives += (alternatives.empty() ? "" : "|") + ("'" + c + "'");
+    }
+    sh << "    " << alternatives << ") paths=1 ;;\n";
+  }
+  sh << "  esac\n"
+     << "  if [[ $cur == -* || -z $paths ]]; then\n"
      << "    COMPREPLY=($(compgen -W \"$words\" -- \"$cur\"))\n"
      << "  else\n"
      << "    COMPREPLY=($(compgen -W \"$words\" -- \"$cur\") $(compgen -f -- \"$cur\"))\n"
@@ -339,8 +400,18 @@ std::string BashCompletion(const CLI::App& app) {
 }
 
 int RunHelp(const CLI::App& app, const HelpOptions& o) {
-  if (o.markdown + o.man + o.bash_completion > 1) {
-    throw UsageError("help: give one of --markdown, --man and --bash-completion");
+  if (o.markdown + o.man + o.bash_completion + o.examples_dir > 1) {
+    throw UsageError("help: give one of --markdown, --man, --bash-completion and --examples-dir");
+  }
+  if (o.examples_dir) {
+    const std::string dir = InstalledDataDir("examples");
+    if (dir.empty()) {
+      throw RunError(
+          "help: no examples are installed beside this binary (<bin>/examples or "
+          "<prefix>/share/fetchscope/examples); they are in the source tree's examples/");
+    }
+    std::printf("%s\n", dir.c_str());
+    return 0;
   }
   if ((o.markdown || o.man || o.bash_completion) && !o.command.empty()) {
     throw UsageError(
@@ -392,6 +463,10 @@ Command AddHelp(CLI::App& app) {
   sub->add_flag("--bash-completion", o->bash_completion,
                 "Print the bash completion script (subcommands, options, env ids, cameras, "
                 "policies)");
+  sub->add_flag("--examples-dir", o->examples_dir,
+                "Print the folder of the examples installed with the binary (an exec: policy, "
+                "Slurm and Kubernetes job files), e.g. for --policy \"exec:python3 "
+                "DIR/policies/mlp_policy.py\"");
   const CLI::App* parent = &app;
   return {sub, [parent, o] { return RunHelp(*parent, *o); }};
 }

@@ -12,6 +12,7 @@
 #include "cli/jobs_options.h"
 #include "cli/resolve.h"
 #include "run/episode_scheduler.h"
+#include "run/progress.h"
 #include "run/random_episodes_run.h"
 #include "src/fetch_env.h"
 
@@ -50,7 +51,11 @@ int RunRandomEpisodes(const RandomEpisodesOptions& o) {
   job.episodes = o.n_episodes;
   job.jobs = ResolveJobs(o.jobs, o.n_episodes);
   job.mode = mode;
+  ProgressReporter progress = ProgressReporter::ForLongRuns("random-episodes", o.n_episodes,
+                                                            spec.max_episode_steps, "steps");
+  job.on_episode = [&] { progress.EpisodeDone(spec.max_episode_steps); };
   const RandomMetrics m = RunRandomEpisodesJob(job);
+  progress.Clear();
   if (m.signal) {
     std::fprintf(stderr, "random-episodes: interrupted (%s); nothing written\n",
                  m.signal == SIGINT ? "SIGINT" : "SIGTERM");

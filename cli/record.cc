@@ -43,6 +43,7 @@
 #include "run/run_summary.h"
 #include "run/shard.h"
 #include "src/episode_source.h"
+#include "src/policy.h"
 #include "src/trajectory.h"
 
 namespace fetchscope::cli {

@@ -15,6 +15,7 @@
 #include "render/layers.h"
 #include "render/renderer.h"
 #include "run/episode_scheduler.h"
+#include "src/policy.h"
 
 namespace fetchscope::cli {
 namespace {

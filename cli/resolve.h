@@ -11,7 +11,7 @@
 #include "cli/common.h"
 #include "src/assets.h"
 #include "src/env_spec.h"
-#include "src/policy.h"
+#include "src/policy_spec.h"
 
 namespace fetchscope::cli {
 

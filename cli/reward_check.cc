@@ -10,6 +10,7 @@
 #include "cli/resolve.h"
 #include "src/episode.h"
 #include "src/fetch_env.h"
+#include "src/policy.h"
 #include "src/rng.h"
 
 namespace fetchscope::cli {

@@ -5,6 +5,7 @@
 
 #include "base/errors.h"
 #include "base/json_util.h"
+#include "base/number_format.h"
 #include "cli/command.h"
 #include "cli/common.h"
 #include "cli/jobs_options.h"
@@ -12,6 +13,7 @@
 #include "dataset/minari_format.h"
 #include "run/episode_scheduler.h"
 #include "run/minari_output.h"
+#include "run/progress.h"
 #include "run/rollout_run.h"
 #include "src/fetch_env.h"
 #include "src/trajectory.h"
@@ -71,7 +73,12 @@ int RunRollout(const RolloutOptions& o) {
                                  o.author.email});
     job.output = &*minari;
   }
+  // progress on stderr (the JSON may be on stdout): a bar on a terminal, else a line every
+  // FETCHSCOPE_PROGRESS_INTERVAL (30 s) of a long run
+  ProgressReporter progress = ProgressReporter::ForLongRuns("rollout", count, o.steps, "steps");
+  job.on_episode = [&] { progress.EpisodeDone(o.steps); };
   RolloutResult result = RunRolloutJob(job);
+  progress.Clear();
   if (result.signal) {
     std::fprintf(stderr, "rollout: %s; nothing written\n", result.stopped.c_str());
     return 128 + result.signal;
@@ -89,9 +96,9 @@ int RunRollout(const RolloutOptions& o) {
     wrote += "wrote " + path + "\n";
   }
   if (minari) wrote += "wrote Minari dataset " + o.minari + " at " + result.output + "\n";
-  std::printf("%s: %d episode(s) of %d steps, policy %s, seed %s: success %d/%d (%.0f%%)\n%s",
+  std::printf("%s: %d episode(s) of %d steps, policy %s, seed %s: success %d/%d (%s)\n%s",
               spec.id.c_str(), count, o.steps, o.policy.policy.c_str(), o.env.seed.c_str(),
-              result.successes, count, 100.0 * result.successes / count, wrote.c_str());
+              result.successes, count, PercentText(result.successes, count).c_str(), wrote.c_str());
   return 0;
 }
 

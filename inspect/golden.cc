@@ -21,6 +21,7 @@
 #include "inspect/golden_scene.h"
 #include "inspect/image_diff.h"
 #include "render/gl_context.h"
+#include "src/assets.h"
 
 namespace fs = std::filesystem;
 
@@ -235,7 +236,29 @@ void PrintTable(const std::vector<CheckRow>& rows) {
 
 }  // namespace
 
-int GoldenCheck(const GoldenOptions& o) {
+namespace {
+
+// --golden-dir, or where it defaults to: ./golden, else for a check the goldens installed with
+// the binary (so `golden check` runs from any folder); an update writes, so it never defaults to
+// the installed copy (a rebuild or reinstall would replace what it wrote).
+std::string ResolveGoldenDir(const std::string& given, bool writes) {
+  if (!given.empty()) return given;
+  std::error_code ec;
+  if (fs::is_directory("golden", ec)) return "golden";
+  const std::string installed = writes ? std::string() : InstalledDataDir("golden");
+  if (!installed.empty()) return installed;
+  throw UsageError(
+      writes ? "golden update writes the goldens of a checkout: there is no ./golden here; run it "
+               "from the checkout's root, or pass --golden-dir"
+             : "no goldens: ./golden does not exist and none are installed beside the binary "
+               "(<bin>/golden or <prefix>/share/fetchscope/golden); pass --golden-dir");
+}
+
+}  // namespace
+
+int GoldenCheck(const GoldenOptions& options) {
+  GoldenOptions o = options;
+  o.golden_dir = ResolveGoldenDir(options.golden_dir, /*writes=*/false);
   const GoldenManifest manifest = ReadGoldenManifest(o.golden_dir);
   std::string genuine;
   const std::vector<const GoldenScene*> scenes = RunnableScenes(manifest, o, &genuine);
@@ -274,7 +297,9 @@ int GoldenCheck(const GoldenOptions& o) {
   return 0;
 }
 
-int GoldenUpdate(const GoldenOptions& o) {
+int GoldenUpdate(const GoldenOptions& options) {
+  GoldenOptions o = options;
+  o.golden_dir = ResolveGoldenDir(options.golden_dir, /*writes=*/true);
   const GoldenManifest manifest = ReadGoldenManifest(o.golden_dir);
   std::string genuine;
   const std::vector<const GoldenScene*> scenes = RunnableScenes(manifest, o, &genuine);

@@ -14,7 +14,9 @@ namespace fetchscope {
 
 /// What golden check and update run on.
 struct GoldenOptions {
-  std::string golden_dir = "golden";     ///< folder holding manifest.json and the goldens
+  /// folder holding manifest.json and the goldens; "": ./golden where it exists, else (check
+  /// only) the goldens installed with the binary (ResolveGoldenDir)
+  std::string golden_dir;
   std::string out = "out/golden";        ///< check: folder for the images of failed scenes
   GlBackend backend = GlBackend::kAuto;  ///< --backend, else $MUJOCO_GL, else auto (cli/)
   int gpu = -1;                          ///< EGL device index; -1: from the environment

@@ -9,6 +9,7 @@
 
 #include "base/errors.h"
 #include "base/json_util.h"
+#include "base/suggest.h"
 #include "render/camera.h"
 #include "render/overlay.h"
 #include "render/renderer.h"
@@ -288,9 +289,13 @@ std::vector<const GoldenScene*> SelectScenes(const GoldenManifest& manifest,
       for (const GoldenScene& s : manifest.scenes) found = found || s.name == name;
       if (!found) {
         std::string valid;
-        for (const GoldenScene& s : manifest.scenes) valid += (valid.empty() ? "" : ", ") + s.name;
+        std::vector<std::string> names;
+        for (const GoldenScene& s : manifest.scenes) {
+          valid += (valid.empty() ? "" : ", ") + s.name;
+          names.push_back(s.name);
+        }
         throw UsageError("--only: no scene named '" + name + "' in " + manifest.dir +
-                         "/manifest.json; valid names: " + valid);
+                         "/manifest.json" + DidYouMean(name, names) + "; valid names: " + valid);
       }
       wanted.insert(name);
     }

@@ -21,7 +21,7 @@
 
 #include "inspect/image_diff.h"
 #include "render/gl_context.h"
-#include "src/policy.h"
+#include "src/policy_spec.h"
 
 namespace fetchscope {
 

@@ -16,10 +16,6 @@
 namespace fetchscope {
 namespace {
 
-constexpr char kAcceptedOverlays[] =
-    "accepted: default, none, all, or a comma list of goal, achieved, hud, action, trail, labels, "
-    "hindsight, ghost, contacts";
-
 // Colours (rgba).
 constexpr float kGoalRed[4] = {1.0f, 0.0f, 0.0f, 1.0f};       // as target0
 constexpr float kGoalShell[4] = {1.0f, 0.15f, 0.15f, 0.18f};  // translucent
@@ -143,41 +139,66 @@ bool Overlaps(const PixelRect& a, const PixelRect& b) {
 
 }  // namespace
 
+namespace {
+
+// Every --overlay item, once: the parser, its "did you mean", the accepted list in its message,
+// --help and the bash completion all read this table (OverlayNames).
+struct OverlayItem {
+  const char* name;
+  void (*apply)(OverlaySet*);
+};
+const OverlayItem kOverlayItems[] = {
+    {"goal", [](OverlaySet* s) { s->goal = true; }},
+    // a dataset's ghost goes with the achieved marker
+    {"achieved", [](OverlaySet* s) { s->achieved = s->ghost = true; }},
+    {"hud", [](OverlaySet* s) { s->hud = true; }},
+    {"action", [](OverlaySet* s) { s->action = true; }},
+    {"trail", [](OverlaySet* s) { s->trail = true; }},
+    {"labels", [](OverlaySet* s) { s->labels = true; }},
+    {"hindsight", [](OverlaySet* s) { s->hindsight = true; }},
+    {"ghost", [](OverlaySet* s) { s->ghost = true; }},
+    {"contacts", [](OverlaySet* s) { s->contacts = true; }},
+    {"default",
+     [](OverlaySet* s) { s->goal = s->achieved = s->hud = s->labels = s->ghost = true; }},
+    {"all",
+     [](OverlaySet* s) { *s = OverlaySet{true, true, true, true, true, true, true, true, true}; }},
+};
+
+std::string AcceptedOverlays() {
+  std::string items;
+  for (const OverlayItem& item : kOverlayItems) {
+    const std::string name = item.name;
+    if (name != "default" && name != "all") items += (items.empty() ? "" : ", ") + name;
+  }
+  return "accepted: default, none, all, or a comma list of " + items;
+}
+
+}  // namespace
+
+std::vector<std::string> OverlayNames() {
+  std::vector<std::string> names = {"default", "none", "all"};
+  for (const OverlayItem& item : kOverlayItems) {
+    const std::string name = item.name;
+    if (name != "default" && name != "all") names.push_back(name);
+  }
+  return names;
+}
+
 OverlaySet ParseOverlays(const std::string& spec) {
   const std::string trimmed = TrimSpaces(spec);
   if (trimmed == "default") return OverlaySet{};
   OverlaySet set{false, false, false, false, false, false, false, false};
   if (trimmed == "none") return set;
   for (const std::string& token : SplitCommaList(spec)) {
-    if (token == "goal") {
-      set.goal = true;
-    } else if (token == "achieved") {
-      set.achieved = set.ghost = true;  // a dataset's ghost goes with the achieved marker
-    } else if (token == "hud") {
-      set.hud = true;
-    } else if (token == "action") {
-      set.action = true;
-    } else if (token == "trail") {
-      set.trail = true;
-    } else if (token == "labels") {
-      set.labels = true;
-    } else if (token == "hindsight") {
-      set.hindsight = true;
-    } else if (token == "ghost") {
-      set.ghost = true;
-    } else if (token == "contacts") {
-      set.contacts = true;
-    } else if (token == "default") {
-      set.goal = set.achieved = set.hud = set.labels = set.ghost = true;
-    } else if (token == "all") {
-      set = OverlaySet{true, true, true, true, true, true, true, true, true};
-    } else {
-      const std::string suggestion =
-          DidYouMean(token, {"goal", "achieved", "hud", "action", "trail", "labels", "hindsight",
-                             "ghost", "contacts", "default", "none", "all"});
-      throw UsageError("overlay '" + token + "' in '" + spec + "' is not known" + suggestion +
-                       "; " + kAcceptedOverlays);
+    const OverlayItem* found = nullptr;
+    for (const OverlayItem& item : kOverlayItems) {
+      if (token == item.name) found = &item;
     }
+    if (!found) {
+      throw UsageError("overlay '" + token + "' in '" + spec + "' is not known" +
+                       DidYouMean(token, OverlayNames()) + "; " + AcceptedOverlays());
+    }
+    found->apply(&set);
   }
   return set;
 }

@@ -51,6 +51,10 @@ const char* HudPositionName(HudPosition position);
 /// the accepted ones.
 OverlaySet ParseOverlays(const std::string& spec);
 
+/// Every name --overlay accepts ("default", "none", "all", then each item), from the parser's
+/// own table: completion and help read it, so they cannot drift from the parser.
+std::vector<std::string> OverlayNames();
+
 /// One contact as the contacts overlay draws it.
 struct ContactMark {
   std::array<double, 3> position{};  ///< m, world

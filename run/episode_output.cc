@@ -33,8 +33,8 @@ int LongestEpisodeSteps(const Trajectory& trajectory) {
   return steps;
 }
 
-std::string WriteEpisodes(const Trajectory& trajectory, const OutputRun& run,
-                          EpisodeOutput& output) {
+std::string WriteEpisodes(const Trajectory& trajectory, const OutputRun& run, EpisodeOutput& output,
+                          const std::function<void()>& on_episode) {
   std::vector<const TrajectoryEpisode*> episodes;
   for (const TrajectoryEpisode& e : trajectory.episodes) episodes.push_back(&e);
   std::sort(
@@ -42,7 +42,10 @@ std::string WriteEpisodes(const Trajectory& trajectory, const OutputRun& run,
       [](const TrajectoryEpisode* a, const TrajectoryEpisode* b) { return a->index < b->index; });
   try {
     output.Begin(run);
-    for (const TrajectoryEpisode* e : episodes) output.Add(*e);
+    for (const TrajectoryEpisode* e : episodes) {
+      output.Add(*e);
+      if (on_episode) on_episode();
+    }
     return output.Finish();
   } catch (...) {
     output.Abort();

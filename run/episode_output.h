@@ -5,6 +5,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <string>
 #include <vector>
@@ -76,8 +77,9 @@ class EpisodesInOrder {
 int LongestEpisodeSteps(const Trajectory& trajectory);
 
 /// `trajectory`'s episodes, in index order, through `output`: Begin(run), Add each, Finish.
-/// Returns Finish's name; throws as those do (the output aborted, nothing left).
-std::string WriteEpisodes(const Trajectory& trajectory, const OutputRun& run,
-                          EpisodeOutput& output);
+/// Returns Finish's name; throws as those do (the output aborted, nothing left). `on_episode`,
+/// if set, is called after each episode is added (progress).
+std::string WriteEpisodes(const Trajectory& trajectory, const OutputRun& run, EpisodeOutput& output,
+                          const std::function<void()>& on_episode = {});
 
 }  // namespace fetchscope

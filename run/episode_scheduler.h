@@ -22,7 +22,7 @@
 #include "src/episode.h"
 #include "src/episode_source.h"
 #include "src/fetch_env.h"
-#include "src/policy.h"
+#include "src/policy_spec.h"
 
 namespace fetchscope {
 

@@ -6,6 +6,7 @@
 #include <cstdlib>
 
 #include "base/errors.h"
+#include "base/number_format.h"
 
 namespace fetchscope {
 namespace {
@@ -44,6 +45,19 @@ ProgressReporter::ProgressReporter(const std::string& label, int episodes, long 
           }(),
           SteadySeconds) {}
 
+ProgressReporter ProgressReporter::ForLongRuns(const std::string& label, int episodes,
+                                               long units_per_episode, const std::string& unit) {
+  Options o;
+  o.label = label;
+  o.episodes = episodes;
+  o.frames_per_episode = units_per_episode;
+  o.terminal = isatty(STDERR_FILENO);
+  o.log_interval_s = LogIntervalFromEnvironment();
+  o.log_percent_step = 0;
+  o.unit = unit;
+  return ProgressReporter(o, SteadySeconds);
+}
+
 ProgressReporter::ProgressReporter(const Options& options, std::function<double()> clock_s)
     : o_(options), clock_(std::move(clock_s)) {
   start_ = clock_();
@@ -52,6 +66,12 @@ ProgressReporter::ProgressReporter(const Options& options, std::function<double(
 
 void ProgressReporter::Frames(int n) {
   frames_ += n;
+  Update();
+}
+
+void ProgressReporter::EpisodeDone(long frames) {
+  frames_ += frames;
+  ++done_;
   Update();
 }
 
@@ -65,23 +85,34 @@ std::string ProgressReporter::Line() const {
   const double fps = elapsed > 0 ? frames_ / elapsed : 0;
   const long total = static_cast<long>(o_.episodes) * o_.frames_per_episode;
   const long left = std::max(0L, total - frames_);
+  const bool finishing = left == 0 && done_ < o_.episodes;  // every frame made, episodes not
   char eta[32];
-  if (fps > 0) {
-    std::snprintf(eta, sizeof(eta), "%.0f s", left / fps);
+  if (finishing) {
+    std::snprintf(eta, sizeof(eta), "finishing");
+  } else if (fps > 0) {
+    // "0 s" only when nothing is left; under a second left reads "1 s"
+    std::snprintf(eta, sizeof(eta), "%.0f s", left > 0 ? std::max(1.0, left / fps) : 0.0);
   } else {
     std::snprintf(eta, sizeof(eta), "unknown");
   }
-  char line[256];
+  // frames beyond the finished episodes' are of episodes still running
+  const long finished = static_cast<long>(done_) * o_.frames_per_episode;
+  char running[64] = "";
+  if (frames_ > finished && done_ < o_.episodes) {
+    std::snprintf(running, sizeof(running), " (%ld of episodes still running)", frames_ - finished);
+  }
+  const char* unit = o_.unit.c_str();
+  char line[320];
   if (o_.terminal) {  // the bar as it has always been
-    std::snprintf(line, sizeof(line),
-                  "%s: %d/%d episodes  frame %ld/%ld  %.1f frames/s  ETA %.0f s", o_.label.c_str(),
-                  done_, o_.episodes, frames_, total, fps, fps > 0 ? left / fps : 0.0);
+    std::snprintf(line, sizeof(line), "%s: %d/%d episodes  %s %ld/%ld  %.1f %s/s  ETA %s",
+                  o_.label.c_str(), done_, o_.episodes, o_.unit == "frames" ? "frame" : unit,
+                  frames_, total, fps, unit, eta);
     return line;
   }
-  const int percent = o_.episodes > 0 ? 100 * done_ / o_.episodes : 100;
   std::snprintf(line, sizeof(line),
-                "%s: progress %d/%d episodes (%d%%), %ld/%ld frames, %.1f frames/s, ETA %s",
-                o_.label.c_str(), done_, o_.episodes, percent, frames_, total, fps, eta);
+                "%s: progress %d/%d episodes (%s), %ld/%ld %s%s, %.1f %s/s, ETA %s",
+                o_.label.c_str(), done_, o_.episodes, PercentText(done_, o_.episodes).c_str(),
+                frames_, total, unit, running, fps, unit, eta);
   return line;
 }
 
@@ -98,12 +129,18 @@ void ProgressReporter::Update() {
   const int step = std::max(1, o_.log_percent_step);
   const int percent = o_.episodes > 0 ? 100 * done_ / o_.episodes : 0;
   const int reached = percent / step * step;
-  const bool new_step = reached > logged_percent_;
+  const bool new_step = o_.log_percent_step > 0 && reached > logged_percent_;
   const bool interval = now - last_log_ >= o_.log_interval_s;
   if (!new_step && !interval) return;
   if (new_step) logged_percent_ = reached;
   last_log_ = now;
   std::fprintf(o_.out, "%s\n", Line().c_str());
+  std::fflush(o_.out);
+}
+
+void ProgressReporter::Clear() {
+  if (o_.quiet || !o_.terminal || last_draw_ < 0) return;
+  std::fprintf(o_.out, "\r%*s\r", 78, "");
   std::fflush(o_.out);
 }
 

@@ -27,21 +27,34 @@ class ProgressReporter {
     bool terminal = false;         ///< redraw one line (true) or print log lines (false)
     double log_interval_s = 30;    ///< log mode: a line at least this often
     int log_percent_step = 10;     ///< log mode: a line each time this % more episodes are done
+                                   ///< (0: none, only the interval's lines)
+    std::string unit = "frames";   ///< what Frames counts: "frames", or "steps" (rollout)
     std::FILE* out = stderr;
   };
 
   /// terminal = isatty(stderr); log_interval_s from FETCHSCOPE_PROGRESS_INTERVAL (UsageError
   /// when malformed); the clock is std::chrono::steady_clock.
   ProgressReporter(const std::string& label, int episodes, long frames_per_episode, bool quiet);
+  /// As above, for the commands whose output is on stdout (rollout, random-episodes, export):
+  /// `unit` counted, and in a log only a line per FETCHSCOPE_PROGRESS_INTERVAL (30 s), so short
+  /// runs print nothing.
+  static ProgressReporter ForLongRuns(const std::string& label, int episodes,
+                                      long units_per_episode, const std::string& unit);
   /// For tests: every option, and a clock in seconds.
   ProgressReporter(const Options& options, std::function<double()> clock_s);
 
   /// `n` more frames done.
   void Frames(int n);
-  /// One more episode done.
+  /// One more episode done: complete. An episode an interruption ended is not counted (its
+  /// frames were).
   void EpisodeDone();
+  /// One more episode done with its `frames` (steps) counted at once: for the commands that
+  /// count an episode's frames only when it ends (rollout, random-episodes, export).
+  void EpisodeDone(long frames);
   /// Clears the terminal line and prints `summary` (unless quiet).
   void Done(const std::string& summary);
+  /// Clears the terminal line (a command whose summary goes elsewhere).
+  void Clear();
 
   long frames() const { return frames_; }
   int episodes_done() const { return done_; }

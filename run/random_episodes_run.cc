@@ -46,6 +46,7 @@ RandomMetrics RunRandomEpisodesJob(const RandomEpisodesJob& job) {
   for (int k = 0; k < job.episodes; ++k) schedule.episodes.push_back(k);
   schedule.jobs = job.jobs;
   schedule.mode = job.mode;
+  if (job.on_episode) schedule.on_done = [&](int, const nlohmann::json&) { job.on_episode(); };
   const ScheduleResult result = RunEpisodes(schedule, [&](int) {
     return std::make_unique<RandomEpisodeRunner>(*job.spec, job.assets, context);
   });

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <nlohmann/json.hpp>
 #include <vector>
 
@@ -22,6 +23,7 @@ struct RandomEpisodesJob {
   int episodes = 10;                       ///< episodes 0 .. episodes-1
   int jobs = 1;                            ///< workers (ResolveJobs)
   WorkerMode mode = WorkerMode::kProcess;  ///< --worker-mode
+  std::function<void()> on_episode;        ///< called as each episode is done (progress), if set
 };
 
 /// The baseline over the episodes: means over episodes, the population standard deviation

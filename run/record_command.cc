@@ -85,7 +85,11 @@ ScheduleResult ScheduleRecord(const RecordJob& job, const RunFolder& folder,
   schedule.jobs = job.jobs;
   schedule.mode = job.mode;
   schedule.on_progress = [&](int n) { progress.Frames(n); };
-  schedule.on_done = [&](int, const nlohmann::json&) { progress.EpisodeDone(); };
+  // an episode an interruption ended is kept, but not counted as done
+  schedule.on_done = [&](int, const nlohmann::json& result) {
+    const nlohmann::json* entry = result.contains("entry") ? &result["entry"] : nullptr;
+    if (!entry || entry->value("complete", true)) progress.EpisodeDone();
+  };
   return RecordEpisodes(job.plan, schedule);
 }
 

@@ -11,6 +11,7 @@
 #include "base/cores.h"
 #include "base/cpu_clock.h"
 #include "render/layers.h"
+#include "src/policy.h"
 
 namespace fetchscope {
 namespace {

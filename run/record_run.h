@@ -29,7 +29,7 @@
 #include "src/env_spec.h"
 #include "src/episode_source.h"
 #include "src/hindsight.h"
-#include "src/policy.h"
+#include "src/policy_spec.h"
 
 namespace fetchscope {
 

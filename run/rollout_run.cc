@@ -9,6 +9,7 @@
 #include "dataset/minari_writer.h"
 #include "src/episode.h"
 #include "src/fetch_env.h"
+#include "src/policy.h"
 #include "src/trajectory.h"
 
 namespace fetchscope {
@@ -63,10 +64,11 @@ RolloutResult RunRolloutJob(const RolloutJob& job) {
   std::optional<EpisodesInOrder> in_order;
   ScheduleOptions schedule;
   schedule.episodes = job.episodes;
-  if (output) {
-    in_order.emplace(job.episodes, *output);
+  if (output) in_order.emplace(job.episodes, *output);
+  if (output || job.on_episode) {
     schedule.on_done = [&](int, const nlohmann::json& e) {
-      if (!in_order->stopped()) in_order->Done(ReadBack(job, e));
+      if (output && !in_order->stopped()) in_order->Done(ReadBack(job, e));
+      if (job.on_episode) job.on_episode();
     };
   }
   schedule.jobs = job.jobs;

@@ -6,6 +6,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -14,7 +15,7 @@
 #include "run/episode_scheduler.h"
 #include "src/assets.h"
 #include "src/env_spec.h"
-#include "src/policy.h"
+#include "src/policy_spec.h"
 
 namespace fetchscope {
 
@@ -31,7 +32,8 @@ struct RolloutJob {
   int jobs = 1;                                   ///< workers (ResolveJobs)
   WorkerMode mode = WorkerMode::kProcess;         ///< --worker-mode
   EpisodeOutput* output = nullptr;                ///< where the episodes go (null: nowhere)
-  bool contact_signals = false;  ///< --signals contacts: each step's contacts in the trajectory
+  bool contact_signals = false;      ///< --signals contacts: each step's contacts in the trajectory
+  std::function<void()> on_episode;  ///< called as each episode is done (progress), if set
 };
 
 /// What a rollout made.

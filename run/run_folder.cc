@@ -300,8 +300,14 @@ bool RunFolder::PlanRemovals(const fs::path& out, const std::string& quoted, con
   switch (request_.mode) {
     case ReuseMode::kRefuse:
       if (has_manifest) {
+        // the episodes' files only: not the manifest, nor the report
+        const long episode_files =
+            std::count_if(run_files.begin(), run_files.end(), [](const std::string& n) {
+              const std::optional<RunFileName> parsed = ParseRunFileName(n);
+              return parsed && parsed->episode >= 0;
+            });
         throw UsageError(quoted + " already holds a record run (" + request_.manifest_name +
-                         " and " + std::to_string(run_files.size() - 1) +
+                         " and " + std::to_string(episode_files) +
                          " episode files): pass --resume to continue it, --overwrite to replace "
                          "it, or choose another --out");
       }
@@ -509,10 +515,16 @@ void RunFolder::RefuseForeignFiles(const fs::path& out, const std::string& quote
   }
   if (!foreign.empty()) {
     std::sort(foreign.begin(), foreign.end());
+    // a user's own index.html is the one such file a run can leave alone: --no-report
+    const bool only_report = std::all_of(foreign.begin(), foreign.end(), [](const std::string& n) {
+      const std::optional<RunFileName> parsed = ParseRunFileName(n);
+      return parsed && parsed->report;
+    });
     throw UsageError(quoted + " holds " + Listed(foreign) +
                      ", not written by fetchscope, under names a run writes (--overwrite removes "
                      "only fetchscope's files): move them out of " +
-                     quoted + ", or choose another --out");
+                     quoted + (only_report ? ", pass --no-report to leave it alone" : "") +
+                     ", or choose another --out");
   }
   run_files->erase(std::remove_if(run_files->begin(), run_files->end(),
                                   [&](const std::string& n) { return left_alone.count(n) > 0; }),

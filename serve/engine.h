@@ -24,7 +24,7 @@
 #include "render/view.h"
 #include "serve/request.h"
 #include "serve/sources.h"
-#include "src/policy.h"
+#include "src/policy_spec.h"
 
 namespace fetchscope::serve {
 

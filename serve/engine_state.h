@@ -17,6 +17,7 @@
 #include "serve/engine.h"
 #include "src/fetch_env.h"
 #include "src/hindsight.h"
+#include "src/policy.h"
 #include "src/trajectory.h"
 
 namespace fetchscope::serve {

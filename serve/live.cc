@@ -13,6 +13,7 @@
 #include "base/process.h"
 #include "base/stop_signal.h"
 #include "serve/engine_state.h"
+#include "src/policy.h"
 
 namespace fetchscope::serve {
 namespace {

@@ -78,6 +78,17 @@ std::string FindInstalledGymnasiumRobotics() {
 
 }  // namespace
 
+std::string InstalledDataDir(const std::string& name) {
+  std::error_code ec;
+  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
+  if (ec) return "";
+  for (const fs::path& dir : {exe.parent_path() / name,
+                              exe.parent_path().parent_path() / "share" / "fetchscope" / name}) {
+    if (fs::is_directory(dir, ec)) return dir.string();
+  }
+  return "";
+}
+
 std::string BundledModelsDir() {
   std::error_code ec;
   fs::path exe = fs::read_symlink("/proc/self/exe", ec);

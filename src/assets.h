@@ -27,4 +27,9 @@ std::string ModelPath(const AssetSource& assets, const EnvSpec& spec);
 /// The bundled models folder: <binary dir>/models, else the source tree's models/.
 std::string BundledModelsDir();
 
+/// A folder installed with the binary ("golden", "examples"): <binary dir>/NAME (a build folder,
+/// the bundle's bin/, `cmake --install`'s bin/), else <binary dir>/../share/fetchscope/NAME;
+/// "" when neither exists.
+std::string InstalledDataDir(const std::string& name);
+
 }  // namespace fetchscope

@@ -1,6 +1,7 @@
 #include "src/episode.h"
 
 #include "base/errors.h"
+#include "src/policy.h"
 
 namespace fetchscope {
 

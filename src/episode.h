@@ -7,10 +7,11 @@
 #include <optional>
 
 #include "src/fetch_env.h"
-#include "src/policy.h"
 #include "src/trajectory.h"
 
 namespace fetchscope {
+
+class Policy;  // src/policy.h
 
 /// One row of an episode as it is played (the trajectory's step).
 using StepRecord = TrajectoryStep;

@@ -8,6 +8,7 @@
 #include <tuple>
 
 #include "src/observation_layout.h"
+#include "src/policy.h"
 
 namespace fetchscope {
 namespace {
@@ -49,6 +50,10 @@ void AddFile(const std::string& file, TrajectorySource* source, bool first) {
 }
 
 }  // namespace
+
+EpisodeSequence::~EpisodeSequence() = default;
+EpisodeSequence::EpisodeSequence(EpisodeSequence&&) noexcept = default;
+EpisodeSequence& EpisodeSequence::operator=(EpisodeSequence&&) noexcept = default;
 
 EpisodeSequence::EpisodeSequence(std::unique_ptr<FetchEnv> env, std::unique_ptr<Policy> policy,
                                  uint64_t seed, int steps)

@@ -15,7 +15,7 @@
 #include "base/errors.h"
 #include "src/episode.h"
 #include "src/fetch_env.h"
-#include "src/policy.h"
+#include "src/policy_spec.h"
 #include "src/trajectory.h"
 
 namespace fetchscope {
@@ -28,6 +28,10 @@ class EpisodeSequence {
   /// `seed` seeds episode 0's reset; later episodes continue the generator.
   EpisodeSequence(std::unique_ptr<FetchEnv> env, std::unique_ptr<Policy> policy, uint64_t seed,
                   int steps);
+  // out of line: Policy is only declared here (src/policy.h stays out of this header)
+  ~EpisodeSequence();
+  EpisodeSequence(EpisodeSequence&&) noexcept;
+  EpisodeSequence& operator=(EpisodeSequence&&) noexcept;
   /// Plays episode k (k greater than any played before), calling `on_step` as RunEpisode does.
   EpisodeRecord Play(int k, const StepCallback& on_step = nullptr);
 

@@ -101,13 +101,19 @@ class ExecPolicy : public Policy {
   // interruption (PolicyInterrupted), whatever the child died of; otherwise a failure.
   std::string Died(int t) {
     std::string how = "closed its output";
+    bool crashed = false;  // a failure of its own: its error (a traceback) is on stderr above
     if (const std::optional<ChildExit> status = child_.WaitFor(0.5)) {
       how = status->exited() ? "exited with status " + std::to_string(status->code)
                              : "was killed by signal " + std::to_string(status->signal);
+      crashed = !status->exited() || status->code != 0;
     }
     if (stop_requested_ && stop_requested_()) {
       throw PolicyInterrupted("exec policy '" + command_ + "' " + how + " at step " +
                               std::to_string(t) + " while the run was being stopped");
+    }
+    if (crashed) {
+      return "exec policy '" + command_ + "' " + how + " before answering step " +
+             std::to_string(t) + " (its own error, if it printed one, is on stderr above)";
     }
     return "exec policy '" + command_ + "' " + how + " before answering step " + std::to_string(t) +
            ": it must read one JSON line per step on stdin and print one action line (4 numbers)";

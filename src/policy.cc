@@ -247,9 +247,10 @@ PolicySpec ParsePolicySpec(const std::string& text, const PolicyOptions& options
     }
     return {policy_spec::Exec{argument, options.exec_timeout_s}, text};
   }
-  throw UsageError("unknown policy '" + text + "'" +
-                   DidYouMean(name, {"random", "zero", "scripted", "replay:", "exec:"}) + ": use " +
-                   kPolicyHelp);
+  throw UsageError(
+      "unknown policy '" + text + "'" +
+      DidYouMean(name, std::vector<std::string>(std::begin(kPolicyNames), std::end(kPolicyNames))) +
+      ": use " + kPolicyHelp);
 }
 
 std::unique_ptr<Policy> MakePolicy(const PolicySpec& spec, const EnvSpec& env,

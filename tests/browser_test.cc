@@ -288,6 +288,36 @@ TEST_F(BrowserTest, ReportLoadsPlaysPlotsAndSorts) {
   }
 }
 
+// A fetchscope built without uPlot (configured before `npm ci`, issue 37) embeds
+// web/src/no-uplot.js instead: the page loads without an error, says plainly in a note and in
+// every plot box that the plots are missing and how to get them, and its table still sorts.
+// The same page with uPlot's script swapped for the stand-in, as such a build writes it.
+TEST_F(BrowserTest, APageBuiltWithoutUplotSaysItsPlotsAreMissing) {
+  TempDir tmp;
+  const auto r = RunFetchscope(Record(tmp.path() / "run"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const fs::path page = tmp.path() / "run" / "index.html";
+  std::string html = ReadFile(page);
+  // the first plain <script> is uPlot's (the data blocks carry an id and a type)
+  const size_t start = html.find("<script>\n");
+  ASSERT_NE(start, std::string::npos);
+  const size_t end = html.find("\n</script>", start);
+  ASSERT_NE(html.substr(start, 200).find("uPlot"), std::string::npos) << html.substr(start, 200);
+  html.replace(start + 9, end - start - 9, ReadFile(SourceDir() / "web" / "src" / "no-uplot.js"));
+  std::ofstream(page, std::ios::binary | std::ios::trunc) << html;
+  const json result = CheckPage(page.string(), /*sort_column: return*/ 2);
+  ASSERT_TRUE(result.is_object());
+  EXPECT_EQ(result["page_errors"], json::array()) << result.dump();
+  EXPECT_EQ(result["console_errors"], json::array()) << result.dump();
+  const json& notes = result["missing_plot_notes"];
+  ASSERT_GE(notes.size(), 4u) << "the note and one per report plot: " << notes.dump();
+  for (const json& note : notes) {
+    EXPECT_NE(note.get<std::string>().find("built without uPlot"), std::string::npos) << note;
+    EXPECT_NE(note.get<std::string>().find("tools/install-deps.sh"), std::string::npos) << note;
+  }
+  ExpectSorts(result["table"]);
+}
+
 // A run cut short in its last episode (as record leaves one after SIGINT; made by editing the
 // manifest and trajectory, since a real signal's timing cannot be chosen): that episode's curve
 // is grey and holds the steps it made, and the histogram and success rate leave it out.

@@ -114,7 +114,7 @@ TEST(Chapter, ItsThreeCommandsVerbatimInAnEmptyFolder) {
 }
 
 TEST(Chapter, DescribeLayoutForAnObjectTask) {
-  const auto r = testing::RunFetchscope("describe --env-id FetchPush-v4");
+  const auto r = testing::RunFetchscopeStdout("describe --env-id FetchPush-v4");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const auto j = nlohmann::json::parse(r.output);
   ExpectChapterLayout(j, 25);

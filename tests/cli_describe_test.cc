@@ -18,6 +18,7 @@ using testing::CommandResult;
 using testing::LinesWith;
 using testing::ReadFile;
 using testing::RunFetchscope;
+using testing::RunFetchscopeStdout;
 using testing::TempDir;
 namespace fs = std::filesystem;
 
@@ -65,7 +66,7 @@ TEST(Cli, DescribeEveryId) {
     EXPECT_EQ(j["n_substeps"], 20);
     EXPECT_EQ(j["assets"]["sha256"].get<std::string>().size(), 64u);
   }
-  auto r = RunFetchscope("describe --env-id auto");
+  auto r = RunFetchscopeStdout("describe --env-id auto");
   ASSERT_EQ(r.exit_code, 0);
   EXPECT_EQ(nlohmann::json::parse(r.output)["env_id"], "FetchReachDense-v4");
 }
@@ -107,9 +108,13 @@ TEST(RoughEdges, DescribeSaysWhereTheGripperDiffersFromTheChapterWithAMeasuremen
   ASSERT_EQ(lines.size(), 1u) << r.output;
   EXPECT_NE(lines[0].find("a[3] is ignored in FetchReachDense-v4"), std::string::npos) << lines[0];
   EXPECT_EQ(NumberAfter(lines[0], "a difference of "), 0.0) << lines[0];
-  // stdout JSON stays JSON, with the same line as a key
-  r = RunFetchscope("describe");
+  // stdout JSON stays JSON, with the same line as a key; the line itself goes to stderr
+  std::string err;
+  r = RunFetchscopeStdout("describe", &err);
   ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(err.find("differs from the chapter: a[3] is ignored in FetchReachDense-v4"),
+            std::string::npos)
+      << err;
   const nlohmann::json j = nlohmann::json::parse(r.output);
   ASSERT_EQ(j["chapter_differences"].size(), 1u);
   EXPECT_NE(j["chapter_differences"][0].get<std::string>().find("the chapter says"),

@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "base/number_format.h"
 #include "tests/test_util.h"
 
 namespace fetchscope {
@@ -133,7 +134,7 @@ TEST(ProgressInAPipeTest, RecordPrintsProgressLinesWhenStderrIsNotATerminal) {
                             (tmp.path() / "out").string() + " 2>&1 >/dev/null | cat");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const std::regex progress_line(
-      R"(record: progress (\d+)/10 episodes \((\d+)%\), (\d+)/30 frames, [0-9.]+ frames/s, ETA (\d+ s|unknown))");
+      R"(record: progress (\d+)/10 episodes \((\d+)%\), (\d+)/30 frames( \(\d+ of episodes still running\))?, [0-9.]+ frames/s, ETA (\d+ s|unknown|finishing))");
   int lines = 0, last_done = 0;
   for (const std::string& line : Lines(r.output)) {
     std::smatch m;
@@ -184,6 +185,95 @@ TEST(ProgressInAPipeTest, ALongStepStillPrintsProgressLines) {
   EXPECT_NE(bad.output.find("FETCHSCOPE_PROGRESS_INTERVAL 'soon'"), std::string::npos)
       << bad.output;
   EXPECT_FALSE(fs::exists(tmp.path() / "bad"));
+}
+
+// Counts a reader can trust (issue 36): percentages that never round a shortfall up to 100%,
+// frames of episodes still running said as such, "ETA 0 s" only when nothing is left.
+TEST(ProgressCounts, PercentagesNeverRoundAShortfallUpOrAPartDown) {
+  EXPECT_EQ(PercentText(997, 1000), "99.7%");
+  EXPECT_EQ(PercentText(9999, 10000), "99.9%");
+  EXPECT_EQ(PercentText(1000, 1000), "100%");
+  EXPECT_EQ(PercentText(1, 10000), "0.1%");
+  EXPECT_EQ(PercentText(0, 3), "0%");
+  EXPECT_EQ(PercentText(1, 3), "33.3%");
+  EXPECT_EQ(PercentText(2, 3), "66.7%");
+  EXPECT_EQ(PercentText(3, 4), "75%");
+  EXPECT_EQ(PercentText(0, 0), "100%");
+}
+
+TEST(ProgressCounts, FramesInFlightAndTheLastEpisodesEncodingAreSaidAsSuch) {
+  std::FILE* out = std::tmpfile();
+  ASSERT_NE(out, nullptr);
+  double now = 0;
+  ProgressReporter::Options o;
+  o.episodes = 3;
+  o.frames_per_episode = 51;
+  o.log_percent_step = 1;
+  o.out = out;
+  ProgressReporter progress(o, [&] { return now; });
+  // episode 0 done while episode 1 made its first frame: 52 frames, one of them in flight
+  now = 1;
+  progress.Frames(52);
+  progress.EpisodeDone();
+  std::vector<std::string> lines = Lines(Contents(out));
+  ASSERT_EQ(lines.size(), 1u);
+  EXPECT_EQ(lines[0],
+            "record: progress 1/3 episodes (33.3%), 52/153 frames (1 of episodes still running), "
+            "52.0 frames/s, ETA 2 s");
+  // every frame made, the last two episodes still encoding: not "ETA 0 s"
+  now = 3;
+  progress.Frames(101);
+  progress.EpisodeDone();
+  lines = Lines(Contents(out));
+  ASSERT_EQ(lines.size(), 2u);
+  EXPECT_NE(lines[1].find("2/3 episodes (66.7%), 153/153 frames (51 of episodes still running)"),
+            std::string::npos)
+      << lines[1];
+  EXPECT_NE(lines[1].find("ETA finishing"), std::string::npos) << lines[1];
+  now = 4;
+  progress.EpisodeDone();
+  lines = Lines(Contents(out));
+  EXPECT_NE(lines.back().find("3/3 episodes (100%), 153/153 frames, "), std::string::npos)
+      << lines.back();
+  EXPECT_NE(lines.back().find("ETA 0 s"), std::string::npos) << lines.back();
+  std::fclose(out);
+}
+
+// Every printed line checked against the run's own numbers: the refusal counts the episode
+// files only (not index.html), a Ctrl-C'd episode is never counted done, and rollout, whose
+// JSON is on stdout, prints its progress on stderr in a long run (here every 0.2 s).
+TEST(ProgressCounts, LinesAgreeWithTheRunsOwnNumbers) {
+  unsetenv("DISPLAY");
+  TempDir tmp;
+  const std::string out = (tmp.path() / "two").string();
+  const std::string record = std::string(FETCHSCOPE_BIN) +
+                             " record --env-id FetchReach-v4 --episodes 2 --steps 3 --width 32 "
+                             "--height 32 --quiet --out " +
+                             out;
+  ASSERT_EQ(RunCommand(record).exit_code, 0);
+  const auto again = RunCommand(record);
+  EXPECT_EQ(again.exit_code, 2);
+  // 2 episodes: a video, a sheet and a trajectory each
+  EXPECT_NE(again.output.find("(manifest.json and 6 episode files)"), std::string::npos)
+      << again.output;
+
+  const auto rollout = RunCommand(
+      "FETCHSCOPE_PROGRESS_INTERVAL=0.2 " + std::string(FETCHSCOPE_BIN) +
+      " rollout --env-id FetchPush-v4 --episodes 150 2>" + (tmp.path() / "err").string() +
+      " | python3 -c 'import json, sys; print(len(json.load(sys.stdin)[\"episodes\"]))'");
+  ASSERT_EQ(rollout.exit_code, 0) << rollout.output;
+  EXPECT_EQ(rollout.output, "150\n") << "stdout holds the JSON alone";
+  const std::regex line(
+      R"(rollout: progress (\d+)/150 episodes \(([0-9.]+)%\), (\d+)/7500 steps, [0-9.]+ steps/s, ETA (\d+ s|unknown|finishing))");
+  int seen = 0;
+  for (const std::string& text : Lines(testing::ReadFile(tmp.path() / "err"))) {
+    std::smatch m;
+    if (!std::regex_match(text, m, line)) continue;
+    ++seen;
+    const int done = std::stoi(m[1]);
+    EXPECT_EQ(std::stoi(m[3]), done * 50) << text;  // whole episodes only: no steps in flight
+  }
+  EXPECT_GE(seen, 1) << testing::ReadFile(tmp.path() / "err");
 }
 
 }  // namespace

@@ -38,6 +38,17 @@ CommandResult RunFetchscope(const std::string& args) {
   return RunCommand(std::string(FETCHSCOPE_BIN) + " " + args);
 }
 
+CommandResult RunFetchscopeStdout(const std::string& args, std::string* stderr_text) {
+  char name[] = "/tmp/fetchscope-stderr-XXXXXX";
+  const int fd = mkstemp(name);
+  if (fd >= 0) close(fd);
+  CommandResult r =
+      RunCommand("{ " + std::string(FETCHSCOPE_BIN) + " " + args + " 2>" + name + "; }");
+  if (stderr_text) *stderr_text = ReadFile(name);
+  std::remove(name);
+  return r;
+}
+
 TempDir::TempDir() {
   std::random_device rd;
   for (int i = 0; i < 100; ++i) {

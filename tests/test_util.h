@@ -26,6 +26,10 @@ CommandResult RunFetchscope(const std::string& args);
 /// Runs an arbitrary shell command and captures its output.
 CommandResult RunCommand(const std::string& command);
 
+/// Runs `fetchscope ARGS` and captures its stdout alone (for JSON on stdout); its stderr goes to
+/// `stderr_text` when given, else is dropped.
+CommandResult RunFetchscopeStdout(const std::string& args, std::string* stderr_text = nullptr);
+
 /// A fresh empty folder under the system temp dir, removed on destruction.
 class TempDir {
  public:

@@ -9,12 +9,14 @@
                                                  binary generates (tools/regen-docs.sh)
   docs_check.py completion FETCHSCOPE ROOT       the bash completion completes commands, options
                                                  and values
-  docs_check.py runnable FETCHSCOPE ROOT [PAGE]  every ```sh block of docs/guide/*.md right after
-                                                 a `<!-- runnable -->` line runs and exits 0: the
-                                                 blocks of a page in order, in one temporary
-                                                 folder holding a copy of examples/ and golden/,
-                                                 with FETCHSCOPE's folder first on PATH and
-                                                 MINARI_DATASETS_PATH inside the folder
+  docs_check.py runnable FETCHSCOPE ROOT [PAGE]  every ```sh block right after a
+                                                 `<!-- runnable -->` line runs and exits 0:
+                                                 README.md's, then every guide's in the order
+                                                 docs/README.md lists them, all in one temporary
+                                                 folder outside the checkout, with FETCHSCOPE's
+                                                 folder first on PATH and MINARI_DATASETS_PATH
+                                                 inside the folder; `<!-- output: TEXT -->`
+                                                 lines after a block must appear in its output
 """
 import difflib
 import os
@@ -176,32 +178,51 @@ def check_generated(binary, root):
 def check_completion(binary, root):
     script = subprocess.run([binary, "help", "--bash-completion"], capture_output=True,
                             text=True, check=True).stdout
-    cases = [  # words typed (the last one is being completed), words that must be offered
-        (["rec"], {"record"}),
-        (["record", "--env-id", "FetchPu"], {"FetchPush-v4", "FetchPushDense-v4"}),
-        (["record", "--cam"], {"--camera"}),
-        (["record", "--camera", "ext"], {"external_camera_0"}),
-        (["record", "--camera", "tr"], {"track"}),
-        (["rollout", "--policy", "s"], {"scripted"}),
-        (["render", "--layers", "d"], {"depth"}),
-        (["golden", ""], {"check", "update"}),
-        (["golden", "check", "--only"], {"--only"}),
-        (["help", "prob"], {"probe-actions"}),
-        (["list-gpus", "--"], {"--gpu", "--json", "--help"}),
+    # words typed (the last one is being completed), words that must be offered, and words that
+    # must not be (the folder holds a file "notes.txt", a folder "runs", and a datasets root)
+    cases = [
+        (["rec"], {"record"}, set()),
+        (["record", "--env-id", "FetchPu"], {"FetchPush-v4", "FetchPushDense-v4"}, set()),
+        (["record", "--cam"], {"--camera"}, set()),
+        (["record", "--camera", "ext"], {"external_camera_0"}, set()),
+        (["record", "--camera", "tr"], {"track"}, set()),
+        (["record", "--camera", "default,tr"], {"default,track"}, set()),
+        (["render", "--overlay", "goal,hu"], {"goal,hud"}, set()),
+        (["record", "--overlay", "cont"], {"contacts"}, set()),
+        (["record", "--format", "mp4,we"], {"mp4,webm"}, set()),
+        (["rollout", "--policy", "s"], {"scripted"}, set()),
+        (["render", "--layers", "d"], {"depth"}, set()),
+        (["golden", ""], {"check", "update"}, {"notes.txt", "runs"}),
+        (["golden", "check", "--only"], {"--only"}, set()),
+        (["help", "prob"], {"probe-actions"}, set()),
+        (["help", ""], {"record"}, {"notes.txt", "runs"}),
+        (["list-gpus", "--"], {"--gpu", "--json", "--help"}, set()),
+        (["record", "--out", ""], {"runs"}, {"notes.txt"}),
+        (["record", "--from", "fetchscope/"], {"fetchscope/FetchPush/scripted-v0"}, set()),
+        (["report", ""], {"runs", "notes.txt"}, set()),
     ]
     failed = 0
-    for words, expected in cases:
-        words = ["fetchscope"] + words
-        program = script + (
-            "COMP_WORDS=(" + " ".join("'" + w + "'" for w in words) + ")\n"
-            f"COMP_CWORD={len(words) - 1}\n_fetchscope\nprintf '%s\\n' \"${{COMPREPLY[@]}}\"\n")
-        out = subprocess.run(["bash", "-c", program], capture_output=True, text=True,
-                             cwd=tempfile.gettempdir())
-        offered = set(out.stdout.split())
-        if out.returncode != 0 or not expected <= offered:
-            print(f"completing {' '.join(words)!r}: expected {sorted(expected)}, "
-                  f"offered {sorted(offered)} {out.stderr}")
-            failed = 1
+    with tempfile.TemporaryDirectory(prefix="fetchscope-completion-") as cwd:
+        open(os.path.join(cwd, "notes.txt"), "w").close()
+        os.makedirs(os.path.join(cwd, "runs"))
+        datasets = os.path.join(cwd, "runs", "datasets")
+        os.makedirs(os.path.join(datasets, "fetchscope", "FetchPush", "scripted-v0", "data"))
+        open(os.path.join(datasets, "fetchscope", "FetchPush", "scripted-v0", "data",
+                          "metadata.json"), "w").close()
+        env = dict(os.environ, MINARI_DATASETS_PATH=datasets)
+        for words, expected, unwanted in cases:
+            words = ["fetchscope"] + words
+            program = script + (
+                "COMP_WORDS=(" + " ".join("'" + w + "'" for w in words) + ")\n"
+                f"COMP_CWORD={len(words) - 1}\n_fetchscope\nprintf '%s\\n' \"${{COMPREPLY[@]}}\"\n")
+            out = subprocess.run(["bash", "-c", program], capture_output=True, text=True,
+                                 cwd=cwd, env=env)
+            offered = set(out.stdout.split())
+            if out.returncode != 0 or not expected <= offered or offered & unwanted:
+                print(f"completing {' '.join(words)!r}: expected {sorted(expected)}"
+                      f"{' and none of ' + str(sorted(unwanted)) if unwanted else ''}, "
+                      f"offered {sorted(offered)} {out.stderr}")
+                failed = 1
     print(f"completion: {len(cases)} cases, {'FAILED' if failed else 'ok'}")
     return failed
 
@@ -217,9 +238,21 @@ def runnable_blocks(page):
     return blocks
 
 
-def check_runnable(binary, root, only):
+def guide_order(root):
+    """README.md, then the guides in the order docs/README.md lists them (any it does not list
+    after, by name): the order a reader follows them in."""
     guide = os.path.join(root, "docs", "guide")
-    targets = [os.path.join(guide, f) for f in sorted(os.listdir(guide)) if f.endswith(".md")]
+    listed = re.findall(r"\(guide/([\w-]+\.md)\)", open(os.path.join(root, "docs", "README.md"),
+                                                         encoding="utf-8").read())
+    names = []
+    for name in listed + sorted(os.listdir(guide)):
+        if name.endswith(".md") and name not in names and os.path.exists(os.path.join(guide, name)):
+            names.append(name)
+    return [os.path.join(root, "README.md")] + [os.path.join(guide, n) for n in names]
+
+
+def check_runnable(binary, root, only):
+    targets = guide_order(root)
     if only:
         targets = [t for t in targets if os.path.basename(t) in only]
     env = dict(os.environ)
@@ -234,17 +267,14 @@ def check_runnable(binary, root, only):
         path.append(shim)
     env["PATH"] = os.pathsep.join(path + [env.get("PATH", "")])
     failed, count = 0, 0
-    for page in targets:
-        blocks = runnable_blocks(page)
-        if not blocks:
-            continue
-        with tempfile.TemporaryDirectory(prefix="fetchscope-docs-") as tmp:
-            for folder in ("examples", "golden"):
-                if os.path.isdir(os.path.join(root, folder)):
-                    shutil.copytree(os.path.join(root, folder), os.path.join(tmp, folder))
-            # datasets go into the temporary folder, not the test machine's ~/.minari/datasets
-            env["MINARI_DATASETS_PATH"] = os.path.join(tmp, "minari-datasets")
-            for lineno, block in blocks:
+    # one folder outside the checkout for every page, in order, as a reader follows them: a page
+    # that makes what another already made is refused there, and nothing of the checkout
+    # (examples/, golden/) is at hand: the binary finds what it installs beside itself
+    with tempfile.TemporaryDirectory(prefix="fetchscope-docs-") as tmp:
+        # datasets go into the folder, not the test machine's ~/.minari/datasets
+        env["MINARI_DATASETS_PATH"] = os.path.join(tmp, "minari-datasets")
+        for page in targets:
+            for lineno, block in runnable_blocks(page):
                 count += 1
                 where = f"{os.path.relpath(page, root)}:{lineno}"
                 start = time.monotonic()
@@ -257,9 +287,27 @@ def check_runnable(binary, root, only):
                     failed = 1
                 else:
                     print(f"{where}: ok ({seconds:.1f} s)")
+                failed |= check_quoted_output(where, block, out.stdout + out.stderr, page, lineno)
     shutil.rmtree(shim, ignore_errors=True)
     print(f"runnable: {count} blocks, {'FAILED' if failed else 'ok'}")
     return failed if count else 1
+
+
+def check_quoted_output(where, block, output, page, lineno):
+    """A runnable block may be followed, after its closing fence, by a comment line
+    `<!-- output: TEXT -->` for each number or line the page quotes from it: TEXT must appear in
+    what the block printed, so the guide's numbers are the program's."""
+    lines = open(page, encoding="utf-8").read().split("\n")
+    end = next(j for j in range(lineno, len(lines)) if lines[j].strip() == "```")
+    failed = 0
+    for line in lines[end + 1:]:
+        m = re.match(r"\s*<!-- output: (.*) -->\s*$", line)
+        if not m:
+            break
+        if m.group(1) not in output:
+            print(f"{where}: the page quotes '{m.group(1)}', which the block did not print")
+            failed = 1
+    return failed
 
 
 def main(argv):

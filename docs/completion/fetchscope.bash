@@ -34,11 +34,19 @@ _fetchscope() {
   done
   case $prev in
     --env-id) COMPREPLY=($(compgen -W 'auto FetchReach-v4 FetchReachDense-v4 FetchPush-v4 FetchPushDense-v4 FetchPickAndPlace-v4 FetchPickAndPlaceDense-v4 FetchSlide-v4 FetchSlideDense-v4' -- "$cur")); return ;;
-    --camera) COMPREPLY=($(compgen -W 'default track free: head_camera_rgb gripper_camera_rgb lidar external_camera_0' -- "$cur")); return ;;
+    --camera)
+      local pre=''; [[ $cur == *,* ]] && pre=${cur%,*},
+      COMPREPLY=($(compgen -P "$pre" -W 'default track free: head_camera_rgb gripper_camera_rgb lidar external_camera_0' -- "${cur##*,}")); compopt -o nospace 2>/dev/null; return ;;
     --policy) COMPREPLY=($(compgen -W 'random zero scripted replay: exec:' -- "$cur")); return ;;
-    --overlay) COMPREPLY=($(compgen -W 'default none all goal achieved hud labels action trail hindsight ghost' -- "$cur")); return ;;
-    --layers) COMPREPLY=($(compgen -W 'rgb depth segmentation' -- "$cur")); return ;;
-    --format) COMPREPLY=($(compgen -W 'mp4 webm gif' -- "$cur")); return ;;
+    --overlay)
+      local pre=''; [[ $cur == *,* ]] && pre=${cur%,*},
+      COMPREPLY=($(compgen -P "$pre" -W 'default none all goal achieved hud action trail labels hindsight ghost contacts' -- "${cur##*,}")); compopt -o nospace 2>/dev/null; return ;;
+    --layers)
+      local pre=''; [[ $cur == *,* ]] && pre=${cur%,*},
+      COMPREPLY=($(compgen -P "$pre" -W 'rgb depth segmentation' -- "${cur##*,}")); compopt -o nospace 2>/dev/null; return ;;
+    --format)
+      local pre=''; [[ $cur == *,* ]] && pre=${cur%,*},
+      COMPREPLY=($(compgen -P "$pre" -W 'mp4 webm gif' -- "${cur##*,}")); compopt -o nospace 2>/dev/null; return ;;
     --backend) COMPREPLY=($(compgen -W 'auto egl osmesa' -- "$cur")); return ;;
     --readback) COMPREPLY=($(compgen -W 'auto sync async' -- "$cur")); return ;;
     --msaa) COMPREPLY=($(compgen -W 'auto 0 1 2 4 8 16' -- "$cur")); return ;;
@@ -50,7 +58,16 @@ _fetchscope() {
     --assets) COMPREPLY=($(compgen -W 'bundled auto' -- "$cur")); return ;;
     --gpu) COMPREPLY=($(compgen -W 'all cuda:0' -- "$cur")); return ;;
     --what) COMPREPLY=($(compgen -W 'sim render encode record all node soak' -- "$cur")); return ;;
-    --backends|--crf|--episodes|--exec-timeout|--fps|--from|--genuine-assets|--gif-fps|--gif-width|--golden-dir|--height|--host|--hud-opacity|--idle-timeout|--jobs|--json-out|--magnitudes|--max-queued|--max-sessions|--minari|--minari-author|--minari-author-email|--minari-root|--n-episodes|--n-steps|--only|--out|--output|--pixel-tolerance|--port|--save-dir|--seconds|--seed|--serve-height|--serve-width|--shard|--shard-count|--sheet-every|--signals|--soak-frames|--steps|--token-file|--tolerance|--width|-j|-o)
+    --out)
+      if [[ $cmd == merge-manifests ]]; then COMPREPLY=($(compgen -f -- "$cur"));
+      else COMPREPLY=($(compgen -d -- "$cur")); fi; return ;;
+    --golden-dir|--minari-root|--save-dir|--genuine-assets)
+      COMPREPLY=($(compgen -d -- "$cur")); return ;;
+    --from)
+      local root=${MINARI_DATASETS_PATH:-$HOME/.minari/datasets} ids=''
+      [[ -d $root ]] && ids=$(cd "$root" && find . -path '*/data/metadata.json' 2>/dev/null | sed 's|^\./||; s|/data/metadata.json$||')
+      COMPREPLY=($(compgen -W "$ids" -- "$cur") $(compgen -f -- "$cur")); return ;;
+    --backends|--crf|--episodes|--exec-timeout|--fps|--gif-fps|--gif-width|--height|--host|--hud-opacity|--idle-timeout|--jobs|--json-out|--magnitudes|--max-queued|--max-sessions|--minari|--minari-author|--minari-author-email|--n-episodes|--n-steps|--only|--output|--pixel-tolerance|--port|--seconds|--seed|--serve-height|--serve-width|--shard|--shard-count|--sheet-every|--signals|--soak-frames|--steps|--token-file|--tolerance|--width|-j|-o)
       COMPREPLY=($(compgen -f -- "$cur")); return ;;
   esac
   local words=''
@@ -77,9 +94,13 @@ _fetchscope() {
     'report') words='--help -h --quiet -q' ;;
     'compare') words='--help -h --out --tolerance --pixel-tolerance --states-only --quiet -q' ;;
     'serve') words='--help -h --env-id --assets --seed --policy --exec-timeout --replay-dtype --camera --overlay --width --height --hud-position --hud-opacity --backend --msaa --readback --gpu --minari-root --host --port --token-file --save-dir --max-sessions --max-queued --idle-timeout' ;;
-    'help') words='--help -h --markdown --man --bash-completion list-envs describe reward-check random-episodes anatomy rollout export datasets render list-cameras record bench probe-actions merge-manifests golden list-gpus report compare serve help' ;;
+    'help') words='--help -h --markdown --man --bash-completion --examples-dir list-envs describe reward-check random-episodes anatomy rollout export datasets render list-cameras record bench probe-actions merge-manifests golden list-gpus report compare serve help' ;;
   esac
-  if [[ $cur == -* || -n $words && $cmd == '' ]]; then
+  local paths=''
+  case $cmd in
+    'export'|'merge-manifests'|'report'|'compare'|'serve') paths=1 ;;
+  esac
+  if [[ $cur == -* || -z $paths ]]; then
     COMPREPLY=($(compgen -W "$words" -- "$cur"))
   else
     COMPREPLY=($(compgen -W "$words" -- "$cur") $(compgen -f -- "$cur"))

@@ -109,6 +109,9 @@ try {
             caption: caption ? caption.textContent : null};
   }));
 
+  // what a page built without uPlot says in place of its plots (web/src/no-uplot.js)
+  result.missing_plot_notes = await page.$$eval('.missing-plot', (els) => els.map((e) => e.textContent));
+
   // the episode table: the rows (first column, the episode) and the chosen column's cells before
   // and after one and two clicks on its header
   const column = Number(args['sort-column']);
