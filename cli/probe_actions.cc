@@ -75,7 +75,8 @@ int RunProbeActions(const ProbeOptions& o) {
     std::snprintf(title, sizeof(title), "probe-actions %s seed %llu, %d steps", spec.id.c_str(),
                   static_cast<unsigned long long>(seed), o.steps);
     const SheetImage sheet =
-        MakeContactSheet(title, result.tiles, std::clamp(o.view.width, 16, 4096), 2);
+        MakeContactSheet(title, result.tiles, std::clamp(o.view.width, 16, 4096),
+                         ProbeSheetColumns(result.tiles.size()));
     const std::string sheet_path = (fs::path(o.out) / "probe_actions_sheet.png").string();
     report["sheet"] = "probe_actions_sheet.png";
     WritePng(sheet_path, sheet.width, sheet.height, 3, 8, sheet.rgb.data());

@@ -28,6 +28,7 @@
 #include "cli/view_options.h"
 #include "dataset/minari_format.h"
 #include "encode/episode_sink.h"
+#include "encode/video_format.h"
 #include "encode/video_writer.h"
 #include "inspect/report.h"
 #include "render/layers.h"
@@ -253,10 +254,9 @@ void AddRecordVideoOptions(CLI::App* sub, RecordOptions* o) {
       ->capture_default_str();
   sub->add_option("--preset", o->preset,
                   std::string("Encoder preset (default ") + kDefaultVideoPreset + ")");
-  sub->add_option("--format", o->formats,
-                  "Video formats, a comma list: mp4 (H.264), webm (VP9, plays in every browser and "
-                  "wandb), gif (one palette per clip, scaled by --gif-fps/--gif-width); one file "
-                  "per episode and format")
+  sub->add_option(
+         "--format", o->formats,
+         "Video formats, a comma list: " + VideoFormatHelp() + "; one file per episode and format")
       ->capture_default_str();
   sub->add_option("--gif-fps", o->gif_fps, "GIF frame rate, 1..50 (at most --fps)")
       ->capture_default_str();
@@ -313,9 +313,10 @@ void AddRecordReuseOptions(CLI::App* sub, RecordOptions* o) {
 Command AddRecord(CLI::App& app) {
   auto o = std::make_shared<RecordOptions>();
   CLI::App* sub = app.add_subcommand(
-      "record",
-      "Record episodes: episode_NNN.mp4 (.webm, .gif: --format), episode_NNN_sheet.png, "
-      "episode_NNN.json, manifest.json");
+      "record", "Record episodes: episode_NNN." + std::string(VideoFormats().front().extension) +
+                    " (" + OtherVideoExtensions() +
+                    ": --format), episode_NNN_sheet.png, episode_NNN.json, "
+                    "manifest.json");
   AddEnvOptions(sub, &o->env);
   AddViewOptions(sub, &o->view);
   sub->add_option("--episodes", o->episodes, "Number of episodes")

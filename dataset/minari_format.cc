@@ -52,14 +52,16 @@ bool IsSupportedMinariVersion(const std::string& version) {
   return false;
 }
 
-void ValidateMinariDatasetId(const std::string& id) {
+bool IsMinariDatasetId(const std::string& id) {
   // Minari's DATASET_ID_RE, ASCII \w, with the -vN its parse_dataset_id needs
   static const std::regex kId(R"(^(?:([-_\w][-_\w/]*[-_\w]+)/)?([-_\w]+?)-v(\d+)$)");
   std::smatch m;
-  bool ok = std::regex_match(id, m, kId);
   // no empty folder between slashes: "a//b-v0" would name the folder "a/b-v0"
-  if (ok && id.find("//") != std::string::npos) ok = false;
-  if (!ok) {
+  return std::regex_match(id, m, kId) && id.find("//") == std::string::npos;
+}
+
+void ValidateMinariDatasetId(const std::string& id) {
+  if (!IsMinariDatasetId(id)) {
     throw UsageError("--minari: '" + id +
                      "' is not a Minari dataset id: expected (namespace/)name-vN of letters, "
                      "digits, '-' and '_', e.g. fetchscope/FetchPush/scripted-v0");

@@ -43,6 +43,11 @@ bool IsSupportedMinariVersion(const std::string& version);
 /// as `parse_dataset_id` needs it). Throws UsageError naming the id and the form otherwise.
 void ValidateMinariDatasetId(const std::string& id);
 
+/// True when `id` has that form. The one rule for ids, read or written: an id names a folder
+/// under the datasets root and never leaves it (no "..", no leading "/"); a dataset elsewhere is
+/// given by its path.
+bool IsMinariDatasetId(const std::string& id);
+
 /// The datasets root: `flag` if not empty, else $MINARI_DATASETS_PATH, else
 /// ~/.minari/datasets (Minari's get_dataset_path).
 std::filesystem::path MinariRoot(const std::string& flag);

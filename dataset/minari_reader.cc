@@ -8,6 +8,7 @@
 #include "base/errors.h"
 #include "base/suggest.h"
 #include "dataset/hdf5_handles.h"
+#include "dataset/minari_format.h"
 #include "src/observation_layout.h"
 
 namespace fetchscope {
@@ -294,8 +295,16 @@ MinariLocation LocateMinariDataset(const std::string& what, const fs::path& root
                      ": a folder, but not a Minari dataset (it holds neither data/ nor "
                      "main_data.hdf5)");
   }
-  if (!what.empty() && what.front() != '/' && fs::is_directory(root / what / "data", ec)) {
+  // an id names a folder under the root, never outside it (the writers' rule): a dataset
+  // elsewhere is given by its path
+  if (IsMinariDatasetId(what) && fs::is_directory(root / what / "data", ec)) {
     return in(root / what / "data");
+  }
+  if (!IsMinariDatasetId(what)) {
+    throw UsageError("no Minari dataset '" + what +
+                     "': not a file or folder, and not a dataset id ((namespace/)name-vN of "
+                     "letters, digits, '-' and '_', looked up under " +
+                     root.string() + "); give a dataset outside the datasets root by its path");
   }
   throw UsageError("no Minari dataset '" + what + "': not a file or folder, nor an id under " +
                    root.string() + " (--minari-root, $MINARI_DATASETS_PATH, ~/.minari/datasets)" +

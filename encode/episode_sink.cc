@@ -35,7 +35,7 @@ std::string LayerVideoName(int k, Layer layer, const VideoFormat& format) {
 }
 
 std::string FormatCodec(const VideoFormat& format, const std::string& h264) {
-  return format.codec.empty() ? h264 : std::string(format.codec);
+  return format.codec == kH264 ? h264 : std::string(format.codec);
 }
 
 VideoOptions EpisodeVideoOptions(const EpisodeSinkOptions& options, int k,
@@ -151,7 +151,8 @@ void EpisodeEncoder::Body() {
           const auto t0 = Clock::now();
           for (size_t i = 0; i < writers_.size(); ++i) {
             // a scaled-down GIF takes the copy whose text is sized for it
-            const bool gif_copy = options_.formats[i]->palette && !f->gif_rgb.empty();
+            const bool gif_copy =
+                options_.formats[i]->pixels == VideoPixels::kPal8 && !f->gif_rgb.empty();
             writers_[i].AddFrame(gif_copy ? f->gif_rgb.data() : f->rgb.data());
           }
           const size_t formats = options_.formats.size();

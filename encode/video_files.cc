@@ -1,7 +1,9 @@
 #include "encode/video_files.h"
 
 #include <unistd.h>
+#include <zlib.h>
 
+#include <cstdint>
 #include <fstream>
 #include <iterator>
 
@@ -14,6 +16,34 @@ namespace {
 std::string Quoted(const std::string& s) { return "'" + s + "'"; }
 
 namespace fs = std::filesystem;
+
+std::string ReadWholeFile(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+void WriteWholeFile(const fs::path& path, const std::string& bytes, const char* what) {
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+  out.close();
+  if (!out) throw RunError(std::string("cannot write ") + what + " " + Quoted(path.string()));
+}
+
+void AppendBigEndian32(std::string* bytes, uint32_t value) {
+  for (int shift = 24; shift >= 0; shift -= 8) *bytes += static_cast<char>((value >> shift) & 0xff);
+}
+
+// One PNG chunk: length, type, data, CRC-32 of type and data.
+std::string PngChunk(const std::string& type, const std::string& data) {
+  std::string chunk;
+  AppendBigEndian32(&chunk, static_cast<uint32_t>(data.size()));
+  const std::string body = type + data;
+  chunk += body;
+  AppendBigEndian32(&chunk,
+                    static_cast<uint32_t>(crc32(0, reinterpret_cast<const Bytef*>(body.data()),
+                                                static_cast<uInt>(body.size()))));
+  return chunk;
+}
 
 }  // namespace
 
@@ -53,9 +83,7 @@ std::string GifComment(const std::vector<std::pair<std::string, std::string>>& m
 }
 
 void InsertGifComment(const std::filesystem::path& path, const std::string& comment) {
-  std::ifstream in(path, std::ios::binary);
-  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  in.close();
+  std::string bytes = ReadWholeFile(path);
   if (bytes.size() < 13 || bytes.compare(0, 6, "GIF89a") != 0) {
     throw RunError("cannot tag GIF " + Quoted(path.string()) + ": not a GIF89a file");
   }
@@ -71,10 +99,32 @@ void InsertGifComment(const std::filesystem::path& path, const std::string& comm
   }
   block += '\0';  // block terminator
   bytes.insert(at, block);
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-  out.close();
-  if (!out) throw RunError("cannot write GIF " + Quoted(path.string()));
+  WriteWholeFile(path, bytes, "GIF");
+}
+
+void InsertPngText(const std::filesystem::path& path,
+                   const std::vector<std::pair<std::string, std::string>>& metadata) {
+  std::string bytes = ReadWholeFile(path);
+  // the signature, then IHDR: 4 bytes of length (13), "IHDR", 13 bytes, 4 bytes of CRC
+  constexpr std::size_t kAfterHeader = 8 + 4 + 4 + 13 + 4;
+  if (bytes.size() < kAfterHeader || bytes.compare(0, 8, "\x89PNG\r\n\x1a\n") != 0 ||
+      bytes.compare(12, 4, "IHDR") != 0) {
+    throw RunError("cannot tag PNG " + Quoted(path.string()) + ": not a PNG file");
+  }
+  std::string chunks;
+  for (const auto& [key, value] : metadata) {
+    if (key.empty() || key.size() > 79 || key.find('\0') != std::string::npos) {
+      throw RunError("cannot tag PNG " + Quoted(path.string()) + ": the tag name '" + key +
+                     "' is not 1 to 79 characters without a NUL");
+    }
+    bool ascii = true;
+    for (char c : value) ascii = ascii && static_cast<unsigned char>(c) < 0x80 && c != '\0';
+    // tEXt holds Latin-1; a value with other bytes (UTF-8) goes in an iTXt chunk, uncompressed
+    chunks += ascii ? PngChunk("tEXt", key + '\0' + value)
+                    : PngChunk("iTXt", key + std::string("\0\0\0\0\0", 5) + value);
+  }
+  bytes.insert(kAfterHeader, chunks);
+  WriteWholeFile(path, bytes, "PNG");
 }
 
 }  // namespace fetchscope

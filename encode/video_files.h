@@ -1,6 +1,7 @@
 // The files a video writer writes: the output folder's check, the hidden temporary name, and the
-// tags of GIF files (FFmpeg's GIF muxer writes none, so a GIF89a comment extension is inserted,
-// which FFmpeg's demuxer, and so ffprobe, reads back as the tag "comment").
+// tags of GIF and APNG files (FFmpeg's GIF and APNG muxers write none: a GIF89a comment
+// extension is inserted, which FFmpeg's demuxer, and so ffprobe, reads back as the tag "comment";
+// PNG text chunks, which FFmpeg's PNG decoder reads back as each frame's tags).
 #pragma once
 
 #include <filesystem>
@@ -29,5 +30,12 @@ std::string GifComment(const std::vector<std::pair<std::string, std::string>>& m
 /// descriptor and the global colour table of the GIF file at `path`. Throws RunError naming the
 /// file when it is not a GIF89a file or is truncated.
 void InsertGifComment(const std::filesystem::path& path, const std::string& comment);
+
+/// Inserts one PNG text chunk per tag right after the IHDR chunk of the (A)PNG file at `path`:
+/// tEXt for an ASCII value, iTXt (UTF-8, uncompressed) otherwise. FFmpeg's APNG muxer writes no
+/// tags. Throws RunError naming the file when it is not a PNG file or a tag name is not 1 to 79
+/// characters.
+void InsertPngText(const std::filesystem::path& path,
+                   const std::vector<std::pair<std::string, std::string>>& metadata);
 
 }  // namespace fetchscope

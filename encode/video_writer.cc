@@ -66,6 +66,41 @@ class TemporaryFile {
   fs::path path_;
 };
 
+// Every encoder fetchscope opens, each with its own options below (TryOpenEncoder): a format
+// row naming an encoder that has no case here is refused, never given another's options.
+enum class Encoder { kX264, kNvenc, kVp9, kGif, kApng };
+
+struct KnownEncoder {
+  std::string_view name;  // libavcodec's
+  Encoder encoder;
+};
+constexpr std::array<KnownEncoder, 5> kEncoders = {{{"libx264", Encoder::kX264},
+                                                    {"h264_nvenc", Encoder::kNvenc},
+                                                    {"libvpx-vp9", Encoder::kVp9},
+                                                    {"gif", Encoder::kGif},
+                                                    {"apng", Encoder::kApng}}};
+
+const KnownEncoder* EncoderOf(std::string_view name) {
+  for (const KnownEncoder& known : kEncoders) {
+    if (known.name == name) return &known;
+  }
+  return nullptr;
+}
+
+std::string KnownEncoderList() {
+  std::string list;
+  for (const KnownEncoder& known : kEncoders) {
+    list += (list.empty() ? "" : ", ") + std::string(known.name);
+  }
+  return list;
+}
+
+// The even size an encoder of 4:2:0 frames needs (the last column/row repeated), else `size`
+// (also for no format at all, which ValidateVideoOptions then refuses).
+int EncodedSize(int size, const VideoFormat* format) {
+  return format != nullptr && format->even_size ? (size + 1) & ~1 : size;
+}
+
 }  // namespace
 
 struct VideoWriter::Impl {
@@ -75,8 +110,8 @@ struct VideoWriter::Impl {
   // Options and sizes only, no file: for ProbeEncoder.
   explicit Impl(const VideoOptions& opts)
       : options(opts),
-        encoded_width((opts.width + 1) & ~1),
-        encoded_height((opts.height + 1) & ~1) {
+        encoded_width(EncodedSize(opts.width, opts.format)),
+        encoded_height(EncodedSize(opts.height, opts.format)) {
     if (options.preset.empty()) options.preset = kDefaultVideoPreset;
   }
   // Opens options.codec for options' size and closes it again; throws RunError with FFmpeg's
@@ -105,7 +140,7 @@ struct VideoWriter::Impl {
   CodecContextPtr encoder;
   OutputFormatContextPtr muxer;
   AVStream* stream = nullptr;   // owned by muxer
-  FramePtr frame;               // one YUV frame reused for every AddFrame
+  FramePtr frame;               // one frame (the row's pixels) reused for every AddFrame
   PacketPtr packet;             // one packet reused for every encoded output
   SwsContextPtr converter;      // RGB24 -> yuv420p, BT.709 limited range
   std::vector<uint8_t> padded;  // swscale's input: the frame (odd row/column repeated) + slack
@@ -125,8 +160,8 @@ struct VideoWriter::Impl {
 VideoWriter::Impl::Impl(const std::string& path, const VideoOptions& opts)
     : final_path(path),
       options(opts),
-      encoded_width((opts.width + 1) & ~1),
-      encoded_height((opts.height + 1) & ~1) {
+      encoded_width(EncodedSize(opts.width, opts.format)),
+      encoded_height(EncodedSize(opts.height, opts.format)) {
   ValidateVideoOptions(options);
   if (options.preset.empty()) options.preset = kDefaultVideoPreset;
   if (path.empty()) {
@@ -135,7 +170,7 @@ VideoWriter::Impl::Impl(const std::string& path, const VideoOptions& opts)
   }
   CheckOutputFolder(path);
   InstallAvLogCapture();
-  gif = Format().palette;
+  gif = Format().pixels == VideoPixels::kPal8;
   if (gif) {
     gif_fps = std::min(options.gif_fps, options.fps);
     encoded_width = std::min(options.gif_width, options.width);
@@ -156,15 +191,18 @@ VideoWriter::Impl::Impl(const std::string& path, const VideoOptions& opts)
   frame.reset(av_frame_alloc());
   packet.reset(av_packet_alloc());
   if (!frame || !packet) throw RunError("out of memory allocating video frame buffers");
-  frame->format = AV_PIX_FMT_YUV420P;
+  frame->format = encoder->pix_fmt;
   frame->width = encoded_width;
   frame->height = encoded_height;
-  frame->color_range = AVCOL_RANGE_MPEG;
-  frame->colorspace = AVCOL_SPC_BT709;
+  if (Format().bt709_tags) {
+    frame->color_range = AVCOL_RANGE_MPEG;
+    frame->colorspace = AVCOL_SPC_BT709;
+  }
   if (int rc = av_frame_get_buffer(frame.get(), 0); rc < 0) {
     throw RunError("cannot allocate a " + std::to_string(encoded_width) + "x" +
                    std::to_string(encoded_height) + " video frame: " + DescribeAvError(rc));
   }
+  if (Format().pixels == VideoPixels::kRgb24) return;  // AddFrame copies the rows as they are
 
   converter.reset(sws_getContext(encoded_width, encoded_height, AV_PIX_FMT_RGB24, encoded_width,
                                  encoded_height, AV_PIX_FMT_YUV420P,
@@ -192,8 +230,13 @@ void VideoWriter::Impl::ProbeEncoder(const VideoOptions& options) {
 }
 
 void VideoWriter::Impl::OpenEncoder() {
-  if (!Format().codec.empty()) {  // a format of one encoder; H.264 follows --codec
+  if (Format().codec != kH264) {  // a format of one encoder; H.264 follows --codec
     const std::string name(Format().codec);
+    if (EncoderOf(name) == nullptr) {
+      throw RunError("video format " + std::string(Format().name) +
+                     ": fetchscope has no settings for the encoder " + name + " (it knows " +
+                     KnownEncoderList() + ")");
+    }
     std::string failure;
     if (!TryOpenEncoder(name, &failure)) {
       throw RunError("video codec " + name + " cannot open (" + failure +
@@ -218,6 +261,12 @@ void VideoWriter::Impl::OpenEncoder() {
 
 bool VideoWriter::Impl::TryOpenEncoder(const std::string& name, std::string* failure) {
   ClearLastAvError();
+  const KnownEncoder* known = EncoderOf(name);
+  if (known == nullptr) {
+    *failure = "fetchscope has no settings for the encoder " + name + " (it knows " +
+               KnownEncoderList() + ")";
+    return false;
+  }
   const AVCodec* codec = avcodec_find_encoder_by_name(name.c_str());
   if (codec == nullptr) {
     *failure = "this libavcodec has no " + name + " encoder";
@@ -228,60 +277,81 @@ bool VideoWriter::Impl::TryOpenEncoder(const std::string& name, std::string* fai
     *failure = "out of memory";
     return false;
   }
-  const bool is_gif = Format().palette;  // palette frames at the GIF's own rate
   context->width = encoded_width;
   context->height = encoded_height;
-  context->pix_fmt = is_gif ? AV_PIX_FMT_PAL8 : AV_PIX_FMT_YUV420P;
+  switch (Format().pixels) {
+    case VideoPixels::kYuv420p:
+      context->pix_fmt = AV_PIX_FMT_YUV420P;
+      break;
+    case VideoPixels::kPal8:
+      context->pix_fmt = AV_PIX_FMT_PAL8;
+      break;
+    case VideoPixels::kRgb24:
+      context->pix_fmt = AV_PIX_FMT_RGB24;
+      break;
+  }
   // GIF frames keep their input index as pts (frames between gif_fps ticks are dropped)
   context->time_base = AVRational{1, options.fps};
-  context->framerate = AVRational{is_gif ? gif_fps : options.fps, 1};
+  context->framerate = AVRational{gif ? gif_fps : options.fps, 1};
   context->sample_aspect_ratio = AVRational{1, 1};
   // A keyframe every 2 s keeps scrubbing through an episode quick.
   context->gop_size = 2 * options.fps;
-  context->color_range = AVCOL_RANGE_MPEG;
-  context->colorspace = AVCOL_SPC_BT709;
-  context->color_primaries = AVCOL_PRI_BT709;
-  context->color_trc = AVCOL_TRC_BT709;
-  // MP4 keeps SPS/PPS in the avcC box rather than in the stream.
-  if (!is_gif) context->flags |= AV_CODEC_FLAG_GLOBAL_HEADER;
-  if (is_gif) {
-    context->color_range = AVCOL_RANGE_UNSPECIFIED;
-    context->colorspace = AVCOL_SPC_UNSPECIFIED;
-    context->color_primaries = AVCOL_PRI_UNSPECIFIED;
-    context->color_trc = AVCOL_TRC_UNSPECIFIED;
+  if (Format().bt709_tags) {  // what the conversion does (ConvertFrame), said on the stream
+    context->color_range = AVCOL_RANGE_MPEG;
+    context->colorspace = AVCOL_SPC_BT709;
+    context->color_primaries = AVCOL_PRI_BT709;
+    context->color_trc = AVCOL_TRC_BT709;
+  }
+  // MP4 and WebM keep the codec's headers (H.264's SPS/PPS) in the container, not the stream.
+  const std::string muxer_name(Format().muxer);
+  const AVOutputFormat* container = av_guess_format(muxer_name.c_str(), nullptr, nullptr);
+  if (container != nullptr && (container->flags & AVFMT_GLOBALHEADER) != 0) {
+    context->flags |= AV_CODEC_FLAG_GLOBAL_HEADER;
   }
 
   const int preset_index = PresetIndex(options.preset);
   AvDictionary codec_options;
-  if (name == "h264_nvenc") {
-    // Constant-quality VBR is NVENC's nearest match to x264's crf (cq 0 means
-    // "automatic" there, so crf 0 asks for the best fixed quality instead).
-    codec_options.Set("preset", NvencPresetFor(preset_index));
-    codec_options.Set("rc", "vbr");
-    codec_options.Set("cq", std::to_string(std::max(options.crf, 1)));
-    context->bit_rate = 0;
-  } else if (name == "libvpx-vp9") {
-    // Constant quality (crf with no bitrate cap). x264's crf 23 looks about like VP9's 31, so the
-    // scale is shifted by 8. One thread, no row or tile parallelism: libvpx's output then never
-    // depends on the machine or the number of workers (record runs one encoder per episode).
-    codec_options.Set("crf", std::to_string(std::min(63, options.crf + 8)));
-    codec_options.Set("b", "0");
-    const Vp9Speed vp9 = Vp9SpeedFor(options.preset);
-    codec_options.Set("deadline", vp9.deadline);
-    codec_options.Set("cpu-used", std::to_string(vp9.cpu_used));
-    codec_options.Set("threads", "1");
-    codec_options.Set("row-mt", "0");
-    codec_options.Set("tile-columns", "0");
-    codec_options.Set("frame-parallel", "0");
-    context->bit_rate = 0;
-  } else if (is_gif) {
-    // nothing to set: one palette per clip comes from the filter graph
-  } else {
-    codec_options.Set("preset", options.preset);
-    codec_options.Set("crf", std::to_string(options.crf));
-    codec_options.Set("threads", options.threads == 0 ? "auto" : std::to_string(options.threads));
-    const std::string params = X264ParamsFor(options.preset);
-    if (!params.empty()) codec_options.Set("x264-params", params);
+  switch (known->encoder) {
+    case Encoder::kNvenc:
+      // Constant-quality VBR is NVENC's nearest match to x264's crf (cq 0 means
+      // "automatic" there, so crf 0 asks for the best fixed quality instead).
+      codec_options.Set("preset", NvencPresetFor(preset_index));
+      codec_options.Set("rc", "vbr");
+      codec_options.Set("cq", std::to_string(std::max(options.crf, 1)));
+      context->bit_rate = 0;
+      break;
+    case Encoder::kVp9: {
+      // Constant quality (crf with no bitrate cap). x264's crf 23 looks about like VP9's 31, so the
+      // scale is shifted by 8. One thread, no row or tile parallelism: libvpx's output then never
+      // depends on the machine or the number of workers (record runs one encoder per episode).
+      codec_options.Set("crf", std::to_string(std::min(63, options.crf + 8)));
+      codec_options.Set("b", "0");
+      const Vp9Speed vp9 = Vp9SpeedFor(options.preset);
+      codec_options.Set("deadline", vp9.deadline);
+      codec_options.Set("cpu-used", std::to_string(vp9.cpu_used));
+      codec_options.Set("threads", "1");
+      codec_options.Set("row-mt", "0");
+      codec_options.Set("tile-columns", "0");
+      codec_options.Set("frame-parallel", "0");
+      context->bit_rate = 0;
+      break;
+    }
+    case Encoder::kGif:
+      // nothing to set: one palette per clip comes from the filter graph
+      break;
+    case Encoder::kApng:
+      // lossless: --crf and --preset do not apply. Each frame is filtered per row as PNG's
+      // best guess ("mixed" prediction) and compressed at zlib's default level; one thread.
+      codec_options.Set("pred", "mixed");
+      codec_options.Set("threads", "1");
+      break;
+    case Encoder::kX264:
+      codec_options.Set("preset", options.preset);
+      codec_options.Set("crf", std::to_string(options.crf));
+      codec_options.Set("threads", options.threads == 0 ? "auto" : std::to_string(options.threads));
+      const std::string params = X264ParamsFor(options.preset);
+      if (!params.empty()) codec_options.Set("x264-params", params);
+      break;
   }
   if (int rc = avcodec_open2(context.get(), codec, codec_options.address()); rc < 0) {
     *failure = DescribeAvError(rc);
@@ -305,8 +375,10 @@ void VideoWriter::Impl::OpenOutput() {
   muxer.reset(raw);
   // Matroska writes a random segment UID and the library version unless asked to be bitexact.
   if (Format().bitexact_muxer) muxer->flags |= AVFMT_FLAG_BITEXACT;
-  for (const auto& [key, value] : options.metadata) {
-    av_dict_set(&muxer->metadata, key.c_str(), value.c_str(), 0);
+  if (Format().tags == VideoTags::kContainer) {  // the others are inserted by Finish()
+    for (const auto& [key, value] : options.metadata) {
+      av_dict_set(&muxer->metadata, key.c_str(), value.c_str(), 0);
+    }
   }
   stream = avformat_new_stream(muxer.get(), nullptr);
   if (stream == nullptr) throw RunError("cannot add a video stream to the video muxer");
@@ -324,10 +396,14 @@ void VideoWriter::Impl::OpenOutput() {
   temporary.Adopt(temp_path);
 
   AvDictionary muxer_options;
-  // faststart: after the last frame the muxer moves the index (moov) in front
-  // of the data, so a browser can start playing before the whole file arrives.
-  // use_metadata_tags: every tag is written (plain MP4 keeps only a few known names).
-  if (Format().faststart) muxer_options.Set("movflags", "+faststart+use_metadata_tags");
+  if (!Format().muxer_options.empty()) {
+    const std::string pairs(Format().muxer_options);
+    if (int rc = av_dict_parse_string(muxer_options.address(), pairs.c_str(), "=", ":", 0);
+        rc < 0) {
+      throw RunError("the " + std::string(Format().name) + " row's muxer options '" + pairs +
+                     "' do not parse: " + DescribeAvError(rc));
+    }
+  }
   if (int rc = avformat_write_header(muxer.get(), muxer_options.address()); rc < 0) {
     throw RunError("cannot write the " + std::string(Format().name) + " header of " +
                    Quoted(final_path) + ": " + DescribeAvError(rc));
@@ -335,6 +411,25 @@ void VideoWriter::Impl::OpenOutput() {
 }
 
 void VideoWriter::Impl::ConvertFrame(const uint8_t* rgb) {
+  // The encoder released its reference when it consumed the previous frame,
+  // so this normally keeps the same buffers (no per-frame allocation).
+  if (int rc = av_frame_make_writable(frame.get()); rc < 0) {
+    throw RunError("cannot reuse the video frame buffer: " + DescribeAvError(rc));
+  }
+  switch (Format().pixels) {
+    case VideoPixels::kRgb24: {
+      const std::size_t row = static_cast<std::size_t>(options.width) * 3;
+      for (int y = 0; y < options.height; ++y) {
+        std::memcpy(frame->data[0] + static_cast<std::size_t>(y) * frame->linesize[0],
+                    rgb + y * row, row);
+      }
+      return;
+    }
+    case VideoPixels::kYuv420p:
+      break;
+    case VideoPixels::kPal8:  // frames go through the palette filter (PushGifFrame) instead
+      throw RunError("internal: palette frames are not converted one by one");
+  }
   if (encoded_width == options.width && encoded_height == options.height) {
     std::memcpy(padded.data(), rgb, static_cast<std::size_t>(options.width) * options.height * 3);
   } else {
@@ -347,11 +442,6 @@ void VideoWriter::Impl::ConvertFrame(const uint8_t* rgb) {
       std::memcpy(out, in, in_row);
       if (encoded_width != options.width) std::memcpy(out + in_row, in + in_row - 3, 3);
     }
-  }
-  // The encoder released its reference when it consumed the previous frame,
-  // so this normally keeps the same buffers (no per-frame allocation).
-  if (int rc = av_frame_make_writable(frame.get()); rc < 0) {
-    throw RunError("cannot reuse the video frame buffer: " + DescribeAvError(rc));
   }
   const uint8_t* const planes[1] = {padded.data()};
   const int strides[1] = {encoded_width * 3};
@@ -400,8 +490,17 @@ void VideoWriter::Impl::Finish() {
   if (int rc = avio_closep(&muxer->pb); rc < 0) {
     throw RunError("cannot close video " + Quoted(final_path) + ": " + DescribeAvError(rc));
   }
-  if (gif && !options.metadata.empty()) {
-    InsertGifComment(temporary.path(), GifComment(options.metadata));
+  if (!options.metadata.empty()) {
+    switch (Format().tags) {
+      case VideoTags::kContainer:  // written by the muxer (OpenOutput)
+        break;
+      case VideoTags::kGifComment:
+        InsertGifComment(temporary.path(), GifComment(options.metadata));
+        break;
+      case VideoTags::kPngText:
+        InsertPngText(temporary.path(), options.metadata);
+        break;
+    }
   }
   KillPoint("video written, not renamed");
   std::error_code error;

@@ -275,9 +275,10 @@ void CompareFrames(const CompareOptions& o, const RecordedRun& a, const Recorded
     // a palette (GIF) video holds every n-th frame: it plays at its own rate
     const VideoFormat* format_row = FindVideoFormat(format);
     const ManifestVideo& recorded = a.manifest.video;
-    const std::optional<int> rate = format_row != nullptr && format_row->palette
-                                        ? recorded.gif.value_or(ManifestVideoGif{}).fps
-                                        : recorded.fps;
+    const std::optional<int> rate =
+        format_row != nullptr && format_row->pixels == VideoPixels::kPal8
+            ? recorded.gif.value_or(ManifestVideoGif{}).fps
+            : recorded.fps;
     const int fps = rate.value_or(25);
     auto [ra, rb] = OpenVideos(a, b, k);
     const int w = ra.width(), h = ra.height();

@@ -372,4 +372,11 @@ ProbeResult ProbeActions(FetchEnv& env, uint64_t seed, int steps,
   return result;
 }
 
+int ProbeSheetColumns(std::size_t tiles) {
+  // a pair is two tiles about as wide as they are high: p pairs per row and pairs / p rows make
+  // a square when 2 p = pairs / p
+  const double pairs = static_cast<double>((tiles + 1) / 2);
+  return 2 * std::max(1, static_cast<int>(std::lround(std::sqrt(pairs / 2))));
+}
+
 }  // namespace fetchscope

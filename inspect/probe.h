@@ -34,4 +34,9 @@ struct ProbeResult {
 ProbeResult ProbeActions(FetchEnv& env, uint64_t seed, int steps,
                          const std::vector<double>& magnitudes, Renderer* renderer);
 
+/// The probe sheet's columns for `tiles` tiles that come in pairs (each probe's first and last
+/// frame side by side): an even number, so that a pair is never split, and about as many pairs
+/// per row as make the sheet near square (11 pairs: 2 per row, 4 columns; 17: 3, 6 columns).
+int ProbeSheetColumns(std::size_t tiles);
+
 }  // namespace fetchscope

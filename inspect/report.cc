@@ -96,12 +96,11 @@ std::vector<std::string> GlDevices(const Manifest& manifest) {
   return devices;
 }
 
+// A video of the format table's, or of another container a manifest may name
 bool IsVideoFile(const std::string& name) {
+  if (IsVideoFileName(name)) return true;
   const std::string ext = fs::path(name).extension().string();
-  for (const char* known : {".mp4", ".webm", ".gif", ".mkv", ".mov", ".avi"}) {
-    if (ext == known) return true;
-  }
-  return false;
+  return ext == ".mkv" || ext == ".mov" || ext == ".avi";
 }
 
 void CollectVideoFiles(const json& j, std::set<std::string>* files) {
@@ -322,6 +321,9 @@ void AddEpisodeVideos(const RecordedRun& run, int k, const ManifestEpisode& entr
   const EpisodeVideo* shown = PlayableVideo(videos, run.dir);
   (*e)["video"] = shown ? json(shown->file) : json(nullptr);
   (*e)["video_format"] = shown ? json(shown->format) : json(nullptr);
+  // the format row's flag, so that pages never compare names: an image (gif, apng) has no seeking
+  const VideoFormat* row = shown ? FindVideoFormat(shown->format) : nullptr;
+  (*e)["video_image"] = row != nullptr && row->image;
   (*e)["videos"] = std::move(video_list);
   // record --layers: per layer ("depth", "segmentation") its videos and legend, linked
   json layers = json::array();

@@ -13,6 +13,7 @@
 #include <nlohmann/json.hpp>
 
 #include "base/errors.h"
+#include "encode/video_format.h"
 #include "run/run_files.h"
 
 namespace fetchscope {
@@ -133,16 +134,6 @@ bool IsFetchscopeVideo(const fs::path& path, int k, const std::string& title = "
   return false;
 }
 
-bool IsVideoName(const std::string& name) {
-  for (const char* ext : {".mp4", ".webm", ".gif"}) {
-    const std::string e = ext;
-    if (name.size() > e.size() && name.compare(name.size() - e.size(), e.size(), e) == 0) {
-      return true;
-    }
-  }
-  return false;
-}
-
 // True when one of `names` is a video of episode k with fetchscope's tags (remembered in
 // `videos`).
 bool EpisodeHasFetchscopeVideo(const fs::path& out, int k, const std::vector<std::string>& names,
@@ -152,7 +143,7 @@ bool EpisodeHasFetchscopeVideo(const fs::path& out, int k, const std::vector<std
   bool found = false;
   for (const std::string& name : names) {
     const std::optional<RunFileName> parsed = ParseRunFileName(name);
-    if (found || !parsed || parsed->episode != k || !IsVideoName(name)) continue;
+    if (found || !parsed || parsed->episode != k || !IsVideoFileName(name)) continue;
     found = IsFetchscopeVideo(out / name, k);
   }
   (*videos)[k] = found;
@@ -551,7 +542,7 @@ void RunFolder::CheckSameRunWithoutManifest(const fs::path& out, const std::stri
                                 std::to_string(k) + " (" + p.policy + ")";
       for (const std::string& other : run_files) {
         const std::optional<RunFileName> o = ParseRunFileName(other);
-        if (!same && o && o->episode == k && IsVideoName(other)) {
+        if (!same && o && o->episode == k && IsVideoFileName(other)) {
           same = IsFetchscopeVideo(out / other, k, title);
         }
       }

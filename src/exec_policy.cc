@@ -80,7 +80,7 @@ class ExecPolicy : public Policy {
     msg["observation"] = JsonVector(obs.observation.data(), obs.observation.size());
     msg["achieved_goal"] = JsonVector(obs.achieved_goal.data(), 3);
     msg["desired_goal"] = JsonVector(obs.desired_goal.data(), 3);
-    if (!child_.channel().WriteLine(msg.dump())) throw RunError(Died(t));
+    if (!child_.channel().WriteLine(msg.dump())) throw RunError(Died(t, /*writing=*/true));
     const std::string answer = ReadLine(t);
     try {
       Action a;
@@ -99,13 +99,19 @@ class ExecPolicy : public Policy {
  private:
   // The child closed its output: it exited or died. While the run is being stopped that is an
   // interruption (PolicyInterrupted), whatever the child died of; otherwise a failure.
-  std::string Died(int t) {
+  // `writing`: the observation could not be written (its stdin is closed); a child still running
+  // then closed its input, not its output.
+  std::string Died(int t, bool writing = false) {
     std::string how = "closed its output";
     bool crashed = false;  // a failure of its own: its error (a traceback) is on stderr above
     if (const std::optional<ChildExit> status = child_.WaitFor(0.5)) {
       how = status->exited() ? "exited with status " + std::to_string(status->code)
                              : "was killed by signal " + std::to_string(status->signal);
       crashed = !status->exited() || status->code != 0;
+    } else if (writing && !(stop_requested_ && stop_requested_())) {
+      return "exec policy '" + command_ + "' closed its input (stdin) before step " +
+             std::to_string(t) + " and kept running: it must keep reading one JSON line per " +
+             "step until fetchscope closes it";
     }
     if (stop_requested_ && stop_requested_()) {
       throw PolicyInterrupted("exec policy '" + command_ + "' " + how + " at step " +

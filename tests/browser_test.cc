@@ -27,6 +27,7 @@
 #include <vector>
 
 #include "encode/png_io.h"
+#include "encode/video_format.h"
 #include "encode/video_reader.h"
 #include "tests/test_util.h"
 
@@ -368,25 +369,38 @@ TEST_F(BrowserTest, ReportPlaysWebmAndLinksEveryFormat) {
 }
 
 // A gif-only run: no video element plays a gif; each clip shows as an image that loads.
-TEST_F(BrowserTest, ReportOfAGifRunShowsImages) {
+// Every image format of the format table (gif, apng: the row's `image`, which the page reads from
+// its data, never from a name) is shown as an image, loaded at its own size.
+TEST_F(BrowserTest, ReportOfAnImageFormatRunShowsImages) {
   TempDir tmp;
-  const auto r =
-      RunFetchscope(Record(tmp.path() / "run", "scripted", "--format gif --gif-width 64"));
-  ASSERT_EQ(r.exit_code, 0) << r.output;
-  const json result =
-      CheckPage((tmp.path() / "run" / "index.html").string(), /*sort_column: return*/ 2);
-  ExpectHealthyPage(result, 0, 0, 0, 3);
-  ASSERT_EQ(result["images"].size(), 5u) << result.dump();
-  for (const json& image : result["images"]) {
-    EXPECT_EQ(fs::path(image["src"].get<std::string>()).extension(), ".gif") << image.dump();
-    EXPECT_TRUE(image["complete"].get<bool>()) << image.dump();
-    EXPECT_EQ(image["natural_width"], 64) << image.dump();
-    EXPECT_EQ(image["natural_height"], 64) << image.dump();
+  int image_rows = 0;
+  for (const VideoFormat& row : VideoFormats()) {
+    if (!row.image) continue;
+    ++image_rows;
+    SCOPED_TRACE(std::string(row.name));
+    const fs::path run = tmp.path() / std::string(row.name);
+    const auto r = RunFetchscope(
+        Record(run, "scripted", "--format " + std::string(row.name) + " --gif-width 64"));
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    const json result = CheckPage((run / "index.html").string(), /*sort_column: return*/ 2);
+    ExpectHealthyPage(result, 0, 0, 0, 3);
+    ASSERT_EQ(result["images"].size(), 5u) << result.dump();
+    // a gif is scaled to --gif-width; an apng keeps the frames' size
+    const int width = row.pixels == VideoPixels::kPal8 ? 64 : 96;
+    for (const json& image : result["images"]) {
+      EXPECT_EQ(fs::path(image["src"].get<std::string>()).extension(),
+                "." + std::string(row.extension))
+          << image.dump();
+      EXPECT_TRUE(image["complete"].get<bool>()) << image.dump();
+      EXPECT_EQ(image["natural_width"], width) << image.dump();
+      EXPECT_EQ(image["natural_height"], width) << image.dump();
+    }
+    for (const json& links : result["video_links"]) {
+      ASSERT_EQ(links.size(), 1u) << links.dump();
+      EXPECT_EQ(links[0]["text"], std::string(row.name));
+    }
   }
-  for (const json& links : result["video_links"]) {
-    ASSERT_EQ(links.size(), 1u) << links.dump();
-    EXPECT_EQ(links[0]["text"], "gif");
-  }
+  EXPECT_EQ(image_rows, 2);  // gif and apng
 }
 
 // The mean absolute difference per RGB sample of two images of one size (a PNG's alpha ignored),

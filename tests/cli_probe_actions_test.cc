@@ -11,6 +11,7 @@
 
 #include "encode/contact_sheet.h"
 #include "encode/png_io.h"
+#include "inspect/probe.h"
 #include "tests/test_util.h"
 
 namespace fetchscope {
@@ -155,14 +156,22 @@ TEST(ProbeActionsTest, OutWritesReportAndSheet) {
   EXPECT_EQ(j["sheet"], "probe_actions_sheet.png");
   const size_t probes = j["probes"].size();
   EXPECT_EQ(probes, 10u);  // 6 axes, 2 grip, 2 magnitudes
-  // one row per probe (first and last frame), and one for the grasp (closed, lifted)
+  // a grid of pairs (each probe's first and last frame, then the grasp's closed and lifted):
+  // 11 pairs, 2 per row, so 4 columns and 6 rows, near square rather than an 11-row strip
   const Image sheet = ReadPng((out / "probe_actions_sheet.png").string());
-  EXPECT_EQ(sheet.width, kSheetMargin + 2 * (96 + kSheetMargin));
+  EXPECT_EQ(ProbeSheetColumns(2 * (probes + 1)), 4);
+  EXPECT_EQ(sheet.width, kSheetMargin + 4 * (96 + kSheetMargin));
   const SheetLayout layout = ContactSheetLayout(96);
-  EXPECT_EQ(sheet.height,
-            layout.title_bar_height +
-                static_cast<int>(probes + 1) * (kSheetMargin + 96 + layout.label_bar_height) +
-                kSheetMargin);
+  EXPECT_EQ(sheet.height, layout.title_bar_height +
+                              6 * (kSheetMargin + 96 + layout.label_bar_height) + kSheetMargin);
+  EXPECT_LT(sheet.height, 2 * sheet.width);
+  // any number of probes: pairs never split across rows, and never a two-column strip
+  for (std::size_t pairs = 1; pairs <= 40; ++pairs) {
+    const int columns = ProbeSheetColumns(2 * pairs);
+    EXPECT_EQ(columns % 2, 0) << pairs;
+    const double rows = std::ceil(2.0 * pairs / columns);
+    EXPECT_LE(rows, columns + 2.0) << pairs << " pairs: a strip";
+  }
   // no stray files beside the two
   int files = 0;
   for (const auto& e : fs::directory_iterator(out)) {

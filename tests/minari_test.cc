@@ -712,6 +712,43 @@ TEST(MinariCommands, AnEmptyDatasetsPathIsUnsetAndAFileIsRefusedNamingTheVariabl
       << r.output;
 }
 
+// One rule for ids, read or written: an id names a folder under the datasets root, so
+// "../outside/x-v0" is refused by record --from (as by rollout --minari), and the same dataset
+// is read when given by its path.
+TEST(MinariCommands, AnIdNeverLeavesTheDatasetsRootAndAPathIsGivenAsAPath) {
+  TempDir tmp;
+  const fs::path root = tmp.path() / "root", outside = tmp.path() / "outside";
+  fs::create_directories(root);
+  auto r = RunFetchscope("rollout --env-id FetchReach-v4 --steps 3 --minari x-v0 --minari-root " +
+                         outside.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  ASSERT_TRUE(fs::is_directory(outside / "x-v0" / "data"));
+  // from a folder where ../outside/x-v0 is no path: only the root could make it one
+  const fs::path cwd = tmp.path() / "work" / "here";
+  fs::create_directories(cwd);
+  const std::string from_id = "cd " + cwd.string() + " && " FETCHSCOPE_BIN " ";
+  r = RunCommand(from_id + "record --from ../outside/x-v0 --minari-root " + root.string() +
+                 " --out " + (tmp.path() / "run").string() + " 2>&1");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_EQ(testing::LineCount(r.output), 1) << r.output;
+  EXPECT_NE(r.output.find("no Minari dataset '../outside/x-v0': not a file or folder, and not a "
+                          "dataset id"),
+            std::string::npos)
+      << r.output;
+  EXPECT_FALSE(fs::exists(tmp.path() / "run"));
+  r = RunCommand(from_id +
+                 "rollout --env-id FetchReach-v4 --steps 3 --minari ../outside/y-v0 "
+                 "--minari-root " +
+                 root.string() + " 2>&1");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("is not a Minari dataset id"), std::string::npos) << r.output;
+  // the same dataset by its path
+  r = RunFetchscope("record --from " + (outside / "x-v0").string() + " --minari-root " +
+                    root.string() + " --width 32 --height 32 --quiet --out " +
+                    (tmp.path() / "run").string());
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+}
+
 // datasets: a folder with data/ but no metadata.json is listed as unreadable, not left out; a
 // root that cannot be listed is an error, not "no datasets"
 TEST(MinariCommands, DatasetsListsABrokenDatasetAndRefusesAnUnlistableRoot) {

@@ -28,16 +28,9 @@ using testing::ReadFile;
 using testing::RunFetchscope;
 using testing::TempDir;
 
-constexpr char kDataOpen[] = "<script id=\"fetchscope-data\" type=\"application/json\">";
-
 // The JSON a page carries (the embedded data element).
 json PageData(const fs::path& html) {
-  const std::string text = ReadFile(html);
-  const size_t begin = text.find(kDataOpen);
-  if (begin == std::string::npos) return nullptr;
-  const size_t start = begin + sizeof(kDataOpen) - 1;
-  const size_t end = text.find("</script>", start);
-  return json::parse(text.substr(start, end - start));
+  return testing::PageBlock(ReadFile(html), "fetchscope-data");
 }
 
 json ReadJsonFile(const fs::path& path) { return json::parse(ReadFile(path)); }

@@ -223,6 +223,14 @@ std::map<std::string, std::string> FfprobeFormatTags(const std::filesystem::path
   return tags;
 }
 
+nlohmann::json PageBlock(const std::string& html, const std::string& id) {
+  const std::string open = "<script id=\"" + id + "\" type=\"application/json\">";
+  const size_t begin = html.find(open);
+  if (begin == std::string::npos) return nullptr;
+  const size_t start = begin + open.size();
+  return nlohmann::json::parse(html.substr(start, html.find("</script>", start) - start));
+}
+
 int DecodedFrames(const std::filesystem::path& video) {
   auto r = RunCommand(
       "ffprobe -v error -count_frames -select_streams v:0 -show_entries "

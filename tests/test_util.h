@@ -88,6 +88,10 @@ nlohmann::json FfprobeJson(const std::filesystem::path& path, const std::string&
 /// ffprobe's format tags of `path`, names lowercased (Matroska stores tag names in capitals).
 std::map<std::string, std::string> FfprobeFormatTags(const std::filesystem::path& path);
 
+/// The JSON of a page's `<script id="ID" type="application/json">` block ("fetchscope-data": the
+/// page's data), or null when the page has none.
+nlohmann::json PageBlock(const std::string& html, const std::string& id);
+
 /// Frames ffprobe decodes from the first video stream of `video`, or -1 if it does not play.
 int DecodedFrames(const std::filesystem::path& video);
 

@@ -413,7 +413,7 @@ INSTANTIATE_TEST_SUITE_P(
         BadOptionCase{"HugeHeight", With([](VideoOptions* o) { o->height = 100000; }),
                       "video size 480x100000 is out of range: width and height must be 1..8192"},
         BadOptionCase{"NoFormat", With([](VideoOptions* o) { o->format = nullptr; }),
-                      "no video format: accepted mp4, webm, gif"},
+                      "no video format: accepted mp4, webm, gif, apng"},
         BadOptionCase{"GifFpsZero", With([](VideoOptions* o) { o->gif_fps = 0; }),
                       "GIF fps 0 is out of range: accepted 1..50"},
         BadOptionCase{"GifFpsTooHigh", With([](VideoOptions* o) { o->gif_fps = 60; }),

@@ -258,13 +258,14 @@ TEST(VideoFormatsOptionTest, ParsesCommaListsIntoTheTablesRows) {
   const std::vector<const VideoFormat*> three = ParseVideoFormats("webm,gif,mp4");
   EXPECT_EQ(three, (std::vector<const VideoFormat*>{FindVideoFormat("webm"), FindVideoFormat("gif"),
                                                     FindVideoFormat("mp4")}));
-  EXPECT_TRUE(three[1]->palette);
+  EXPECT_EQ(three[1]->pixels, VideoPixels::kPal8);
   EXPECT_EQ(VideoFormatNames(three), (std::vector<std::string>{"webm", "gif", "mp4"}));
   // spaces after the commas, as every other list option takes them
   EXPECT_EQ(VideoFormatNames(ParseVideoFormats("mp4, gif")),
             (std::vector<std::string>{"mp4", "gif"}));
   for (const auto& [list, expected] : std::vector<std::pair<std::string, std::string>>{
-           {"avi", "unknown --format 'avi' in 'avi': accepted a comma list of mp4, webm, gif"},
+           {"avi",
+            "unknown --format 'avi' in 'avi': accepted a comma list of mp4, webm, gif, apng"},
            {"mp4,", "unknown --format '' in 'mp4,'"},
            {"", "unknown --format ''"},
            {"MP4", "unknown --format 'MP4'"},

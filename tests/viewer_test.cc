@@ -25,6 +25,7 @@ namespace {
 
 namespace fs = std::filesystem;
 using nlohmann::json;
+using testing::PageBlock;
 using testing::ReadFile;
 using testing::RunFetchscope;
 using testing::TempDir;
@@ -184,14 +185,6 @@ TEST(ViewerSheetTest, ReadsAPngsSizeFromItsHeader) {
 }
 
 // The JSON of block `id` in a page, or null.
-json PageBlock(const std::string& html, const std::string& id) {
-  const std::string open = "<script id=\"" + id + "\" type=\"application/json\">";
-  const size_t begin = html.find(open);
-  if (begin == std::string::npos) return nullptr;
-  const size_t start = begin + open.size();
-  return json::parse(html.substr(start, html.find("</script>", start) - start));
-}
-
 TEST(ViewerPageTest, ARunsPageCarriesEachEpisodesSignals) {
   TempDir tmp;
   const fs::path run = tmp.path() / "run";

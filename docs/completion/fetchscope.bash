@@ -46,7 +46,7 @@ _fetchscope() {
       COMPREPLY=($(compgen -P "$pre" -W 'rgb depth segmentation' -- "${cur##*,}")); compopt -o nospace 2>/dev/null; return ;;
     --format)
       local pre=''; [[ $cur == *,* ]] && pre=${cur%,*},
-      COMPREPLY=($(compgen -P "$pre" -W 'mp4 webm gif' -- "${cur##*,}")); compopt -o nospace 2>/dev/null; return ;;
+      COMPREPLY=($(compgen -P "$pre" -W 'mp4 webm gif apng' -- "${cur##*,}")); compopt -o nospace 2>/dev/null; return ;;
     --backend) COMPREPLY=($(compgen -W 'auto egl osmesa' -- "$cur")); return ;;
     --readback) COMPREPLY=($(compgen -W 'auto sync async' -- "$cur")); return ;;
     --msaa) COMPREPLY=($(compgen -W 'auto 0 1 2 4 8 16' -- "$cur")); return ;;

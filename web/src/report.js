@@ -188,7 +188,7 @@
     id: 'viewer', fps: data.fps, threshold: data.threshold, linkable: true, legend: markerLegend('viewer-overlay-legend'),
     has_object: v.has_object, gripper_command: v.gripper_command, layout: v.layout || {},
     episodes: viewable.map((e) => ({index: e.index, label: e.label, title: headline(e), className: e.success ? 'ok' : 'fail',
-      tracks: () => [{name: `episode ${e.label}`, video: e.video, format: e.video_format, frames: e.frames,
+      tracks: () => [{name: `episode ${e.label}`, video: e.video, format: e.video_format, image: e.video_image, frames: e.frames,
                       signals: e.viewer ? withReplay(FSViewer.episodeSignals(`fetchscope-episode-${e.index}`), e.replay) : null}]})),
     // the episodes ↑/↓ visit: the table's rows in their order, those the filter shows
     visible: () => [...table.tBodies[0].rows]
@@ -225,8 +225,9 @@
   // video elements would take seconds to create and lay out, and load nothing anyone looks at.
   const lazy = recorded.length > 50;
   const media = (e) => {
-    // the best format a browser plays (mp4, then webm) as a video; a gif-only run's gif as an image
-    if (e.video && e.video_format === 'gif') return el('img', {class: 'clip', src: e.video, alt: `episode ${e.label} (gif)`});
+    // the best format a browser plays (mp4, then webm) as a video; an image format's file (a
+    // gif-only run's gif: the format table's flag, video_image) as an image
+    if (e.video && e.video_image) return el('img', {class: 'clip', src: e.video, alt: `episode ${e.label} (${e.video_format})`});
     if (e.video) return el('video', {src: e.video, controls: true, muted: true, playsinline: true, preload: lazy ? 'metadata' : 'auto'});
     return null;
   };

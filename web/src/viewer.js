@@ -101,7 +101,7 @@ const FSViewer = (() => {
   // the steps itself, without videos: serve),
   // layout: {finger_width, object_height} (the observation indices the titles name), legend (an
   // element under the videos: the markers the frames show),
-  // episodes: [{index, label, title, tracks: () => [{name, caption, video, format, signals, frames,
+  // episodes: [{index, label, title, tracks: () => [{name, caption, video, format, image, signals, frames,
   // noMedia (signals only)}]}],
   // visible: () => indices allowed by the page's filter, onOpen(index)}.
   function create(parent, options) {
@@ -330,8 +330,8 @@ const FSViewer = (() => {
         for (const track of state.tracks) {
           if (track.noMedia) continue;  // compare: B's signals, its frames are in A's video
           const figure = el('figure', {class: 'viewer-track'});
-          if (track.video && track.format === 'gif') {
-            figure.append(el('img', {src: track.video, alt: `${track.name} (gif: not seekable)`}));
+          if (track.video && track.image) {  // an image format (gif, apng): not seekable
+            figure.append(el('img', {src: track.video, alt: `${track.name} (${track.format}: not seekable)`}));
           } else if (track.video) {
             const video = el('video', {src: track.video, muted: true, playsinline: true, preload: 'auto', class: 'viewer-video'});
             video.muted = true;
