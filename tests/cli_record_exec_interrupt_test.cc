@@ -83,7 +83,7 @@ TEST(ExecInterrupt, CtrlCAlwaysEndsAsAnInterruptionWithAManifest) {
 #ifdef FETCHSCOPE_SANITIZED
   const int runs = 12;  // the sanitizer stage checks memory; the Release run explores the races
 #else
-  const int runs = 30;  // about 2 s each: the random moments cover the episode and its end
+  const int runs = 20;  // about 2 s each: the random moments cover the episode and its end
 #endif
   for (int run = 0; run < runs; ++run) {
     SCOPED_TRACE("run " + std::to_string(run));
