@@ -65,7 +65,7 @@ ParentFolders::ParentFolders(const std::string& file_path) {
     } else if (errno != EEXIST || !fs::is_directory(*it)) {  // EEXIST: made by a concurrent writer
       const int error = errno == EEXIST ? ENOTDIR : errno;
       RemoveCreated();
-      throw RunError("cannot create folder '" + it->string() + "': " + std::strerror(error));
+      ThrowPathError("cannot create folder '" + it->string() + "': " + std::strerror(error), error);
     }
   }
 }
@@ -114,8 +114,10 @@ AtomicFile::AtomicFile(const std::string& final_path)
     const int fd = ::open(temp_path_.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
     if (fd < 0 && errno == EEXIST) continue;
     if (fd < 0) {
-      throw RunError("cannot write to folder '" + FolderForMessage(folder) +
-                     "': " + std::strerror(errno));
+      const int error = errno;
+      ThrowPathError("cannot write to folder '" + FolderForMessage(folder) +
+                         "': " + std::strerror(error),
+                     error);
     }
     pending_ = true;
     file_ = ::fdopen(fd, "wb");
@@ -188,6 +190,15 @@ void WriteFileAtomically(const std::string& path, std::string_view contents) {
   AtomicFile file(path);
   file.Write(contents);
   file.Commit();
+}
+
+void CreateOutputFolder(const std::string& folder) {
+  std::error_code ec, ignored;
+  std::filesystem::create_directories(folder, ec);
+  if (std::filesystem::is_directory(folder, ignored)) return;
+  const std::string message = "cannot create output folder '" + folder + "': ";
+  if (!ec) throw UsageError(message + "a file is in the way");
+  ThrowPathError(message + ec.message(), ec.value());
 }
 
 }  // namespace fetchscope

@@ -93,4 +93,9 @@ class AtomicFile {
 /// Writes `contents` to `path` through an AtomicFile. Throws RunError on failure.
 void WriteFileAtomically(const std::string& path, std::string_view contents);
 
+/// Creates the output folder `folder` (a command's --out) and its parents. A path that cannot
+/// be one (a file in the way, below a file, not writable) is a UsageError, a full disk a
+/// RunError (ThrowPathError), each "cannot create output folder 'FOLDER': REASON".
+void CreateOutputFolder(const std::string& folder);
+
 }  // namespace fetchscope

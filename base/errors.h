@@ -13,8 +13,8 @@ class UsageError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-/// A failure while running (bad assets, GL unavailable, unwritable output,
-/// malformed replay file...). Exit code 1.
+/// A failure while running (bad assets, GL unavailable, a full disk, a malformed replay
+/// file...). Exit code 1.
 class RunError : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
@@ -27,5 +27,13 @@ class PolicyInterrupted : public RunError {
  public:
   using RunError::RunError;
 };
+
+/// The one rule for a path named on the command line (docs/reference/exit-codes.md): when the
+/// system's error `error` (an errno) says the path cannot be used as given (it does not exist,
+/// is of the wrong kind, lies below a file, or may not be read or written: ENOENT, ENOTDIR,
+/// EISDIR, EEXIST, EACCES, EPERM, EROFS, ENAMETOOLONG, ELOOP) it is a usage error, exit 2;
+/// any other (a full disk, an I/O error) is a run-time failure, exit 1. Throws the one chosen,
+/// with `message`.
+[[noreturn]] void ThrowPathError(const std::string& message, int error);
 
 }  // namespace fetchscope

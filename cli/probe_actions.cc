@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "base/atomic_file.h"
 #include "base/errors.h"
 #include "cli/command.h"
 #include "cli/common.h"
@@ -52,12 +53,7 @@ int RunProbeActions(const ProbeOptions& o) {
   std::optional<Renderer> renderer;
   if (!o.out.empty()) {
     const ViewSetup view = ResolveView(o.view, env.model());
-    std::error_code ec;
-    fs::create_directories(o.out, ec);
-    if (!fs::is_directory(o.out)) {
-      throw RunError("cannot create output folder '" + o.out +
-                     "': " + (ec ? ec.message() : std::string("a file is in the way")));
-    }
+    CreateOutputFolder(o.out);
     gl = CreateViewContext(view.backend, ResolveGpuChoice(view));
     renderer.emplace(*gl, env.model(), view.render);
   }

@@ -168,7 +168,10 @@ void WritePng(const std::string& path, int width, int height, int channels, int 
   const size_t name_at = slash == std::string::npos ? 0 : slash + 1;
   std::string temp = path.substr(0, name_at) + "." + path.substr(name_at) + ".tmp-XXXXXX";
   int fd = mkstemp(temp.data());
-  if (fd < 0) throw RunError("cannot write " + path + ": " + std::strerror(errno));
+  if (fd < 0) {
+    const int error = errno;
+    ThrowPathError("cannot write " + path + ": " + std::strerror(error), error);
+  }
   fchmod(fd, 0644);  // mkstemp makes 0600; images are meant to be shared
   FILE* file = fdopen(fd, "wb");
   if (!file) {

@@ -492,11 +492,7 @@ CompareResult CompareRuns(const CompareOptions& o) {
 
   std::error_code ec;
   OutputsGuard guard(o.out);
-  fs::create_directories(o.out, ec);
-  if (!fs::is_directory(o.out)) {
-    throw UsageError("cannot create output folder '" + o.out +
-                     "': " + (ec ? ec.message() : std::string("a file is in the way")));
-  }
+  CreateOutputFolder(o.out);
   const std::string labels[3] = {"A: " + FolderName(o.run_a), "B: " + FolderName(o.run_b),
                                  "|A − B| ×" + std::to_string(kHeatGain)};
   json rows = json::array();

@@ -130,12 +130,7 @@ struct CheckRow {
 
 void WriteFailureImages(const std::string& out, const GoldenScene& s, const Image* golden,
                         int width, int height, const std::vector<uint8_t>& actual) {
-  std::error_code ec;
-  fs::create_directories(out, ec);
-  if (!fs::is_directory(out)) {
-    throw RunError("cannot create output folder '" + out +
-                   "': " + (ec ? ec.message() : std::string("a file is in the way")));
-  }
+  CreateOutputFolder(out);
   const fs::path dir(out);
   WritePng((dir / (s.name + "_actual.png")).string(), width, height, 3, 8, actual.data());
   if (!golden) return;

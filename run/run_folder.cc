@@ -12,6 +12,7 @@
 #include <map>
 #include <nlohmann/json.hpp>
 
+#include "base/atomic_file.h"
 #include "base/errors.h"
 #include "encode/video_format.h"
 #include "run/run_files.h"
@@ -211,7 +212,7 @@ RunFolder::Listing RunFolder::ListFolder(const fs::path& out, const std::string&
   Listing listing;
   std::error_code ec;
   if (!fs::is_directory(out, ec)) {
-    throw RunError("cannot create output folder '" + request_.out + "': a file is in the way");
+    throw UsageError("cannot create output folder '" + request_.out + "': a file is in the way");
   }
   for (const auto& entry : fs::directory_iterator(out, ec)) {
     const std::string name = entry.path().filename().string();
@@ -412,11 +413,7 @@ void RunFolder::PrepareFolder(const fs::path& out, const std::string& quoted,
     }
   }
 
-  fs::create_directories(out, ec);
-  if (!fs::is_directory(out)) {
-    throw RunError("cannot create output folder '" + request_.out +
-                   "': " + (ec ? ec.message() : std::string("a file is in the way")));
-  }
+  CreateOutputFolder(request_.out);
   if (!lock_.held()) {
     // made just now, by this run or by another one racing it: the lock decides, and the loser
     // leaves the folders alone (the winner may be writing in them)

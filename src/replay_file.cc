@@ -488,18 +488,21 @@ std::string ReadReplayBytes(const std::string& path, std::string* format) {
           ? ""
           : Lowercase(path.substr(dot));
   const char kAccepted[] = ": use .csv, .npy or .jsonl (or .json)";
-  if (extension.empty()) throw RunError("replay file " + path + " has no extension" + kAccepted);
+  if (extension.empty()) throw UsageError("replay file " + path + " has no extension" + kAccepted);
   if (extension != ".csv" && extension != ".npy" && extension != ".jsonl" && extension != ".json") {
-    throw RunError("replay file " + path + ": unknown replay file extension " + Quote(extension) +
+    throw UsageError("replay file " + path + ": unknown replay file extension " + Quote(extension) +
                    kAccepted);
   }
 
   std::error_code ec;
   if (std::filesystem::is_directory(path, ec)) {
-    throw RunError("cannot read replay file " + path + ": it is a folder, not a file");
+    throw UsageError("cannot read replay file " + path + ": it is a folder, not a file");
   }
   std::ifstream in(path, std::ios::binary);
-  if (!in) throw RunError("cannot read replay file " + path + ": " + std::strerror(errno));
+  if (!in) {
+    const int error = errno;
+    ThrowPathError("cannot read replay file " + path + ": " + std::strerror(error), error);
+  }
   std::ostringstream contents;
   contents << in.rdbuf();
   if (in.bad()) throw RunError("cannot read replay file " + path + ": " + std::strerror(errno));

@@ -30,7 +30,7 @@ size_t FileCount(const std::filesystem::path& dir) {
 std::string ErrorOf(const std::function<void()>& body) {
   try {
     body();
-  } catch (const RunError& e) {
+  } catch (const std::runtime_error& e) {  // UsageError for a path that cannot be, else RunError
     return e.what();
   }
   return "(no error)";

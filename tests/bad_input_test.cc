@@ -206,7 +206,7 @@ std::vector<Case> Matrix() {
       {"AnatomyBadSeed", "anatomy --seed -1 --out {tmp}/results", 2, "-1", {"results"}},
       {"AnatomyBadMsaa", "anatomy --msaa 3 --out {tmp}/results", 2, "3", {"results"}},
       {"AnatomyTinyCard", "anatomy --width 10 --out {tmp}/results", 2, "10", {"results"}},
-      {"AnatomyOutIsFile", "anatomy --no-card --out {tmp}/f", 1, "{tmp}/f", {}, file("f", "x")},
+      {"AnatomyOutIsFile", "anatomy --no-card --out {tmp}/f", 2, "{tmp}/f", {}, file("f", "x")},
       {"RolloutEmptyExec", "rollout --policy exec:", 2, "exec"},
       {"RolloutEmptyReplay", "rollout --policy replay:", 2, "replay"},
       {"RenderUnknownBackend", "render --backend vulkan -o {tmp}/f.png", 2, "vulkan", {"f.png"}},
@@ -492,13 +492,13 @@ std::vector<Case> Matrix() {
        kRecordOutputs,
        assets([](const fs::path& a) { fs::remove(a / "stls" / "fetch" / "gripper_link.stl"); })},
       // ---- replay files: empty, binary, wrong width or shape, NaN/inf, too few rows
-      {"ReplayMissingFile", rollout + "--policy replay:{tmp}/none.csv", 1, "{tmp}/none.csv",
+      {"ReplayMissingFile", rollout + "--policy replay:{tmp}/none.csv", 2, "{tmp}/none.csv",
        rollout_out},
-      {"ReplayUnknownExtension", rollout + "--policy replay:{tmp}/a.txt", 1, ".txt", rollout_out,
+      {"ReplayUnknownExtension", rollout + "--policy replay:{tmp}/a.txt", 2, ".txt", rollout_out,
        file("a.txt", CsvRows(60))},
-      {"ReplayIsAFolder", rollout + "--policy replay:{tmp}/d.csv", 1, "{tmp}/d.csv", rollout_out,
+      {"ReplayIsAFolder", rollout + "--policy replay:{tmp}/d.csv", 2, "{tmp}/d.csv", rollout_out,
        [](const fs::path& tmp) { return fs::create_directory(tmp / "d.csv"); }},
-      {"ReplayUnreadable", rollout + "--policy replay:{tmp}/u.csv", 1, "{tmp}/u.csv", rollout_out,
+      {"ReplayUnreadable", rollout + "--policy replay:{tmp}/u.csv", 2, "{tmp}/u.csv", rollout_out,
        unreadable("u.csv"), Unprivileged()},
       {"ReplayEmptyCsv", rollout + "--policy replay:{tmp}/e.csv", 1, "e.csv", rollout_out,
        file("e.csv", "")},
@@ -599,40 +599,41 @@ std::vector<Case> Matrix() {
        rollout + "--policy replay:{src}/tests/data/replay/replay_f64.npy "
                  "--replay-dtype float32",
        2, "float64", rollout_out},
-      // ---- outputs that cannot be written, or a full disk (ulimit -f: writes fail with EFBIG)
+      // ---- outputs that cannot be written (exit 2: the path as given), or a full disk (ulimit -f:
+      // writes fail with EFBIG; exit 1)
       {"JsonOutParentIsFile",
        "describe --json-out {tmp}/f/d.json",
-       1,
+       2,
        "{tmp}/f",
        {"f/d.json"},
        file("f", "x")},
       {"JsonOutFileInTheWayOfFolder",
        "rollout --json-out {tmp}/f/such/r.json",
-       1,
+       2,
        "{tmp}/f/such",
        {"f/such/r.json"},
        file("f", "x")},
       {"RenderOutputFileInTheWayOfFolder",
        "render -o {tmp}/f/new/x.png",
-       1,
+       2,
        "{tmp}/f/new",
        {"f/new/x.png"},
        file("f", "x")},
       {"RenderOutputParentIsFile",
        "render -o {tmp}/f/x.png",
-       1,
+       2,
        "{tmp}/f",
        {"f/x.png"},
        file("f", "x")},
       {"RecordOutIsFile",
        "record --quiet --steps 3 --out {tmp}/f",
-       1,
+       2,
        "{tmp}/f",
        {},
        file("f", "x")},
       {"RecordOutUnwritable",
        "record --quiet --steps 3 --out {tmp}/ro/out",
-       1,
+       2,
        "{tmp}/ro",
        {"ro/out/episode_000.mp4", "ro/out/manifest.json"},
        [](const fs::path& tmp) {
@@ -882,7 +883,7 @@ INSTANTIATE_TEST_SUITE_P(
         AnatomyBadInput{"rollout --steps 1 --policy replay:TMP/three.csv", 1, "three.csv"},
         AnatomyBadInput{"rollout --steps 1 --policy replay:TMP/empty.csv", 1, "empty"},
         AnatomyBadInput{"rollout --steps 1 --policy replay:TMP/text.csv", 1, "text.csv"},
-        AnatomyBadInput{"rollout --steps 5 --policy replay:TMP/missing.csv", 1, "missing.csv"},
+        AnatomyBadInput{"rollout --steps 5 --policy replay:TMP/missing.csv", 2, "missing.csv"},
         AnatomyBadInput{"rollout --steps 50 --policy replay:TMP/nan.csv", 1, "nan.csv"},
         AnatomyBadInput{"rollout --steps 3 --policy 'exec:exit 3'", 1, "exited with status 3"},
         AnatomyBadInput{"rollout --steps 3 --policy 'exec:echo hello; cat >/dev/null'", 1,
@@ -890,6 +891,67 @@ INSTANTIATE_TEST_SUITE_P(
         AnatomyBadInput{"rollout --steps 3 --exec-timeout 0.5 --policy 'exec:sleep 5'", 1,
                         "no answer for step 0 within 0.5 s"},
         AnatomyBadInput{"rollout --steps 10001", 2, "--steps"}));
+
+// The rule of docs/reference/exit-codes.md, a command for each row: 0 for success; 1 for what
+// fails while working (a file's contents, a policy); 2 for the command line, and a path on it
+// that cannot be used as given is part of the command line: an input that does not exist or is
+// a folder, an output that is a file or lies below one (and one that may not be written, where
+// the tests do not run as root). SIGINT/SIGTERM's 130/143: tests/signals_test.cc.
+TEST(ExitCodeRule, EveryRowOfTheTable) {
+  TempDir tmp;
+  const std::string t = tmp.path().string();
+  std::ofstream(tmp.path() / "file") << "x";
+  std::ofstream(tmp.path() / "text.csv") << "hello,world\n";
+  fs::create_directories(tmp.path() / "folder.csv");
+  const std::string reach = "--env-id FetchReach-v4 --steps 2 ";
+  struct Row {
+    std::string args;
+    int exit_code;
+    std::string message;
+  };
+  std::vector<Row> rows = {
+      {"describe --env-id FetchReach-v4", 0, ""},
+      // 1: found while working
+      {"rollout " + reach + "--policy replay:" + t + "/text.csv", 1, "text.csv"},
+      {"rollout " + reach + "--policy 'exec:exit 3'", 1, "exited with status 3"},
+      // 2: the command line, paths included
+      {"rollout --env-id FetchReach-v9", 2, "unknown env id"},
+      {"rollout " + reach + "--policy replay:" + t + "/missing.csv", 2,
+       "missing.csv: No such file or directory"},
+      {"rollout " + reach + "--policy replay:" + t + "/folder.csv", 2, "it is a folder"},
+      {"record --from " + t + "/missing-run --out " + t + "/r", 2, "missing-run"},
+      {"export " + t + "/missing-run --minari x-v0", 2, "missing-run"},
+      {"record " + reach + "--episodes 1 --quiet --out " + t + "/file", 2,
+       "cannot create output folder '" + t + "/file'"},
+      {"record " + reach + "--episodes 1 --quiet --out " + t + "/file/run", 2,
+       "cannot create output folder '" + t + "/file/run': Not a directory"},
+      {"rollout " + reach + "--json-out " + t + "/file/r.json", 2, "Not a directory"},
+      {"render --env-id FetchReach-v4 --width 32 --height 32 -o " + t + "/file/f.png", 2,
+       "Not a directory"},
+      {"rollout " + reach + "--minari x-v0 --minari-root " + t + "/file/datasets", 2,
+       "Not a directory"},
+      {"probe-actions --env-id FetchReach-v4 --steps 1 --out " + t + "/file", 2,
+       "cannot create output folder '" + t + "/file'"},
+  };
+  if (geteuid() != 0) {  // root writes into read-only folders
+    fs::create_directories(tmp.path() / "ro");
+    fs::permissions(tmp.path() / "ro", fs::perms::owner_read | fs::perms::owner_exec);
+    rows.push_back({"record " + reach + "--episodes 1 --quiet --out " + t + "/ro/run", 2,
+                    "Permission denied"});
+  }
+  for (const Row& row : rows) {
+    SCOPED_TRACE(row.args);
+    const auto r = RunFetchscope(row.args + " 2>&1");
+    EXPECT_EQ(r.exit_code, row.exit_code) << r.output;
+    if (row.exit_code != 0) {
+      EXPECT_EQ(testing::Count(r.output, "fetchscope: error: "), 1) << r.output;
+      EXPECT_NE(r.output.find(row.message), std::string::npos) << r.output;
+    }
+  }
+  EXPECT_FALSE(fs::exists(tmp.path() / "r"));
+  std::error_code ignored;  // absent as root
+  fs::permissions(tmp.path() / "ro", fs::perms::owner_all, ignored);
+}
 
 }  // namespace
 }  // namespace fetchscope

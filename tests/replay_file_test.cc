@@ -351,7 +351,7 @@ TEST(ReplayFileTest, FileErrorsNameTheFile) {
   try {
     ReadReplayFile(txt);
     FAIL() << "no error";
-  } catch (const RunError& e) {
+  } catch (const UsageError& e) {  // the name on the command line: exit 2
     EXPECT_NE(std::string(e.what()).find(
                   "unknown replay file extension '.txt': use .csv, .npy or .jsonl"),
               std::string::npos)
@@ -360,7 +360,7 @@ TEST(ReplayFileTest, FileErrorsNameTheFile) {
   try {
     ReadReplayFile((dir.path() / "missing.csv").string());
     FAIL() << "no error";
-  } catch (const RunError& e) {
+  } catch (const UsageError& e) {  // a path that cannot be used as given: exit 2
     EXPECT_NE(std::string(e.what()).find("missing.csv: No such file or directory"),
               std::string::npos)
         << e.what();
@@ -368,7 +368,7 @@ TEST(ReplayFileTest, FileErrorsNameTheFile) {
   try {
     ReadReplayFile((dir.path() / "actions").string());
     FAIL() << "no error";
-  } catch (const RunError& e) {
+  } catch (const UsageError& e) {
     EXPECT_NE(std::string(e.what()).find("actions has no extension: use .csv, .npy or .jsonl"),
               std::string::npos)
         << e.what();
@@ -377,7 +377,7 @@ TEST(ReplayFileTest, FileErrorsNameTheFile) {
   try {
     ReadReplayFile((dir.path() / "folder.csv").string());
     FAIL() << "no error";
-  } catch (const RunError& e) {
+  } catch (const UsageError& e) {
     EXPECT_NE(std::string(e.what()).find("folder.csv: it is a folder"), std::string::npos)
         << e.what();
   }
