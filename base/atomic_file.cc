@@ -115,9 +115,9 @@ AtomicFile::AtomicFile(const std::string& final_path)
     if (fd < 0 && errno == EEXIST) continue;
     if (fd < 0) {
       const int error = errno;
-      ThrowPathError("cannot write to folder '" + FolderForMessage(folder) +
-                         "': " + std::strerror(error),
-                     error);
+      ThrowPathError(
+          "cannot write to folder '" + FolderForMessage(folder) + "': " + std::strerror(error),
+          error);
     }
     pending_ = true;
     file_ = ::fdopen(fd, "wb");

@@ -183,9 +183,12 @@ std::string Man(const CLI::App& app) {
   }
   man << ".SH EXIT STATUS\n"
       << ".TP\n.B 0\nsuccess (compare: the runs are the same)\n"
-      << ".TP\n.B 1\na run-time failure (reward-check: a mismatch; golden check: a scene fails; "
-         "compare: the runs differ)\n"
-      << ".TP\n.B 2\na usage error: a bad option, value, input file or folder\n"
+      << ".TP\n.B 1\na run-time failure: an input file's contents malformed, a policy that fails, "
+         "a full disk (reward-check: a mismatch; golden check: a scene fails; compare: the runs "
+         "differ)\n"
+      << ".TP\n.B 2\na usage error: a bad option or value, or a path that cannot be used as given "
+         "(an input that does not exist or is a folder, an output below a file or not "
+         "writable)\n"
       << ".TP\n.B 130, 143\ninterrupted by SIGINT or SIGTERM (the files written so far are "
          "kept and playable)\n"
       << ".SH ENVIRONMENT\n";

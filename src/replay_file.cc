@@ -491,7 +491,7 @@ std::string ReadReplayBytes(const std::string& path, std::string* format) {
   if (extension.empty()) throw UsageError("replay file " + path + " has no extension" + kAccepted);
   if (extension != ".csv" && extension != ".npy" && extension != ".jsonl" && extension != ".json") {
     throw UsageError("replay file " + path + ": unknown replay file extension " + Quote(extension) +
-                   kAccepted);
+                     kAccepted);
   }
 
   std::error_code ec;
