@@ -184,12 +184,13 @@ TEST_F(BundleTest, BundledBinaryRecordsAnEpisode) {
   const CommandResult r = RunCommand(
       "cd " + work.path().string() +
       " && env -u MUJOCO_GL ./fs record --env-id FetchPush-v4 --policy scripted --episodes 1 "
-      "--steps 5 --width 64 --height 64 --quiet --format mp4,webm,gif --out run");
+      "--steps 5 --width 64 --height 64 --quiet --format mp4,webm,gif,apng --out run");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   for (const auto& [file, expected] :
        std::vector<std::pair<std::string, std::string>>{{"episode_000.mp4", "h264,6\n"},
                                                         {"episode_000.webm", "vp9,6\n"},
-                                                        {"episode_000.gif", "gif,3\n"}}) {
+                                                        {"episode_000.gif", "gif,3\n"},
+                                                        {"episode_000.apng", "apng,6\n"}}) {
     const fs::path video = work.path() / "run" / file;
     const CommandResult probe = RunCommand(
         "ffprobe -v error -count_frames -select_streams v:0 -show_entries "
@@ -200,6 +201,30 @@ TEST_F(BundleTest, BundledBinaryRecordsAnEpisode) {
   EXPECT_TRUE(fs::is_regular_file(work.path() / "run" / "episode_000_sheet.png"));
   const CommandResult version = RunCommand((root_ / "fetchscope").string() + " --version");
   EXPECT_EQ(version.exit_code, 0) << version.output;
+}
+
+// The README tour's golden check, from a folder outside any checkout: the bundle's own goldens
+// (bin/golden, beside the binary) are found without --golden-dir, and its examples are where
+// `help --examples-dir` says.
+TEST_F(BundleTest, GoldenCheckFromAnyFolderUsesTheBundlesGoldens) {
+  TempDir work;
+  const CommandResult r = RunCommand(
+      "cd " + work.path().string() + " && env -u MUJOCO_GL " + (root_ / "fetchscope").string() +
+      " golden check --backend osmesa --only reach_reset,slide_reset --out golden-failures 2>&1");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(
+      r.output.find("2 scene(s) from " + (root_ / "bin" / "golden" / "manifest.json").string()),
+      std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("all 2 scene(s) pass"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(work.path() / "golden-failures"));
+  const CommandResult examples =
+      RunCommand("cd " + work.path().string() + " && " + (root_ / "fetchscope").string() +
+                 " help --examples-dir");
+  ASSERT_EQ(examples.exit_code, 0) << examples.output;
+  const fs::path dir = examples.output.substr(0, examples.output.find('\n'));
+  EXPECT_EQ(dir, root_ / "bin" / "examples");
+  EXPECT_TRUE(fs::is_regular_file(dir / "policies" / "mlp_policy.py")) << dir;
 }
 
 }  // namespace
