@@ -71,9 +71,10 @@ TEST(Cli, DescribeEveryId) {
   EXPECT_EQ(nlohmann::json::parse(r.output)["env_id"], "FetchReachDense-v4");
 }
 
-TEST(Cli, UnwritableOutputIsARunError) {
+// an output path that cannot be used as given is the command line's fault (exit-codes.md)
+TEST(Cli, UnwritableOutputIsAUsageError) {
   auto r = RunFetchscope("describe --json-out /proc/nope/x.json");
-  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_NE(r.output.find("/proc/nope"), std::string::npos) << r.output;
 }
 

@@ -121,8 +121,8 @@ TEST(PolicySpec, BadTextIsRefusedWithOneLineNamingIt) {
             "--replay-dtype float32: replay file " + npy +
                 " holds float64 (its .npy dtype); drop --replay-dtype, a .npy carries its own "
                 "precision");
-  // a file that cannot be read is a RunError naming it, at parse time
-  EXPECT_THROW(ParsePolicySpec("replay:/nonexistent/none.csv"), RunError);
+  // a file that does not exist is a UsageError naming it, at parse time
+  EXPECT_THROW(ParsePolicySpec("replay:/nonexistent/none.csv"), UsageError);
 }
 
 // The spec holds the file's contents: once parsed, the file can go, and every worker's
