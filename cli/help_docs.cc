@@ -18,6 +18,7 @@
 #include "cli/common.h"
 #include "cli/resolve.h"
 #include "encode/video_format.h"
+#include "render/camera.h"
 #include "render/layers.h"
 #include "render/overlay.h"
 #include "src/assets.h"
@@ -215,7 +216,8 @@ std::string Man(const CLI::App& app) {
 
 /// The cameras --camera accepts on any of the bundled models (as list-cameras prints them).
 std::vector<std::string> CameraNames() {
-  std::vector<std::string> names = {"default", "track", "free:"};
+  std::vector<std::string> names;
+  for (const CameraKind& kind : CameraKinds()) names.emplace_back(kind.completion);
   std::set<std::string> seen(names.begin(), names.end());
   for (const EnvSpec& spec : AllEnvSpecs()) {
     EnvOptions options;

@@ -12,6 +12,7 @@
 #include "cli/resolve.h"
 #include "cli/view_options.h"
 #include "encode/png_io.h"
+#include "render/camera.h"
 #include "render/layers.h"
 #include "render/renderer.h"
 #include "run/episode_scheduler.h"
@@ -156,11 +157,10 @@ int RunListCameras(const ListCamerasOptions& o) {
   FetchEnv fetch(*env.spec, env.assets);
   const mjModel* m = fetch.model();
   // columns as wide as their widest name (a model camera's name can be long)
-  std::vector<std::vector<std::string>> rows = {
-      {"default",
-       "Gymnasium's free camera: distance 2.5, azimuth 132, elevation -14, lookat 1.3 0.75 0.55"},
-      {"track", "follows robot0:gripper_link"},
-      {"free:...", "free:lookat=x,y,z,distance=d,azimuth=a,elevation=e (any subset)"}};
+  std::vector<std::vector<std::string>> rows;
+  for (const CameraKind& kind : CameraKinds()) {
+    rows.push_back({std::string(kind.listed), std::string(kind.summary)});
+  }
   auto name = [&](int type, int id) {
     const char* n = mj_id2name(m, type, id);
     return std::string(n ? n : "(unnamed)");

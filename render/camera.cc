@@ -13,10 +13,17 @@
 namespace fetchscope {
 namespace {
 
-constexpr char kAccepted[] =
-    "accepted: default, track, free:lookat=x,y,z,distance=d,azimuth=a,elevation=e (any subset "
-    "of keys), track:body=NAME,distance=d,azimuth=a,elevation=e (any subset), a camera named in "
-    "the model, or a comma list of these";
+// "accepted: default, track, track:body=..., free:..., a camera named in the model, ..."
+const std::string& Accepted() {
+  static const std::string text = [] {
+    std::string forms;
+    for (const CameraKind& kind : CameraKinds()) {
+      forms += (forms.empty() ? "" : ", ") + std::string(kind.forms);
+    }
+    return "accepted: " + forms + ", a camera named in the model, or a comma list of these";
+  }();
+  return text;
+}
 
 // The tracking camera's pose relative to the gripper: close enough to see the fingers and the
 // object, from the same side as the default camera.
@@ -53,7 +60,7 @@ std::string ModelCameraNames(const mjModel* model) {
 }
 
 [[noreturn]] void Fail(const std::string& what) {
-  throw UsageError("camera " + what + "; " + kAccepted);
+  throw UsageError("camera " + what + "; " + Accepted());
 }
 
 // Parses the text after "free:" or "track:" (keys and their comma-separated values) into `cam`;
@@ -159,16 +166,31 @@ CameraSpec ParseOne(const std::string& token, const mjModel* model) {
     spec.kind = CameraSpec::kNamed;
     return spec;
   }
-  std::vector<std::string> names = {"default", "track", "free"};
+  std::vector<std::string> names;
+  for (const CameraKind& kind : CameraKinds()) names.emplace_back(kind.name);
   for (int i = 0; model && i < model->ncam; ++i)
     names.push_back(mj_id2name(model, mjOBJ_CAMERA, i));
   throw UsageError("camera '" + token + "' is not known" + DidYouMean(token, names) + "; " +
-                   kAccepted + " (model cameras: " + ModelCameraNames(model) + ")");
+                   Accepted() + " (model cameras: " + ModelCameraNames(model) + ")");
 }
 
 }  // namespace
 
 FreeCamera DefaultFreeCamera() { return FreeCamera{{1.3, 0.75, 0.55}, 2.5, 132.0, -14.0}; }
+
+const std::vector<CameraKind>& CameraKinds() {
+  static const std::vector<CameraKind> kKinds = {
+      {"default", "default", "default",
+       "Gymnasium's free camera: distance 2.5, azimuth 132, elevation -14, lookat 1.3 0.75 0.55",
+       "default"},
+      {"track", "track", "track", "follows robot0:gripper_link",
+       "track, track:body=NAME,distance=d,azimuth=a,elevation=e (any subset)"},
+      {"free", "free:", "free:...",
+       "free:lookat=x,y,z,distance=d,azimuth=a,elevation=e (any subset)",
+       "free:lookat=x,y,z,distance=d,azimuth=a,elevation=e (any subset of keys)"},
+  };
+  return kKinds;
+}
 
 std::string CameraText(const CameraSpec& spec) {
   const auto number = [](double v) {

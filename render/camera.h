@@ -19,6 +19,7 @@
 #include <mujoco/mujoco.h>
 
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace fetchscope {
@@ -33,6 +34,19 @@ struct FreeCamera {
 
 /// Gymnasium's DEFAULT_CAMERA_CONFIG for the Fetch tasks.
 FreeCamera DefaultFreeCamera();
+
+/// A kind of --camera that is not one of the model's own cameras: the one list that parsing's
+/// "did you mean", its accepted forms, list-cameras and the shell completion read.
+struct CameraKind {
+  std::string_view name;        ///< "default", "track", "free"
+  std::string_view completion;  ///< what completion offers: "free:" (the keys follow)
+  std::string_view listed;      ///< list-cameras' first column: "free:..."
+  std::string_view summary;     ///< list-cameras' second column
+  std::string_view forms;       ///< the accepted forms, for errors: "track, track:body=NAME,..."
+};
+
+/// default, track, free: in the order list-cameras prints them.
+const std::vector<CameraKind>& CameraKinds();
 
 /// One parsed camera.
 struct CameraSpec {

@@ -115,6 +115,27 @@ TEST(CameraSpec, DefaultIsGymnasiumsCamera) {
   EXPECT_DOUBLE_EQ(spec.free.lookat[2], 0.55);
 }
 
+// The kinds are listed once (CameraKinds): each parses by its name (free with a key), and a
+// misspelt one is refused with the nearest kind and every kind's accepted forms.
+TEST(CameraSpec, EveryKindOfTheListParsesAndIsNamedInTheRefusal) {
+  ASSERT_EQ(CameraKinds().size(), 3u);
+  for (const CameraKind& kind : CameraKinds()) {
+    const std::string text =
+        std::string(kind.completion) + (kind.completion.back() == ':' ? "azimuth=90" : "");
+    EXPECT_NO_THROW(ParseCameraList(text, Model())) << text;
+  }
+  try {
+    ParseCameraList("trak", Model());
+    FAIL() << "'trak' should be rejected";
+  } catch (const UsageError& e) {
+    const std::string message = e.what();
+    EXPECT_NE(message.find("did you mean 'track'?"), std::string::npos) << message;
+    for (const CameraKind& kind : CameraKinds()) {
+      EXPECT_NE(message.find(std::string(kind.forms)), std::string::npos) << kind.name;
+    }
+  }
+}
+
 // One invalid spec and the substrings its message must hold.
 struct InvalidCase {
   std::string spec;
