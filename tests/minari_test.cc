@@ -1006,7 +1006,11 @@ TEST(MinariCommands, RolloutInterruptedLeavesNoDataset) {
                                           std::to_string(++i) + " --minari-root " + root.string() +
                                           " --minari ri/push-v0",
                                       log);
-    std::this_thread::sleep_for(std::chrono::milliseconds(1200));
+    // once the rollout handles the signal (its episodes started; before that the default
+    // action ends it, with nothing to say), and a moment into its episodes: a fixed wait alone
+    // came before that under the sanitizers
+    ASSERT_TRUE(testing::WaitForSignalHandler(pid, sig)) << ReadFile(log);
+    std::this_thread::sleep_for(std::chrono::milliseconds(300));
     kill(pid, sig);
     EXPECT_EQ(WaitExit(pid), 128 + sig) << ReadFile(log);
     EXPECT_NE(ReadFile(log).find("nothing written"), std::string::npos) << ReadFile(log);

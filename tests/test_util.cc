@@ -9,11 +9,13 @@
 #include <array>
 #include <cctype>
 #include <cerrno>
+#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <random>
 #include <sstream>
+#include <thread>
 
 namespace fetchscope::testing {
 
@@ -221,6 +223,22 @@ std::map<std::string, std::string> FfprobeFormatTags(const std::filesystem::path
     tags[name] = value.get<std::string>();
   }
   return tags;
+}
+
+bool WaitForSignalHandler(pid_t pid, int signal, double seconds) {
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
+  while (std::chrono::steady_clock::now() < deadline) {
+    std::ifstream status("/proc/" + std::to_string(pid) + "/status");
+    if (!status) return false;
+    std::string line;
+    while (std::getline(status, line)) {
+      if (line.rfind("SigCgt:", 0) != 0) continue;
+      const unsigned long long caught = std::stoull(line.substr(7), nullptr, 16);
+      if ((caught >> (signal - 1)) & 1ULL) return true;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  return false;
 }
 
 nlohmann::json PageBlock(const std::string& html, const std::string& id) {

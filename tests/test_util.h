@@ -81,6 +81,11 @@ pid_t SpawnFetchscope(const std::string& args, const std::filesystem::path& log)
 /// Waits for `pid`: its exit status, or 128 + the signal that ended it.
 int WaitExit(pid_t pid);
 
+/// Waits up to `seconds` until process `pid` has a handler of its own for `signal` (SigCgt in
+/// /proc/PID/status): from then on a signal is the command's to handle, not the default's death.
+/// False when it never did (or the process ended).
+bool WaitForSignalHandler(pid_t pid, int signal, double seconds = 60);
+
 /// ffprobe's JSON for `path` (-count_frames -show_entries SHOW_ENTRIES -of json); a failed probe
 /// fails the test and gives a discarded value.
 nlohmann::json FfprobeJson(const std::filesystem::path& path, const std::string& show_entries);

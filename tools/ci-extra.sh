@@ -16,7 +16,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 root=$(pwd)
 jobs=${JOBS:-$(nproc)}
-fuzz_seconds=${FUZZ_SECONDS:-20}
+fuzz_seconds=${FUZZ_SECONDS:-12}
 stages=("$@")
 [[ ${#stages[@]} -eq 0 ]] && stages=(asan fuzz valgrind)
 supp="$root/tools/sanitizers"
