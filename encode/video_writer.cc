@@ -9,6 +9,7 @@
 #include <fstream>
 #include <iterator>
 #include <mutex>
+#include <optional>
 #include <sstream>
 #include <system_error>
 #include <utility>
@@ -20,6 +21,7 @@
 #include "base/suggest.h"
 #include "encode/av_handles.h"
 #include "encode/av_log.h"
+#include "encode/gif_palette.h"
 #include "encode/video_files.h"
 #include "encode/video_format.h"
 #include "encode/video_options.h"
@@ -39,12 +41,6 @@ namespace {
 namespace fs = std::filesystem;
 
 std::string Quoted(const std::string& s) { return "'" + s + "'"; }
-
-// Frees a filter graph and every filter in it.
-struct FilterGraphDeleter {
-  void operator()(AVFilterGraph* graph) const noexcept { avfilter_graph_free(&graph); }
-};
-using FilterGraphPtr = std::unique_ptr<AVFilterGraph, FilterGraphDeleter>;
 
 // Removes the file it was given (Adopt) on destruction unless Release()d.
 class TemporaryFile {
@@ -124,9 +120,10 @@ struct VideoWriter::Impl {
   void SendFrame(const AVFrame* frame);
   void Finish();
   // GIF: the palette filter graph, and frames through it.
-  void OpenGifFilter();
-  void PushGifFrame(const uint8_t* rgb);  // nullptr: end of the clip
-  void DrainGifFilter();
+  // the palette filter's frames into the encoder
+  void DrainGifFilter() {
+    gif_filter->Drain([this](const AVFrame* f) { SendFrame(f); });
+  }
   bool GifKeeps(int index) const;
 
   std::string final_path;
@@ -149,12 +146,8 @@ struct VideoWriter::Impl {
   double convert_cpu_s = 0, encode_cpu_s = 0;  // thread CPU (convert_cpu_s())
   bool finished = false;
   bool gif = false;
-  int gif_fps = 0;           // options.gif_fps, at most options.fps
-  FilterGraphPtr gif_graph;  // buffer -> scale -> split -> palettegen/paletteuse -> buffersink
-  AVFilterContext* gif_source = nullptr;  // owned by gif_graph
-  AVFilterContext* gif_sink = nullptr;    // owned by gif_graph
-  FramePtr gif_input;                     // RGB24 frame handed to the graph
-  FramePtr gif_output;                    // PAL8 frame out of the graph
+  int gif_fps = 0;                             // options.gif_fps, at most options.fps
+  std::optional<GifPaletteFilter> gif_filter;  // GIF: frames in at options' size, PAL8 out
 };
 
 VideoWriter::Impl::Impl(const std::string& path, const VideoOptions& opts)
@@ -180,7 +173,7 @@ VideoWriter::Impl::Impl(const std::string& path, const VideoOptions& opts)
                          (2L * options.width)));
     OpenEncoder();
     OpenOutput();
-    OpenGifFilter();
+    gif_filter.emplace(options.width, options.height, options.fps, encoded_width, encoded_height);
     packet.reset(av_packet_alloc());
     if (!packet) throw RunError("out of memory allocating a video packet");
     return;
@@ -427,7 +420,7 @@ void VideoWriter::Impl::ConvertFrame(const uint8_t* rgb) {
     }
     case VideoPixels::kYuv420p:
       break;
-    case VideoPixels::kPal8:  // frames go through the palette filter (PushGifFrame) instead
+    case VideoPixels::kPal8:  // frames go through the palette filter (GifPaletteFilter) instead
       throw RunError("internal: palette frames are not converted one by one");
   }
   if (encoded_width == options.width && encoded_height == options.height) {
@@ -478,7 +471,7 @@ void VideoWriter::Impl::Finish() {
     throw RunError("video " + Quoted(final_path) + " has no frames: nothing written");
   }
   if (gif) {
-    PushGifFrame(nullptr);  // palettegen sees the whole clip; paletteuse then lets frames out
+    gif_filter->Push(nullptr, 0);  // palettegen sees the whole clip; paletteuse lets frames out
     DrainGifFilter();
   }
   KillPoint("video flush");
@@ -518,108 +511,11 @@ void VideoWriter::Impl::Finish() {
   packet.reset();
   encoder.reset();
   muxer.reset();
-  gif_graph.reset();
-  gif_input.reset();
-  gif_output.reset();
+  gif_filter.reset();
 }
 
 bool VideoWriter::Impl::GifKeeps(int index) const {
   return GifKeepsFrame(index, options.fps, gif_fps);  // the first frame at or after each tick
-}
-
-void VideoWriter::Impl::OpenGifFilter() {
-  gif_graph.reset(avfilter_graph_alloc());
-  gif_input.reset(av_frame_alloc());
-  gif_output.reset(av_frame_alloc());
-  if (!gif_graph || !gif_input || !gif_output) throw RunError("out of memory for the GIF filter");
-  gif_graph->nb_threads = 1;  // the same bytes whatever the machine
-  char source_args[160];
-  std::snprintf(source_args, sizeof(source_args),
-                "video_size=%dx%d:pix_fmt=%d:time_base=1/%d:pixel_aspect=1/1", options.width,
-                options.height, static_cast<int>(AV_PIX_FMT_RGB24), options.fps);
-  ClearLastAvError();
-  if (int rc = avfilter_graph_create_filter(&gif_source, avfilter_get_by_name("buffer"), "in",
-                                            source_args, nullptr, gif_graph.get());
-      rc < 0) {
-    throw RunError("cannot create the GIF filter source: " + DescribeAvError(rc));
-  }
-  if (int rc = avfilter_graph_create_filter(&gif_sink, avfilter_get_by_name("buffersink"), "out",
-                                            nullptr, nullptr, gif_graph.get());
-      rc < 0) {
-    throw RunError("cannot create the GIF filter sink: " + DescribeAvError(rc));
-  }
-  // One palette for the whole clip (stats_mode=full), then each frame mapped onto it with
-  // error diffusion; lanczos keeps thin lines when scaling down, and bitexact keeps swscale off
-  // CPU-specific code paths whose rounding differs, so the bytes are the same on every machine.
-  const std::string description =
-      "scale=" + std::to_string(encoded_width) + ":" + std::to_string(encoded_height) +
-      ":flags=lanczos+accurate_rnd+bitexact,split[a][b];"
-      "[a]palettegen=stats_mode=full[p];[b][p]paletteuse=dither=sierra2_4a";
-  AVFilterInOut* outputs = avfilter_inout_alloc();
-  AVFilterInOut* inputs = avfilter_inout_alloc();
-  if (!outputs || !inputs) {
-    avfilter_inout_free(&outputs);
-    avfilter_inout_free(&inputs);
-    throw RunError("out of memory for the GIF filter");
-  }
-  outputs->name = av_strdup("in");
-  outputs->filter_ctx = gif_source;
-  outputs->pad_idx = 0;
-  outputs->next = nullptr;
-  inputs->name = av_strdup("out");
-  inputs->filter_ctx = gif_sink;
-  inputs->pad_idx = 0;
-  inputs->next = nullptr;
-  int rc =
-      avfilter_graph_parse_ptr(gif_graph.get(), description.c_str(), &inputs, &outputs, nullptr);
-  avfilter_inout_free(&outputs);
-  avfilter_inout_free(&inputs);
-  if (rc < 0) {
-    throw RunError("cannot build the GIF palette filter (" + description +
-                   "): " + DescribeAvError(rc) + "; Debian's libavfilter8 has it");
-  }
-  if (rc = avfilter_graph_config(gif_graph.get(), nullptr); rc < 0) {
-    throw RunError("cannot configure the GIF palette filter: " + DescribeAvError(rc));
-  }
-}
-
-void VideoWriter::Impl::PushGifFrame(const uint8_t* rgb) {
-  ClearLastAvError();
-  if (rgb == nullptr) {
-    if (int rc = av_buffersrc_add_frame_flags(gif_source, nullptr, 0); rc < 0) {
-      throw RunError("cannot end the GIF clip: " + DescribeAvError(rc));
-    }
-    return;
-  }
-  AVFrame* in = gif_input.get();
-  av_frame_unref(in);
-  in->format = AV_PIX_FMT_RGB24;
-  in->width = options.width;
-  in->height = options.height;
-  if (int rc = av_frame_get_buffer(in, 0); rc < 0) {
-    throw RunError("cannot allocate a GIF input frame: " + DescribeAvError(rc));
-  }
-  const std::size_t row = static_cast<std::size_t>(options.width) * 3;
-  for (int y = 0; y < options.height; ++y) {
-    std::memcpy(in->data[0] + static_cast<std::size_t>(y) * in->linesize[0], rgb + y * row, row);
-  }
-  in->pts = frames_written;
-  if (int rc = av_buffersrc_add_frame_flags(gif_source, in, AV_BUFFERSRC_FLAG_KEEP_REF); rc < 0) {
-    throw RunError("cannot pass frame " + std::to_string(frames_written) +
-                   " to the GIF filter: " + DescribeAvError(rc));
-  }
-  av_frame_unref(in);
-}
-
-void VideoWriter::Impl::DrainGifFilter() {
-  while (true) {
-    ClearLastAvError();
-    const int rc = av_buffersink_get_frame(gif_sink, gif_output.get());
-    if (rc == AVERROR(EAGAIN) || rc == AVERROR_EOF) return;
-    if (rc < 0) throw RunError("the GIF palette filter failed: " + DescribeAvError(rc));
-    SendFrame(gif_output.get());
-    av_frame_unref(gif_output.get());
-  }
 }
 
 VideoWriter::VideoWriter(const std::string& path, const VideoOptions& options)
@@ -637,7 +533,7 @@ void VideoWriter::AddFrame(const uint8_t* rgb) {
   CpuLap lap;
   if (impl_->gif) {
     if (impl_->GifKeeps(impl_->frames_written)) {
-      impl_->PushGifFrame(rgb);
+      impl_->gif_filter->Push(rgb, impl_->frames_written);
       impl_->DrainGifFilter();
     }
     ++impl_->frames_written;
