@@ -21,4 +21,6 @@ void ThrowPathError(const std::string& message, int error) {
   }
 }
 
+std::string Quoted(const std::string& s) { return "'" + s + "'"; }
+
 }  // namespace fetchscope

@@ -36,4 +36,7 @@ class PolicyInterrupted : public RunError {
 /// with `message`.
 [[noreturn]] void ThrowPathError(const std::string& message, int error);
 
+/// `s` in single quotes, as messages name a value or a path: 'episode_000.mp4'.
+std::string Quoted(const std::string& s);
+
 }  // namespace fetchscope

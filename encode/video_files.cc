@@ -13,8 +13,6 @@
 namespace fetchscope {
 namespace {
 
-std::string Quoted(const std::string& s) { return "'" + s + "'"; }
-
 namespace fs = std::filesystem;
 
 std::string ReadWholeFile(const fs::path& path) {

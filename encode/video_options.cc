@@ -30,8 +30,6 @@ constexpr std::array<const char*, 10> kX264Presets = {
 constexpr std::array<const char*, 10> kNvencPresets = {"p1", "p1", "p2", "p3", "p3",
                                                        "p4", "p5", "p6", "p7", "p7"};
 
-std::string Quoted(const std::string& s) { return "'" + s + "'"; }
-
 }  // namespace
 
 int PresetIndex(const std::string& preset) {

@@ -40,8 +40,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::string Quoted(const std::string& s) { return "'" + s + "'"; }
-
 // Removes the file it was given (Adopt) on destruction unless Release()d.
 class TemporaryFile {
  public:
