@@ -14,8 +14,11 @@
 // (WriteFileAtomically).
 #pragma once
 
+#include <filesystem>
+#include <map>
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace fetchscope {
 
@@ -57,5 +60,23 @@ struct RunFileName {
 
 /// Parses `name` as one of the run's file names (see the top of this file); nullopt otherwise.
 std::optional<RunFileName> ParseRunFileName(const std::string& name);
+
+// Whose file it is, by its content (a run folder keeps only what fetchscope wrote, and refuses to
+// replace anything else):
+
+/// True for a fetchscope trajectory file (an object with env_id, seed and episodes).
+bool IsFetchscopeTrajectory(const std::filesystem::path& path);
+/// True for a video record wrote for episode k: its metadata (MP4 tags, Matroska tags, whose
+/// names are upper case, the GIF comment) holds fetchscope_version and the title
+/// "... episode K (POLICY)" (or `title`). Read in pieces, so a large video costs no more memory
+/// than a small one.
+bool IsFetchscopeVideo(const std::filesystem::path& path, int k, const std::string& title = "");
+/// True when one of `names` (files in `out`) is a video of episode k with fetchscope's tags;
+/// the answer is remembered in `videos`.
+bool EpisodeHasFetchscopeVideo(const std::filesystem::path& out, int k,
+                               const std::vector<std::string>& names, std::map<int, bool>* videos);
+/// True when `path` is a report page fetchscope wrote (it carries the generator tag
+/// `<meta name="generator" content="fetchscope ...">`).
+bool IsFetchscopeReport(const std::filesystem::path& path);
 
 }  // namespace fetchscope

@@ -102,64 +102,7 @@ void CheckWritable(const fs::path& out, const std::string& quoted) {
   ::unlink(probe.c_str());
 }
 
-// True for a fetchscope trajectory file (an object with env_id, seed and episodes).
-bool IsFetchscopeTrajectory(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  const nlohmann::json j = nlohmann::json::parse(in, nullptr, false);
-  return j.is_object() && j.contains("env_id") && j.contains("seed") && j.contains("episodes");
-}
-
-// True for a video record wrote for episode k: its metadata (MP4 tags, Matroska tags, whose names
-// are upper case, the GIF comment) holds fetchscope_version and the title "... episode K
-// (POLICY)" (or `title`). Read in pieces, so a large video costs no more memory than a small one.
-bool IsFetchscopeVideo(const fs::path& path, int k, const std::string& title = "") {
-  const std::string marks[] = {"fetchscope_version",
-                               title.empty() ? " episode " + std::to_string(k) + " (" : title,
-                               "FETCHSCOPE_VERSION"};
-  bool found[2] = {false, false};
-  std::ifstream in(path, std::ios::binary);
-  constexpr size_t kPiece = 1 << 20;
-  const size_t kOverlap = std::max<size_t>(64, marks[1].size());  // longer than either mark
-  std::string buffer;
-  std::string piece(kPiece, '\0');
-  while (in) {
-    in.read(&piece[0], static_cast<std::streamsize>(piece.size()));
-    const size_t n = static_cast<size_t>(in.gcount());
-    if (n == 0) break;
-    buffer.append(piece, 0, n);
-    for (int i = 0; i < 2; ++i) found[i] = found[i] || buffer.find(marks[i]) != std::string::npos;
-    found[0] = found[0] || buffer.find(marks[2]) != std::string::npos;
-    if (found[0] && found[1]) return true;
-    if (buffer.size() > kOverlap) buffer.erase(0, buffer.size() - kOverlap);
-  }
-  return false;
-}
-
-// True when one of `names` is a video of episode k with fetchscope's tags (remembered in
-// `videos`).
-bool EpisodeHasFetchscopeVideo(const fs::path& out, int k, const std::vector<std::string>& names,
-                               std::map<int, bool>* videos) {
-  const auto known = videos->find(k);
-  if (known != videos->end()) return known->second;
-  bool found = false;
-  for (const std::string& name : names) {
-    const std::optional<RunFileName> parsed = ParseRunFileName(name);
-    if (found || !parsed || parsed->episode != k || !IsVideoFileName(name)) continue;
-    found = IsFetchscopeVideo(out / name, k);
-  }
-  (*videos)[k] = found;
-  return found;
-}
-
 }  // namespace
-
-bool IsFetchscopeReport(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::string head(4096, '\0');
-  in.read(&head[0], static_cast<std::streamsize>(head.size()));
-  head.resize(static_cast<size_t>(in.gcount()));
-  return head.find("<meta name=\"generator\" content=\"fetchscope ") != std::string::npos;
-}
 
 ReuseMode ParseReuseMode(bool overwrite, bool resume) {
   if (overwrite && resume) {

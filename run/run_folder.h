@@ -153,10 +153,6 @@ class RunFolder {
   bool committed_ = false;
 };
 
-/// True when `path` is a report page fetchscope wrote (it carries the generator tag
-/// `<meta name="generator" content="fetchscope ...">`).
-bool IsFetchscopeReport(const std::filesystem::path& path);
-
 /// Parses --overwrite/--resume into a mode; both at once is a UsageError.
 ReuseMode ParseReuseMode(bool overwrite, bool resume);
 
