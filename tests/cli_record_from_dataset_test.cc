@@ -15,7 +15,6 @@
 #include <string>
 #include <vector>
 
-#include "dataset/hdf5_handles.h"
 #include "render/overlay.h"
 #include "src/assets.h"
 #include "src/env_spec.h"
@@ -30,10 +29,12 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 using testing::PythonWithH5py;
 using testing::ReadFile;
+using testing::ReplaceMinariActions;
 using testing::RunCommand;
 using testing::RunFetchscope;
 using testing::SourceDir;
 using testing::TempDir;
+using testing::WriteEdited;
 
 std::string Script() { return (SourceDir() / "tests/data/minari/minari_in_h5py.py").string(); }
 
@@ -367,25 +368,9 @@ class RecordFromBadDataset : public ::testing::Test {
   fs::path Hdf5() const { return root_ / "bad/push-v0/data/main_data.hdf5"; }
   fs::path Metadata() const { return root_ / "bad/push-v0/data/metadata.json"; }
   void EditMetadata(const std::string& from, const std::string& to) {
-    const size_t at = metadata_.find(from);
-    ASSERT_NE(at, std::string::npos) << from;
-    std::ofstream(Metadata()) << metadata_.substr(0, at) + to + metadata_.substr(at + from.size());
+    WriteEdited(Metadata(), metadata_, from, to);
   }
-  // replaces episode_1's actions with `rows` rows (none: removed)
-  void ReplaceActions(hsize_t rows) {
-    const H5File file(H5Fopen(Hdf5().c_str(), H5F_ACC_RDWR, H5P_DEFAULT));
-    ASSERT_TRUE(file.valid());
-    ASSERT_GE(H5Ldelete(file.get(), "episode_1/actions", H5P_DEFAULT), 0);
-    if (rows == 0) return;
-    const hsize_t dims[2] = {rows, 4};
-    const H5Dataspace space(H5Screate_simple(2, dims, nullptr));
-    const H5Dataset dset(H5Dcreate2(file.get(), "episode_1/actions", H5T_IEEE_F32LE, space.get(),
-                                    H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT));
-    ASSERT_TRUE(dset.valid());
-    std::vector<float> zeros(rows * 4, 0.0f);
-    ASSERT_GE(H5Dwrite(dset.get(), H5T_NATIVE_FLOAT, H5S_ALL, H5S_ALL, H5P_DEFAULT, zeros.data()),
-              0);
-  }
+  void ReplaceActions(size_t rows) { ReplaceMinariActions(Hdf5(), "episode_1", rows); }
   void ExpectOneLine(const fs::path& file, const std::string& what) {
     const fs::path out = tmp_.path() / "out";
     const auto r = RunFetchscope("record --from bad/push-v0 --minari-root " + root_.string() +

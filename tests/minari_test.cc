@@ -21,7 +21,6 @@
 #include <thread>
 
 #include "base/errors.h"
-#include "dataset/hdf5_handles.h"
 #include "dataset/minari_reader.h"
 #include "dataset/minari_replay.h"
 #include "dataset/minari_trajectory.h"
@@ -41,12 +40,14 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 using testing::PythonWithH5py;
 using testing::ReadFile;
+using testing::ReplaceMinariActions;
 using testing::RunCommand;
 using testing::RunFetchscope;
 using testing::SourceDir;
 using testing::SpawnFetchscope;
 using testing::TempDir;
 using testing::WaitExit;
+using testing::WriteEdited;
 
 std::string Script() { return (SourceDir() / "tests/data/minari/minari_h5py.py").string(); }
 
@@ -405,25 +406,9 @@ class MinariBadInput : public ::testing::Test {
   fs::path Hdf5() const { return dir_ / "data/main_data.hdf5"; }
   fs::path Metadata() const { return dir_ / "data/metadata.json"; }
   void EditMetadata(const std::string& from, const std::string& to) {
-    const size_t at = metadata_.find(from);
-    ASSERT_NE(at, std::string::npos) << from;
-    WriteText(Metadata(), metadata_.substr(0, at) + to + metadata_.substr(at + from.size()));
+    WriteEdited(Metadata(), metadata_, from, to);
   }
-  // replaces episode_1's actions with a dataset of `rows` rows (or none)
-  void ReplaceActions(hsize_t rows) {
-    const H5File file(H5Fopen(Hdf5().c_str(), H5F_ACC_RDWR, H5P_DEFAULT));
-    ASSERT_TRUE(file.valid());
-    ASSERT_GE(H5Ldelete(file.get(), "episode_1/actions", H5P_DEFAULT), 0);
-    if (rows == 0) return;
-    const hsize_t dims[2] = {rows, 4};
-    const H5Dataspace space(H5Screate_simple(2, dims, nullptr));
-    const H5Dataset dset(H5Dcreate2(file.get(), "episode_1/actions", H5T_IEEE_F32LE, space.get(),
-                                    H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT));
-    ASSERT_TRUE(dset.valid());
-    std::vector<float> zeros(rows * 4, 0.0f);
-    ASSERT_GE(H5Dwrite(dset.get(), H5T_NATIVE_FLOAT, H5S_ALL, H5S_ALL, H5P_DEFAULT, zeros.data()),
-              0);
-  }
+  void ReplaceActions(size_t rows) { ReplaceMinariActions(Hdf5(), "episode_1", rows); }
   void ExpectOneLine(const fs::path& file, const std::string& what) {
     ::testing::internal::CaptureStderr();
     std::string message;

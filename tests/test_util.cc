@@ -17,6 +17,8 @@
 #include <sstream>
 #include <thread>
 
+#include "dataset/hdf5_handles.h"
+
 namespace fetchscope::testing {
 
 CommandResult RunCommand(const std::string& command) {
@@ -265,6 +267,29 @@ std::string PythonWithH5py() {
     }
   }
   return "";
+}
+
+void WriteEdited(const std::filesystem::path& file, const std::string& text,
+                 const std::string& from, const std::string& to) {
+  const size_t at = text.find(from);
+  ASSERT_NE(at, std::string::npos) << file << " lacks " << from;
+  std::ofstream(file, std::ios::binary) << text.substr(0, at) + to + text.substr(at + from.size());
+}
+
+void ReplaceMinariActions(const std::filesystem::path& hdf5, const std::string& episode,
+                          size_t rows) {
+  const H5File file(H5Fopen(hdf5.c_str(), H5F_ACC_RDWR, H5P_DEFAULT));
+  ASSERT_TRUE(file.valid()) << hdf5;
+  const std::string name = episode + "/actions";
+  ASSERT_GE(H5Ldelete(file.get(), name.c_str(), H5P_DEFAULT), 0) << name;
+  if (rows == 0) return;
+  const hsize_t dims[2] = {rows, 4};
+  const H5Dataspace space(H5Screate_simple(2, dims, nullptr));
+  const H5Dataset dset(H5Dcreate2(file.get(), name.c_str(), H5T_IEEE_F32LE, space.get(),
+                                  H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT));
+  ASSERT_TRUE(dset.valid()) << name;
+  const std::vector<float> zeros(rows * 4, 0.0f);
+  ASSERT_GE(H5Dwrite(dset.get(), H5T_NATIVE_FLOAT, H5S_ALL, H5S_ALL, H5P_DEFAULT, zeros.data()), 0);
 }
 
 FrameInfo ReachSuccessStep() {

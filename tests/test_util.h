@@ -103,6 +103,16 @@ int DecodedFrames(const std::filesystem::path& video);
 /// A python3 that imports h5py and numpy: the one on PATH, else Debian's; "" when none.
 std::string PythonWithH5py();
 
+/// Writes `text` to `file` with its first `from` replaced by `to` (a test's damaged metadata);
+/// fails the test, writing nothing, where `text` lacks `from`.
+void WriteEdited(const std::filesystem::path& file, const std::string& text,
+                 const std::string& from, const std::string& to);
+
+/// Replaces `episode`'s actions in the Minari HDF5 file `hdf5` ("episode_1") by `rows` rows of
+/// four float32 zeros; with 0 rows they are only removed. Fails the test where it cannot.
+void ReplaceMinariActions(const std::filesystem::path& hdf5, const std::string& episode,
+                          size_t rows);
+
 /// A running `fetchscope serve ARGS --port 0 --token-file DIR/token` (output in DIR/serve.log),
 /// once it has printed its URL; stopped with SIGINT and waited for on destruction.
 class ServeProcess {
