@@ -3,7 +3,13 @@
 #include <httplib.h>
 #include <sys/socket.h>
 
+#include <algorithm>
+#include <condition_variable>
 #include <cstdio>
+#include <deque>
+#include <mutex>
+#include <thread>
+#include <utility>
 
 #include "base/errors.h"
 #include "inspect/html_page.h"
@@ -54,6 +60,60 @@ std::string CookieValue(const httplib::Request& req, const std::string& name) {
   return "";
 }
 
+// cpp-httplib's task queue: each connection on a thread of its own, at most `max` at once (more
+// wait for one to end). A fixed pool of 16 threads was held by 16 connections that sent their
+// headers a byte a second (no token needed for that), and the page waited behind them.
+class ConnectionThreads : public httplib::TaskQueue {
+ public:
+  explicit ConnectionThreads(size_t max) : max_(max) {}
+
+  void enqueue(std::function<void()> fn) override {
+    std::unique_lock<std::mutex> lock(mutex_);
+    if (running_ >= max_) {
+      waiting_.push_back(std::move(fn));
+      return;
+    }
+    ++running_;
+    try {
+      std::thread([this, fn = std::move(fn)]() mutable { Serve(std::move(fn)); }).detach();
+    } catch (const std::system_error&) {  // no thread to be had (the user's process limit)
+      if (--running_ > 0) {
+        waiting_.push_back(std::move(fn));  // a running thread takes it next
+        return;
+      }
+      lock.unlock();
+      fn();  // on the accepting thread: slower, but served
+    }
+  }
+
+  // httplib calls it once it has stopped accepting, and deletes the queue after it returns
+  void shutdown() override {
+    std::unique_lock<std::mutex> lock(mutex_);
+    idle_.wait(lock, [this] { return running_ == 0; });
+  }
+
+ private:
+  // A connection's thread: serves it, then whichever waits, then ends.
+  void Serve(std::function<void()> fn) {
+    for (;;) {
+      fn();
+      std::lock_guard<std::mutex> lock(mutex_);
+      if (waiting_.empty()) {
+        if (--running_ == 0) idle_.notify_all();
+        return;
+      }
+      fn = std::move(waiting_.front());
+      waiting_.pop_front();
+    }
+  }
+
+  const size_t max_;
+  std::mutex mutex_;
+  std::condition_variable idle_;
+  size_t running_ = 0;
+  std::deque<std::function<void()>> waiting_;
+};
+
 }  // namespace
 
 std::string ServePage(const Engine& engine) {
@@ -65,8 +125,8 @@ Server::Server(Engine& engine, ServerOptions options)
       options_(std::move(options)),
       http_(std::make_unique<httplib::Server>()),
       page_(ServePage(engine)) {
-  const int threads = options_.threads;
-  http_->new_task_queue = [threads] { return new httplib::ThreadPool(threads); };
+  const size_t max_connections = static_cast<size_t>(std::max(1, options_.max_connections));
+  http_->new_task_queue = [max_connections] { return new ConnectionThreads(max_connections); };
   http_->set_payload_max_length(4096);     // every parameter travels in the query
   http_->set_keep_alive_timeout(2);        // an idle browser connection gives its thread back
   http_->set_keep_alive_max_count(10000);  // a dragging page keeps its connection (default: 5)
@@ -99,7 +159,17 @@ void Server::Routes() {
     if (given.empty()) given = CookieValue(req, CookieName());
     const std::string auth = req.get_header_value("Authorization");
     if (given.empty() && auth.rfind("Bearer ", 0) == 0) given = auth.substr(7);
-    if (SameToken(given, options_.token)) return httplib::Server::HandlerResponse::Unhandled;
+    if (SameToken(given, options_.token)) {
+      // a POST with no Content-Length (curl -X POST) has no body (RFC 9112, 6.3): answered here,
+      // where cpp-httplib would wait its read timeout for one and then refuse it
+      const auto post = posts_.find(req.path);
+      if (req.method == "POST" && post != posts_.end() && !req.has_header("Content-Length") &&
+          !req.has_header("Transfer-Encoding")) {
+        post->second(req, res);
+        return httplib::Server::HandlerResponse::Handled;
+      }
+      return httplib::Server::HandlerResponse::Unhandled;
+    }
     SendError(res, 403,
               given.empty() ? "no token: open the URL fetchscope serve printed (it carries "
                               "?token=...), or send \"Authorization: Bearer TOKEN\""
@@ -139,9 +209,9 @@ void Server::Routes() {
   http_->Get("/api/page", Api([this](const httplib::Request&, httplib::Response& res) {
                SendJson(res, engine_.PageData());
              }));
-  http_->Post("/api/session", Api([this](const httplib::Request&, httplib::Response& res) {
-                SendJson(res, {{"session", engine_.NewSession()}});
-              }));
+  Post("/api/session", Api([this](const httplib::Request&, httplib::Response& res) {
+         SendJson(res, {{"session", engine_.NewSession()}});
+       }));
   http_->Get("/api/episode", Api([this](const httplib::Request& req, httplib::Response& res) {
                const std::string session = SessionParam(req.params);
                SendJson(res, engine_.Episode(session, ParseEpisodeRequest(req.params)));
@@ -160,27 +230,27 @@ void Server::Routes() {
                const std::string session = SessionParam(req.params);
                SendJson(res, engine_.Pick(session, ParsePickRequest(req.params)));
              }));
-  http_->Post("/api/live/start", Api([this](const httplib::Request& req, httplib::Response& res) {
-                const std::string session = SessionParam(req.params);
-                SendJson(res, engine_.StartLive(session, ParseStartRequest(req.params)));
-              }));
-  http_->Post("/api/live/step", Api([this](const httplib::Request& req, httplib::Response& res) {
-                const std::string session = SessionParam(req.params);
-                SendJson(res, engine_.StepLive(session, ParseStepRequest(req.params)));
-              }));
-  http_->Post("/api/live/back", Api([this](const httplib::Request& req, httplib::Response& res) {
-                const std::string session = SessionParam(req.params);
-                ParseStepRequest({});  // no parameters of its own
-                SendJson(res, engine_.BackLive(session));
-              }));
-  http_->Post("/api/live/save", Api([this](const httplib::Request& req, httplib::Response& res) {
-                const std::string session = SessionParam(req.params);
-                // the view the page shows goes into the record command (camera, overlays, size)
-                httplib::Params view = req.params;
-                for (const char* name : {"session", "source", "episode", "t"}) view.erase(name);
-                view.emplace("source", "live");
-                SendJson(res, engine_.SaveLive(session, ParseViewRequest(view)));
-              }));
+  Post("/api/live/start", Api([this](const httplib::Request& req, httplib::Response& res) {
+         const std::string session = SessionParam(req.params);
+         SendJson(res, engine_.StartLive(session, ParseStartRequest(req.params)));
+       }));
+  Post("/api/live/step", Api([this](const httplib::Request& req, httplib::Response& res) {
+         const std::string session = SessionParam(req.params);
+         SendJson(res, engine_.StepLive(session, ParseStepRequest(req.params)));
+       }));
+  Post("/api/live/back", Api([this](const httplib::Request& req, httplib::Response& res) {
+         const std::string session = SessionParam(req.params);
+         ParseStepRequest({});  // no parameters of its own
+         SendJson(res, engine_.BackLive(session));
+       }));
+  Post("/api/live/save", Api([this](const httplib::Request& req, httplib::Response& res) {
+         const std::string session = SessionParam(req.params);
+         // the view the page shows goes into the record command (camera, overlays, size)
+         httplib::Params view = req.params;
+         for (const char* name : {"session", "source", "episode", "t"}) view.erase(name);
+         view.emplace("source", "live");
+         SendJson(res, engine_.SaveLive(session, ParseViewRequest(view)));
+       }));
 }
 
 int Server::Bind() {
@@ -202,6 +272,11 @@ int Server::Bind() {
   }
   options_.port = port;
   return port;
+}
+
+void Server::Post(const std::string& path, Handler handler) {
+  posts_[path] = handler;
+  http_->Post(path, std::move(handler));
 }
 
 bool Server::Run() { return http_->listen_after_bind(); }

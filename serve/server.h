@@ -16,6 +16,8 @@
 //   POST /api/live/save         the live episode as a replay trajectory, with its record command
 #pragma once
 
+#include <functional>
+#include <map>
 #include <memory>
 #include <string>
 
@@ -23,7 +25,9 @@
 
 namespace httplib {
 class Server;
-}
+struct Request;
+struct Response;
+}  // namespace httplib
 
 namespace fetchscope::serve {
 
@@ -32,7 +36,9 @@ struct ServerOptions {
   std::string host = "127.0.0.1";  ///< --host
   int port = 8765;                 ///< --port; 0: any free port
   std::string token;               ///< the access token (serve/token.h)
-  int threads = 16;                ///< connections served at once
+  /// connections served at once, each on its own thread (more wait for one to end): a few slow
+  /// or idle clients never hold every thread while the page waits
+  int max_connections = 256;
 };
 
 class Server {
@@ -56,10 +62,15 @@ class Server {
 
  private:
   void Routes();
+  /// Registers `handler` for POST `path`, also for a POST without Content-Length (curl -X POST),
+  /// which cpp-httplib would read until its read timeout and then refuse.
+  using Handler = std::function<void(const httplib::Request&, httplib::Response&)>;
+  void Post(const std::string& path, Handler handler);
   Engine& engine_;
   ServerOptions options_;
   std::unique_ptr<httplib::Server> http_;
-  std::string page_;  // the page's HTML, made once
+  std::string page_;                      // the page's HTML, made once
+  std::map<std::string, Handler> posts_;  // Post's handlers by path
 };
 
 /// The page's HTML for `engine` (inspect/html_page.h, PageKind::kServe).

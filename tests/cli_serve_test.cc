@@ -4,9 +4,12 @@
 // frame is render's frame of that state, pixel for pixel; a saved session's record command
 // re-renders it byte for byte; sessions are independent; the port, the token file and the
 // signals behave as the guide says.
+#include <arpa/inet.h>
 #include <gtest/gtest.h>
 #include <httplib.h>
+#include <netinet/in.h>
 #include <signal.h>
+#include <sys/socket.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -81,6 +84,37 @@ fs::path RecordRun(const fs::path& dir, int episodes, int steps) {
       " --width 96 --height 72 --quiet --out '" + (dir / "run").string() + "'");
   EXPECT_EQ(r.exit_code, 0) << r.output;
   return dir / "run";
+}
+
+// A raw TCP connection to the server on 127.0.0.1, for what no HTTP client library sends; its
+// reads give up after 60 s. -1 where it cannot connect.
+int Connect(int port) {
+  const int fd = socket(AF_INET, SOCK_STREAM, 0);
+  if (fd < 0) return -1;
+  sockaddr_in addr{};
+  addr.sin_family = AF_INET;
+  addr.sin_port = htons(static_cast<uint16_t>(port));
+  addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  const timeval patience{60, 0};
+  setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &patience, sizeof(patience));
+  if (connect(fd, reinterpret_cast<const sockaddr*>(&addr), sizeof(addr)) != 0) {
+    close(fd);
+    return -1;
+  }
+  return fd;
+}
+
+bool SendAll(int fd, const std::string& bytes) {
+  return send(fd, bytes.data(), bytes.size(), MSG_NOSIGNAL) == static_cast<ssize_t>(bytes.size());
+}
+
+// Everything the server sends until it closes the connection (or 60 s pass).
+std::string ReadUntilClosed(int fd) {
+  std::string text;
+  char buffer[4096];
+  ssize_t n;
+  while ((n = recv(fd, buffer, sizeof(buffer), 0)) > 0) text.append(buffer, n);
+  return text;
 }
 
 // Every refusal: its status and one line of JSON naming what was wrong.
@@ -242,6 +276,64 @@ TEST(ServeTest, AHundredConcurrentRequestsAreAllAnswered) {
   EXPECT_GT(statuses[200], 0);
   EXPECT_EQ(api.Get("/api/frame?session=" + s + "&source=live")->status, 200);
   EXPECT_EQ(serve.Stop(SIGTERM), 143) << serve.log();
+}
+
+// Clients that send their headers a line at a time and never end them need no token: 40 of them
+// held the 16 threads of the pool serve had, and the page's own request got no answer. Now each
+// connection has a thread of its own.
+TEST(ServeTest, SlowClientsWithoutTheTokenDoNotKeepThePageWaiting) {
+  TempDir dir;
+  ServeProcess serve("--env-id FetchReach-v4", dir.path());
+  ASSERT_TRUE(serve.started()) << serve.log();
+  std::vector<int> slow;
+  for (int i = 0; i < 40; ++i) {
+    const int fd = Connect(serve.port);
+    ASSERT_GE(fd, 0);
+    EXPECT_TRUE(SendAll(fd, "GET /api/page HTTP/1.1\r\nHost: 127.0.0.1\r\n"));
+    slow.push_back(fd);
+  }
+  std::atomic<bool> done{false};
+  std::thread drip([&] {  // a header line each, every 0.3 s: well within the 5 s read timeout
+    while (!done) {
+      for (int fd : slow) SendAll(fd, "X-Slow: 1\r\n");
+      std::this_thread::sleep_for(std::chrono::milliseconds(300));
+    }
+  });
+  Api api(serve);
+  api.client.set_read_timeout(30);
+  const httplib::Result page = api.Get("/api/page");
+  done = true;
+  drip.join();
+  for (int fd : slow) close(fd);
+  ASSERT_TRUE(page) << "the page's request got no answer within 30 s";
+  EXPECT_EQ(page->status, 200) << page->body;
+  EXPECT_EQ(serve.Stop(SIGINT), 130) << serve.log();
+}
+
+// curl -X POST sends no Content-Length: the request has no body (RFC 9112, 6.3) and is answered
+// at once, not refused with a bare 400 after cpp-httplib's 5 s read timeout.
+TEST(ServeTest, APostWithoutContentLengthIsAnswered) {
+  TempDir dir;
+  ServeProcess serve("--env-id FetchReach-v4", dir.path());
+  ASSERT_TRUE(serve.started()) << serve.log();
+  const int fd = Connect(serve.port);
+  ASSERT_GE(fd, 0);
+  ASSERT_TRUE(
+      SendAll(fd, "POST /api/session HTTP/1.1\r\nHost: 127.0.0.1\r\nAuthorization: Bearer " +
+                      serve.token + "\r\nConnection: close\r\n\r\n"));
+  const std::string answer = ReadUntilClosed(fd);
+  close(fd);
+  EXPECT_EQ(answer.rfind("HTTP/1.1 200", 0), 0u) << answer;
+  EXPECT_NE(answer.find("{\"session\":\""), std::string::npos) << answer;
+  // without the token it is still refused, body or not
+  const int other = Connect(serve.port);
+  ASSERT_GE(other, 0);
+  ASSERT_TRUE(
+      SendAll(other, "POST /api/session HTTP/1.1\r\nHost: 127.0.0.1\r\nConnection: close\r\n\r\n"));
+  const std::string refused = ReadUntilClosed(other);
+  close(other);
+  EXPECT_EQ(refused.rfind("HTTP/1.1 403", 0), 0u) << refused;
+  EXPECT_EQ(serve.Stop(SIGINT), 130) << serve.log();
 }
 
 TEST(ServeTest, ALiveFrameIsRendersFramePixelForPixel) {
