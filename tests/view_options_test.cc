@@ -171,7 +171,8 @@ TEST(ViewOptionsTest, BadValuesAreRefusedWithOneLineNamingThem) {
     return out;
   }();
   for (const auto& [view, expected] : cases) {
-    const std::string message = UsageMessage([&] { ResolveView(view, Model()); });
+    // (a structured binding is captured by name only from C++20: clang 14 refuses it)
+    const std::string message = UsageMessage([&, &view = view] { ResolveView(view, Model()); });
     EXPECT_NE(message.find(expected), std::string::npos) << "'" << message << "'";
     EXPECT_EQ(message.find('\n'), std::string::npos) << message;
   }
@@ -272,7 +273,7 @@ TEST(VideoFormatsOptionTest, ParsesCommaListsIntoTheTablesRows) {
            {"gif,webm,gif", "--format 'gif,webm,gif' names gif twice: give each format once"},
            {"mp4, gfi", "unknown --format 'gfi' in 'mp4, gfi' (did you mean 'gif'?)"},
            {"mp4, mp4", "names mp4 twice"}}) {
-    const std::string message = UsageMessage([&] { ParseVideoFormats(list); });
+    const std::string message = UsageMessage([&, &list = list] { ParseVideoFormats(list); });
     EXPECT_NE(message.find(expected), std::string::npos) << "'" << list << "': " << message;
   }
 }
