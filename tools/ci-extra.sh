@@ -65,6 +65,7 @@ fuzz_one() {  # fuzz_one SEEDS_DIR
   name=$(basename "$seeds")
   work="build-fuzz/corpus/$name"  # grows while fuzzing; the committed seeds stay as they are
   mkdir -p "$work" build-fuzz/artifacts
+  rm -f "build-fuzz/$name.verdict"  # a fuzzer killed before its verdict shows none, not an old one
   if ! ASAN_OPTIONS="detect_leaks=1" UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1" \
       "build-fuzz/fuzz/$name" -max_total_time="$fuzz_seconds" -timeout=10 -rss_limit_mb=2048 \
       -max_len=4096 -print_final_stats=1 -artifact_prefix="build-fuzz/artifacts/$name-" \
@@ -85,7 +86,7 @@ run_fuzz() {
     -DFETCHSCOPE_FUZZ=ON -DBUILD_TESTING=OFF "${launcher[@]}" >/dev/null
   cmake --build build-fuzz -j"$jobs" --target fuzzers
   # each fuzzer is one single-threaded process: $jobs of them at a time, each for its full time
-  local failed=0 all=(fuzz/corpus/*/) i pids name seeds
+  local failed=0 all=(fuzz/corpus/*/) i pid pids name seeds
   stamp "${#all[@]} fuzzers for ${fuzz_seconds} s each, $jobs at a time"
   for ((i = 0; i < ${#all[@]}; i += jobs)); do
     pids=()
@@ -96,7 +97,7 @@ run_fuzz() {
     for pid in "${pids[@]}"; do wait "$pid" || failed=1; done
     for seeds in "${all[@]:i:jobs}"; do
       name=$(basename "$seeds")
-      cat "build-fuzz/$name.verdict"
+      cat "build-fuzz/$name.verdict" 2>/dev/null || echo "ci-extra: $name ended without a verdict"
     done
   done
   stamp "fuzzers done in $((SECONDS - t0)) s"
