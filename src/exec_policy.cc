@@ -97,10 +97,19 @@ class ExecPolicy : public Policy {
   std::string name() const override { return "exec:" + command_; }
 
  private:
+  // The one message for a child that closed its stdin and kept running, whichever way fetchscope
+  // saw it: the write of step t's line failed (EPIPE), or the pipe reported that its reader had
+  // gone (POLLERR) while fetchscope waited for the answer.
+  std::string InputClosed(int t) const {
+    return "exec policy '" + command_ + "' closed its input (stdin) and kept running without " +
+           "answering step " + std::to_string(t) +
+           ": it must keep reading one JSON line per step until fetchscope closes it";
+  }
+
   // The child closed its output: it exited or died. While the run is being stopped that is an
   // interruption (PolicyInterrupted), whatever the child died of; otherwise a failure.
-  // `writing`: the observation could not be written (its stdin is closed); a child still running
-  // then closed its input, not its output.
+  // `writing`: its stdin is closed (the observation could not be written, or the pipe reported
+  // that its reader had gone); a child still running half a second later closed its input.
   std::string Died(int t, bool writing = false) {
     std::string how = "closed its output";
     bool crashed = false;  // a failure of its own: its error (a traceback) is on stderr above
@@ -109,9 +118,7 @@ class ExecPolicy : public Policy {
                              : "was killed by signal " + std::to_string(status->signal);
       crashed = !status->exited() || status->code != 0;
     } else if (writing && !(stop_requested_ && stop_requested_())) {
-      return "exec policy '" + command_ + "' closed its input (stdin) before step " +
-             std::to_string(t) + " and kept running: it must keep reading one JSON line per " +
-             "step until fetchscope closes it";
+      return InputClosed(t);
     }
     if (stop_requested_ && stop_requested_()) {
       throw PolicyInterrupted("exec policy '" + command_ + "' " + how + " at step " +
@@ -143,12 +150,6 @@ class ExecPolicy : public Policy {
              " but no newline followed" + within +
              ": end each answer with a newline and flush it (Python: print(..., flush=True))";
     }
-    // the write end of a pipe whose reader has gone reports POLLERR
-    pollfd out{channel.out_fd(), 0, 0};
-    if (poll(&out, 1, 0) == 1 && (out.revents & (POLLERR | POLLHUP)) != 0) {
-      return who + " closed its input (stdin) and gave no answer for step " + std::to_string(t) +
-             within + ": it must keep reading one JSON line per step until fetchscope closes it";
-    }
     return who + " gave no answer for step " + std::to_string(t) + within +
            " (raise --exec-timeout)";
   }
@@ -169,7 +170,10 @@ class ExecPolicy : public Policy {
       if (left <= 0) throw RunError(NoAnswer(t));
       // the answer's wait ends at once on SIGINT/SIGTERM: the child is ended (its group) and the
       // episode ends at the step it reached, an interruption
-      std::vector<pollfd> fds = {{channel.in_fd(), POLLIN, 0}};
+      // the child's stdin is watched too: the write end of a pipe whose reader has gone reports
+      // POLLERR at once, so a child that closed its input is named as such when it does so, not
+      // when the timeout passes (whichever came first, the write or the close, the same message)
+      std::vector<pollfd> fds = {{channel.in_fd(), POLLIN, 0}, {channel.out_fd(), 0, 0}};
       const int wait_ms = static_cast<int>(std::min<long long>(left, 1000));
       const WaitEnd end = WaitForInput(&fds, wait_ms, /*watch_stop=*/true);
       if (end == WaitEnd::kStop || (stop_requested_ && stop_requested_())) {
@@ -178,6 +182,7 @@ class ExecPolicy : public Policy {
                                 std::to_string(t) + ": the run was being stopped");
       }
       if (end != WaitEnd::kReady) continue;
+      if (fds[0].revents == 0) throw RunError(Died(t, /*writing=*/true));  // only its stdin closed
       if (!channel.ReadSome()) throw RunError(Died(t));
     }
   }

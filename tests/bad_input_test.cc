@@ -573,13 +573,23 @@ std::vector<Case> Matrix() {
        "step 5", kRecordOutputs},
       {"ExecHangsInRecord", record_long + "--exec-timeout 0.3 --policy \"exec:sleep 30\"", 1, "0.3",
        kRecordOutputs},
-      // an answer that never gets its newline, and a child that closed its stdin: each said as
-      // such, not as silence (the child sleeps on; the timeout ends the wait)
+      // an answer that never gets its newline: said as such, not as silence (the child sleeps
+      // on; the timeout ends the wait)
       {"ExecAnswerWithoutNewline",
        rollout + "--exec-timeout 0.5 --policy \"exec:read l; printf '0 0 0 0'; sleep 30\"", 1,
        "answered '0 0 0 0' for step 0 but no newline followed within 0.5 s", rollout_out},
-      {"ExecClosesItsStdin", rollout + "--exec-timeout 0.5 --policy \"exec:exec 0<&-; sleep 30\"",
-       1, "closed its input (stdin) before step 0 and kept running", rollout_out},
+      // a child that closed its stdin and sleeps on: one message whether fetchscope's first write
+      // came before the close (the pipe then reports its reader gone while fetchscope waits) or
+      // after it (EPIPE); the timeout is long, so only seeing the close itself ends the wait in
+      // time (issue 43: the row failed on slow hosts when the two ways had two messages)
+      {"ExecClosesItsStdin", rollout + "--exec-timeout 60 --policy \"exec:exec 0<&-; sleep 90\"", 1,
+       "closed its input (stdin) and kept running without answering step 0", rollout_out},
+      {"ExecClosesItsStdinAfterReading",
+       rollout + "--exec-timeout 60 --policy \"exec:read l; exec 0<&-; sleep 90\"", 1,
+       "closed its input (stdin) and kept running without answering step 0", rollout_out},
+      {"ExecClosesItsStdinAfterAStep",
+       rollout + "--exec-timeout 60 --policy \"exec:read l; echo 0 0 0 0; exec 0<&-; sleep 90\"", 1,
+       "closed its input (stdin) and kept running without answering step 1", rollout_out},
       // ---- --out reuse, --replay-dtype (issue 13)
       {"RecordOverwriteAndResume", record + "--overwrite --resume", 2, "--resume", kRecordOutputs},
       {"RecordOutHoldsARun",
