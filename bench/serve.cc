@@ -124,7 +124,7 @@ nlohmann::json BenchServe(const AssetSource& assets, const std::string& backend,
   serve::ServerOptions server_options;
   server_options.port = 0;
   server_options.token = serve::NewToken();
-  serve::Server server(engine, server_options);
+  serve::Server server(engine, server_options, serve::ServePage(engine));
   const int port = server.Bind();
   std::thread listener([&server] { server.Run(); });
   nlohmann::json out = {{"gl", engine.GlJson()}, {"width", width}, {"height", height}};

@@ -81,7 +81,7 @@ int RunServe(const ServeOptions& o, const CLI::App& sub) {
   server_options.host = o.host;
   server_options.port = o.port;
   server_options.token = token;
-  serve::Server server(engine, server_options);
+  serve::Server server(engine, server_options, serve::ServePage(engine));
   const int port = server.Bind();
   if (o.host != "127.0.0.1" && o.host != "localhost" && o.host != "::1") {
     std::fprintf(stderr,
@@ -90,7 +90,10 @@ int RunServe(const ServeOptions& o, const CLI::App& sub) {
                  "127.0.0.1 with ssh -L is safer)\n",
                  o.host.c_str(), port);
   }
-  const std::string shown_host = o.host == "0.0.0.0" ? "127.0.0.1" : o.host;
+  // an IPv6 address goes in brackets in a URL (http://[::1]:8765/); every interface (0.0.0.0,
+  // ::) is shown as the loopback address, which the ssh -L line forwards to
+  std::string shown_host = o.host == "0.0.0.0" ? "127.0.0.1" : o.host == "::" ? "::1" : o.host;
+  if (shown_host.find(':') != std::string::npos) shown_host = "[" + shown_host + "]";
   for (const serve::Source& s : engine.sources()) {
     std::printf("serve: %s\n", s.title.c_str());
   }
@@ -117,6 +120,9 @@ int RunServe(const ServeOptions& o, const CLI::App& sub) {
       last_sweep = std::chrono::steady_clock::now();
     }
   }
+  // the queue first (what waits is refused at once, the frame being drawn ends), then every
+  // connection: serve exits within a second whatever its clients do
+  engine.Stop();
   server.Stop();
   listener.join();
   const int sig = StopSignal();

@@ -126,12 +126,16 @@ Engine::Engine(std::vector<Source> sources, EngineOptions options)
 }
 
 Engine::~Engine() {
+  Stop();
+  if (thread_.joinable()) thread_.join();
+}
+
+void Engine::Stop() {
   {
     std::lock_guard<std::mutex> lock(mutex_);
     stopping_ = true;
   }
   wake_.notify_all();
-  if (thread_.joinable()) thread_.join();
 }
 
 void Engine::Loop() {

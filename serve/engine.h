@@ -22,6 +22,7 @@
 #include <vector>
 
 #include "render/view.h"
+#include "serve/api.h"
 #include "serve/request.h"
 #include "serve/sources.h"
 #include "src/policy_spec.h"
@@ -43,22 +44,16 @@ struct EngineOptions {
   int max_live_steps = 10000;   ///< steps a live episode may take
 };
 
-/// One encoded frame.
-struct Frame {
-  std::string bytes;         ///< the image file
-  std::string content_type;  ///< "image/jpeg" or "image/png"
-  std::string camera;        ///< the camera shown, as a --camera value
-  double render_ms = 0;      ///< restoring the state and rendering (GL, readback, HUD)
-  double encode_ms = 0;      ///< JPEG or PNG encoding
-};
-
-class Engine {
+class Engine : public Api {
  public:
   /// Starts the engine's thread, which makes the GL context (view.backend, view.gpu) and an
   /// environment per distinct env of `sources`. Throws what that throws (no GL: RunError).
   Engine(std::vector<Source> sources, EngineOptions options);
   /// Stops the thread: what is queued is refused (503), exec: children are ended.
   ~Engine();
+  /// Refuses every request from now on (503), the queued ones at once; the one running finishes.
+  /// The thread ends without waiting for it (the destructor joins it). For a prompt shutdown.
+  void Stop();
   Engine(const Engine&) = delete;
   Engine& operator=(const Engine&) = delete;
 
@@ -69,25 +64,25 @@ class Engine {
 
   /// What the page shows before any request: the sources, the view options, each env's cameras
   /// (names, and a free camera looking along each, for orbiting from it), the policy, the limits.
-  nlohmann::json PageData() const;
+  nlohmann::json PageData() const override;
 
   /// A new session for a page (at most max_sessions; idle ones are freed first). Its id.
-  std::string NewSession();
+  std::string NewSession() override;
   /// The frame of `request`'s view at its step (the session's live episode for source "live").
-  Frame RenderFrame(const std::string& session, const ViewRequest& request);
+  Frame RenderFrame(const std::string& session, const ViewRequest& request) override;
   /// What is at a pixel of a view: {"body", "geom", "site", "color"} or {"body": null}.
-  nlohmann::json Pick(const std::string& session, const PickRequest& request);
+  nlohmann::json Pick(const std::string& session, const PickRequest& request) override;
   /// A served episode's data for the viewer: steps, signals (inspect/viewer.h's EpisodeSignals),
   /// its replay (exact, or a dataset's divergence) and the dtype of its actions.
-  nlohmann::json Episode(const std::string& session, const StepRef& episode);
+  nlohmann::json Episode(const std::string& session, const StepRef& episode) override;
   /// The session's live episode: started from a live env's reset or a served step, stepped by an
   /// action or the policy, one step back, saved (a replay trajectory and the record command that
   /// re-renders it). Each returns the live episode's data ({"steps", "signals", ...}); Save adds
   /// {"files", "command"}.
-  nlohmann::json StartLive(const std::string& session, const StartRequest& request);
-  nlohmann::json StepLive(const std::string& session, const StepRequest& request);
-  nlohmann::json BackLive(const std::string& session);
-  nlohmann::json SaveLive(const std::string& session, const ViewRequest& view);
+  nlohmann::json StartLive(const std::string& session, const StartRequest& request) override;
+  nlohmann::json StepLive(const std::string& session, const StepRequest& request) override;
+  nlohmann::json BackLive(const std::string& session) override;
+  nlohmann::json SaveLive(const std::string& session, const ViewRequest& view) override;
   /// Frees sessions idle for longer than idle_timeout_s; how many are open.
   int ExpireIdleSessions();
 

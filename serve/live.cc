@@ -168,6 +168,13 @@ nlohmann::json Engine::SaveLive(const std::string& session, const ViewRequest& v
     const LiveEpisode& live = *ses.live;
     const Source& src = sources_[live.source];
     const FetchEnv& env = *s.env_of_source[live.source];
+    // the camera goes into the record command: one this env cannot draw is refused here, as a
+    // frame request of it is, not saved into a command that would fail
+    try {
+      ParseCameraList(view.camera, env.model());
+    } catch (const UsageError& e) {
+      throw RequestError(400, std::string("parameter camera: ") + e.what());
+    }
     std::error_code ec;
     fs::create_directories(options_.save_dir, ec);
     const fs::path dir = fs::absolute(options_.save_dir);

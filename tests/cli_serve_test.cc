@@ -26,6 +26,7 @@
 #include <vector>
 
 #include "encode/png_io.h"
+#include "tests/serve_client.h"
 #include "tests/test_util.h"
 
 namespace fetchscope {
@@ -33,47 +34,14 @@ namespace {
 
 namespace fs = std::filesystem;
 using nlohmann::json;
+using serve_client::Api;
+using serve_client::Encode;
+using serve_client::ExpectRefusal;
 using testing::ReadFile;
 using testing::RunCommand;
 using testing::RunFetchscope;
 using testing::ServeProcess;
 using testing::TempDir;
-
-// A client of one server, with its token as a bearer header (or none).
-struct Api {
-  explicit Api(const ServeProcess& serve, bool with_token = true)
-      : client("127.0.0.1", serve.port) {
-    client.set_read_timeout(120);
-    if (with_token) client.set_default_headers({{"Authorization", "Bearer " + serve.token}});
-  }
-  httplib::Result Get(const std::string& path) { return client.Get(path); }
-  httplib::Result Post(const std::string& path) { return client.Post(path, "", "text/plain"); }
-  // the JSON of a 200 answer (fails the test otherwise)
-  json Json(const httplib::Result& r) {
-    EXPECT_TRUE(r) << "no answer";
-    if (!r) return json();
-    EXPECT_EQ(r->status, 200) << r->body;
-    return json::parse(r->body, nullptr, false);
-  }
-  std::string NewSession() { return Json(Post("/api/session")).value("session", ""); }
-  httplib::Client client;
-};
-
-// `text` percent-encoded as a query value
-std::string Encode(const std::string& text) {
-  static const char kHex[] = "0123456789ABCDEF";
-  std::string out;
-  for (unsigned char c : text) {
-    if (std::isalnum(c) || c == '-' || c == '_' || c == '.' || c == '~') {
-      out += static_cast<char>(c);
-    } else {
-      out += '%';
-      out += kHex[c >> 4];
-      out += kHex[c & 15];
-    }
-  }
-  return out;
-}
 
 // A scripted FetchPickAndPlace run of `steps` steps and `episodes` episodes in dir/run.
 fs::path RecordRun(const fs::path& dir, int episodes, int steps) {
@@ -86,49 +54,9 @@ fs::path RecordRun(const fs::path& dir, int episodes, int steps) {
   return dir / "run";
 }
 
-// A raw TCP connection to the server on 127.0.0.1, for what no HTTP client library sends; its
-// reads give up after 60 s. -1 where it cannot connect.
-int Connect(int port) {
-  const int fd = socket(AF_INET, SOCK_STREAM, 0);
-  if (fd < 0) return -1;
-  sockaddr_in addr{};
-  addr.sin_family = AF_INET;
-  addr.sin_port = htons(static_cast<uint16_t>(port));
-  addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  const timeval patience{60, 0};
-  setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &patience, sizeof(patience));
-  if (connect(fd, reinterpret_cast<const sockaddr*>(&addr), sizeof(addr)) != 0) {
-    close(fd);
-    return -1;
-  }
-  return fd;
-}
-
-bool SendAll(int fd, const std::string& bytes) {
-  return send(fd, bytes.data(), bytes.size(), MSG_NOSIGNAL) == static_cast<ssize_t>(bytes.size());
-}
-
-// Everything the server sends until it closes the connection (or 60 s pass).
-std::string ReadUntilClosed(int fd) {
-  std::string text;
-  char buffer[4096];
-  ssize_t n;
-  while ((n = recv(fd, buffer, sizeof(buffer), 0)) > 0) text.append(buffer, n);
-  return text;
-}
-
-// Every refusal: its status and one line of JSON naming what was wrong.
-void ExpectRefusal(const httplib::Result& r, int status, const std::string& says,
-                   const std::string& what) {
-  ASSERT_TRUE(r) << what << ": no answer";
-  EXPECT_EQ(r->status, status) << what << ": " << r->body;
-  EXPECT_EQ(testing::LineCount(r->body), 1) << what << ": " << r->body;
-  const json body = json::parse(r->body, nullptr, false);
-  ASSERT_TRUE(body.is_object() && body.contains("error")) << what << ": " << r->body;
-  EXPECT_NE(body["error"].get<std::string>().find(says), std::string::npos)
-      << what << ": " << r->body;
-  EXPECT_EQ(r->get_header_value("Content-Type"), "application/json") << what;
-}
+int Connect(int port) { return testing::ConnectLoopback(port); }
+using testing::ReadUntilClosed;
+using testing::SendAll;
 
 TEST(ServeTest, EveryRequestNeedsTheTokenAndTheFirstUrlSetsACookie) {
   TempDir dir;

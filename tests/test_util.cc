@@ -1,7 +1,10 @@
 #include "tests/test_util.h"
 
+#include <arpa/inet.h>
 #include <gtest/gtest.h>
+#include <netinet/in.h>
 #include <signal.h>
+#include <sys/socket.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -38,16 +41,20 @@ CommandResult RunCommand(const std::string& command) {
   return result;
 }
 
+std::string FetchscopeBinary() {
+  const char* other = std::getenv("FETCHSCOPE_TEST_BIN");
+  return other && *other ? other : FETCHSCOPE_BIN;
+}
+
 CommandResult RunFetchscope(const std::string& args) {
-  return RunCommand(std::string(FETCHSCOPE_BIN) + " " + args);
+  return RunCommand(FetchscopeBinary() + " " + args);
 }
 
 CommandResult RunFetchscopeStdout(const std::string& args, std::string* stderr_text) {
   char name[] = "/tmp/fetchscope-stderr-XXXXXX";
   const int fd = mkstemp(name);
   if (fd >= 0) close(fd);
-  CommandResult r =
-      RunCommand("{ " + std::string(FETCHSCOPE_BIN) + " " + args + " 2>" + name + "; }");
+  CommandResult r = RunCommand("{ " + FetchscopeBinary() + " " + args + " 2>" + name + "; }");
   if (stderr_text) *stderr_text = ReadFile(name);
   std::remove(name);
   return r;
@@ -146,13 +153,41 @@ int LineCount(const std::string& text) {
 
 pid_t SpawnFetchscope(const std::string& args, const std::filesystem::path& log) {
   const std::string command =
-      "exec " + std::string(FETCHSCOPE_BIN) + " " + args + " </dev/null >" + log.string() + " 2>&1";
+      "exec " + FetchscopeBinary() + " " + args + " </dev/null >" + log.string() + " 2>&1";
   const pid_t pid = fork();
   if (pid == 0) {
     execl("/bin/sh", "sh", "-c", command.c_str(), static_cast<char*>(nullptr));
     _exit(127);
   }
   return pid;
+}
+
+int ConnectLoopback(int port, int patience_s) {
+  const int fd = socket(AF_INET, SOCK_STREAM, 0);
+  if (fd < 0) return -1;
+  sockaddr_in addr{};
+  addr.sin_family = AF_INET;
+  addr.sin_port = htons(static_cast<uint16_t>(port));
+  addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  const timeval patience{patience_s, 0};
+  setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &patience, sizeof(patience));
+  if (connect(fd, reinterpret_cast<const sockaddr*>(&addr), sizeof(addr)) != 0) {
+    close(fd);
+    return -1;
+  }
+  return fd;
+}
+
+bool SendAll(int fd, const std::string& bytes) {
+  return send(fd, bytes.data(), bytes.size(), MSG_NOSIGNAL) == static_cast<ssize_t>(bytes.size());
+}
+
+std::string ReadUntilClosed(int fd) {
+  std::string text;
+  char buffer[4096];
+  ssize_t n;
+  while ((n = recv(fd, buffer, sizeof(buffer), 0)) > 0) text.append(buffer, n);
+  return text;
 }
 
 int WaitExit(pid_t pid) {
@@ -197,6 +232,18 @@ ServeProcess::~ServeProcess() {
 int ServeProcess::Stop(int sig) {
   if (pid <= 0) return -1;
   kill(pid, sig);
+  // a serve that ignores the signal is killed after 30 s (its status then says SIGKILL), so that
+  // a test of a broken server fails instead of waiting for ever
+  int status = 0;
+  for (int i = 0; i < 3000; ++i) {
+    const pid_t done = waitpid(pid, &status, WNOHANG);
+    if (done == pid || (done < 0 && errno != EINTR)) {
+      pid = -1;
+      return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+    }
+    usleep(10 * 1000);
+  }
+  kill(pid, SIGKILL);
   const int code = WaitExit(pid);
   pid = -1;
   return code;

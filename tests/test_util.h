@@ -21,6 +21,9 @@ struct CommandResult {
 };
 
 /// Runs `fetchscope ARGS` (the built binary) through /bin/sh and captures its output.
+/// The fetchscope the black-box tests run: this build's, or $FETCHSCOPE_TEST_BIN when set (to
+/// run the tests against another build, e.g. to see a new test fail on the code before a fix).
+std::string FetchscopeBinary();
 CommandResult RunFetchscope(const std::string& args);
 
 /// Runs an arbitrary shell command and captures its output.
@@ -115,6 +118,14 @@ void ReplaceMinariActions(const std::filesystem::path& hdf5, const std::string& 
 
 /// A running `fetchscope serve ARGS --port 0 --token-file DIR/token` (output in DIR/serve.log),
 /// once it has printed its URL; stopped with SIGINT and waited for on destruction.
+/// A raw TCP connection to 127.0.0.1:`port`, for what no HTTP client library sends; its reads
+/// give up after `patience_s`. -1 where it cannot connect.
+int ConnectLoopback(int port, int patience_s = 60);
+/// Sends all of `bytes` at once (false when the connection took fewer).
+bool SendAll(int fd, const std::string& bytes);
+/// Everything the peer sends until it closes the connection (or the read times out).
+std::string ReadUntilClosed(int fd);
+
 class ServeProcess {
  public:
   ServeProcess(const std::string& args, const std::filesystem::path& dir);

@@ -9,7 +9,10 @@
 (() => {
   performance.mark('fetchscope-serve-script');
   const {el} = FS;
-  const sessionRequest = fetch('/api/session', {method: 'POST', credentials: 'same-origin'});
+  // serve accepts a POST on the cookie only with this Content-Type (and this page's Origin, which
+  // the browser sends): a form or a no-cors fetch on another site's page cannot send it
+  const POST_HEADERS = {'Content-Type': 'application/json'};
+  const sessionRequest = fetch('/api/session', {method: 'POST', credentials: 'same-origin', headers: POST_HEADERS});
   const data = FS.data;
   const page = document.getElementById('page');
   const DEFAULT_FREE = {lookat: [1.3, 0.75, 0.55], distance: 2.5, azimuth: 132, elevation: -14};
@@ -36,7 +39,8 @@
 
   async function api(path, params, method = 'GET') {
     const query = new URLSearchParams({session: state.session, ...params});
-    const response = await fetch(`${path}?${query}`, {method, credentials: 'same-origin'});
+    const response = await fetch(`${path}?${query}`,
+        {method, credentials: 'same-origin', headers: method === 'POST' ? POST_HEADERS : {}});
     const type = response.headers.get('Content-Type') || '';
     const body = type.startsWith('application/json') ? await response.json() : await response.blob();
     if (!response.ok) throw new Error(body.error || `HTTP ${response.status}`);
