@@ -5,6 +5,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "base/confined_file.h"
 #include "base/errors.h"
 #include "base/suggest.h"
 #include "dataset/hdf5_handles.h"
@@ -44,16 +45,15 @@ std::string Hdf5Reason() {
   return descriptions.empty() ? "no reason given" : descriptions.front();
 }
 
+// A regular file of at most kMaxJsonFileBytes (UsageError otherwise: a FIFO, a device, huge).
 std::string ReadText(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) {
+  try {
+    return ReadFileCapped(path, kMaxJsonFileBytes);
+  } catch (const RunError&) {
     Fail(path.string(),
          "cannot be read (a Minari dataset has data/metadata.json beside "
          "data/main_data.hdf5)");
   }
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
 }
 
 // the width of a one-dimensional Box of `dtype`, or 0 when `box` is not one

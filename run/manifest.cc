@@ -7,6 +7,7 @@
 #include <tuple>
 
 #include "base/atomic_file.h"
+#include "base/confined_file.h"
 #include "base/json_util.h"
 #include "encode/video_format.h"
 
@@ -118,12 +119,13 @@ RunParameters ParametersFromJson(const json& j) {
   return p;
 }
 
+// The manifest's bytes: a regular file of at most kMaxJsonFileBytes (UsageError otherwise).
 std::string ReadText(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw ManifestError("cannot read '" + path.string() + "'");
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
+  try {
+    return ReadFileCapped(path, kMaxJsonFileBytes);
+  } catch (const RunError& e) {
+    throw ManifestError(e.what());  // "cannot read 'PATH': REASON"
+  }
 }
 
 json OptionalString(const std::optional<std::string>& s) { return s ? json(*s) : json(nullptr); }
@@ -382,10 +384,12 @@ Manifest ManifestFromJson(const json& j) {
 
 Manifest ReadManifest(const std::filesystem::path& path) {
   json j;
+  const std::string text = ReadText(path);
   try {
-    j = json::parse(ReadText(path));
+    j = json::parse(text);
   } catch (const json::parse_error& e) {
-    throw ManifestError("'" + path.string() + "' is not JSON: " + e.what());
+    throw ManifestError("'" + path.string() +
+                        "' is not JSON: " + DescribeJsonError(e, text.size()));
   }
   try {
     return ManifestFromJson(j);

@@ -192,7 +192,9 @@ ManifestEpisode ManifestEpisodeFromJson(const nlohmann::json& json);
 
 /// Reads the manifest file at `path`. Throws ManifestError naming the file when it cannot be read,
 /// is not JSON, is not a record manifest or has a newer schema version ("'PATH' has manifest schema
-/// version 2; this fetchscope reads versions 0 to 1: use a newer fetchscope").
+/// version 2; this fetchscope reads versions 0 to 1: use a newer fetchscope"), and UsageError when
+/// it is not a regular file or holds more than kMaxJsonFileBytes (base/confined_file.h). Messages
+/// name the file and the byte where its JSON breaks, never its bytes.
 Manifest ReadManifest(const std::filesystem::path& path);
 /// Writes `manifest` to `path` atomically, as DumpJson writes JSON (two-space indent, newline).
 void WriteManifest(const std::filesystem::path& path, const Manifest& manifest);

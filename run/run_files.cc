@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 #include <set>
 
+#include "base/confined_file.h"
 #include "encode/video_format.h"
 
 namespace fetchscope {
@@ -128,8 +129,13 @@ std::optional<RunFileName> ParseRunFileName(const std::string& name) {
 namespace fs = std::filesystem;
 
 bool IsFetchscopeTrajectory(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  const nlohmann::json j = nlohmann::json::parse(in, nullptr, false);
+  std::string text;
+  try {
+    text = ReadFileCapped(path, kMaxJsonFileBytes);  // never a FIFO, a device, a huge file
+  } catch (const std::exception&) {
+    return false;
+  }
+  const nlohmann::json j = nlohmann::json::parse(text, nullptr, false);
   return j.is_object() && j.contains("env_id") && j.contains("seed") && j.contains("episodes");
 }
 
@@ -138,6 +144,8 @@ bool IsFetchscopeVideo(const fs::path& path, int k, const std::string& title) {
                                title.empty() ? " episode " + std::to_string(k) + " (" : title,
                                "FETCHSCOPE_VERSION"};
   bool found[2] = {false, false};
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec)) return false;  // a FIFO would block, a device never end
   std::ifstream in(path, std::ios::binary);
   constexpr size_t kPiece = 1 << 20;
   const size_t kOverlap = std::max<size_t>(64, marks[1].size());  // longer than either mark
@@ -171,6 +179,8 @@ bool EpisodeHasFetchscopeVideo(const fs::path& out, int k, const std::vector<std
 }
 
 bool IsFetchscopeReport(const fs::path& path) {
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec)) return false;  // a FIFO would block
   std::ifstream in(path, std::ios::binary);
   std::string head(4096, '\0');
   in.read(&head[0], static_cast<std::streamsize>(head.size()));

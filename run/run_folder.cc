@@ -13,6 +13,7 @@
 #include <nlohmann/json.hpp>
 
 #include "base/atomic_file.h"
+#include "base/confined_file.h"
 #include "base/errors.h"
 #include "encode/video_format.h"
 #include "run/run_files.h"
@@ -385,8 +386,14 @@ namespace {
 // A manifest that is not JSON at all (cut short, or damaged) is not a user's file under our name:
 // say so, with where the JSON breaks, rather than "not written by fetchscope".
 void RefuseBrokenManifest(const fs::path& path, const std::string& quoted) {
-  std::ifstream in(path, std::ios::binary);
-  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::string text;
+  try {
+    text = ReadFileCapped(path, kMaxJsonFileBytes);  // UsageError: a FIFO, a device, huge
+  } catch (const RunError& e) {
+    throw UsageError(quoted + " holds " + path.filename().string() + ", which cannot be read (" +
+                     e.what() +
+                     "): restore it, remove it to start afresh, or choose another --out");
+  }
   try {
     const nlohmann::json parsed = nlohmann::json::parse(text);
     (void)parsed;
@@ -472,8 +479,12 @@ void RunFolder::CheckSameRunWithoutManifest(const fs::path& out, const std::stri
     const int k = parsed->episode;
     // its trajectory, or (killed before that) a video titled as this run titles episode k
     const fs::path trajectory = out / EpisodeTrajectoryFileName(k);
-    std::ifstream in(trajectory, std::ios::binary);
-    const nlohmann::json j = nlohmann::json::parse(in, nullptr, false);
+    nlohmann::json j;
+    try {  // never a FIFO, a device or a huge file: those are no trajectory of this run
+      j = nlohmann::json::parse(ReadFileCapped(trajectory, kMaxJsonFileBytes), nullptr, false);
+    } catch (const std::exception&) {
+      j = nullptr;
+    }
     bool same = false;
     if (j.is_object() && j.contains("env_id") && j.contains("seed") && j.contains("policy")) {
       same = j["env_id"] == p.env_id && j["seed"] == p.seed && j["policy"] == p.policy;

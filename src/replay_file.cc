@@ -1,6 +1,7 @@
 #include "src/replay_file.h"
 
 #include <locale.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cctype>
@@ -16,6 +17,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "base/confined_file.h"
 #include "base/errors.h"
 
 namespace fetchscope {
@@ -498,16 +500,14 @@ std::string ReadReplayBytes(const std::string& path, std::string* format) {
   if (std::filesystem::is_directory(path, ec)) {
     throw UsageError("cannot read replay file " + path + ": it is a folder, not a file");
   }
-  std::ifstream in(path, std::ios::binary);
-  if (!in) {
+  // access(), not an open: opening a FIFO would wait for a writer (ReadFileCapped refuses one)
+  if (access(path.c_str(), R_OK) != 0) {
     const int error = errno;
     ThrowPathError("cannot read replay file " + path + ": " + std::strerror(error), error);
   }
-  std::ostringstream contents;
-  contents << in.rdbuf();
-  if (in.bad()) throw RunError("cannot read replay file " + path + ": " + std::strerror(errno));
+  std::string contents = ReadFileCapped(path, kMaxJsonFileBytes);
   *format = extension.substr(1);
-  return contents.str();
+  return contents;
 }
 
 std::vector<Action> ReadReplayFile(const std::string& path) {

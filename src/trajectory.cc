@@ -2,10 +2,10 @@
 
 #include <cctype>
 #include <cmath>
-#include <fstream>
+#include <filesystem>
 #include <set>
-#include <sstream>
 
+#include "base/confined_file.h"
 #include "base/errors.h"
 #include "base/json_util.h"
 
@@ -393,7 +393,7 @@ Trajectory ParseTrajectory(const std::string& text, const std::string& file) {
   try {
     root = json::parse(text);
   } catch (const json::parse_error& e) {
-    throw RunError(file + ": not JSON: " + e.what());
+    throw RunError(file + ": not JSON: " + DescribeJsonError(e, text.size()));
   }
   return TrajectoryReader(file).Read(root);
 }
@@ -407,11 +407,17 @@ std::optional<Trajectory> ReadReplayTrajectory(const std::string& path) {
   std::string tail = path.substr(path.size() - 5);
   for (char& c : tail) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   if (tail != ".json") return std::nullopt;
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return std::nullopt;  // ReadReplayFile says why
-  std::ostringstream text;
-  text << in.rdbuf();
-  return ParseReplayTrajectory(text.str(), path);
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec) || std::filesystem::is_directory(path, ec)) {
+    return std::nullopt;  // ReadReplayFile says why
+  }
+  std::string text;
+  try {
+    text = ReadFileCapped(path, kMaxJsonFileBytes);  // refuses a FIFO, a device, a huge file
+  } catch (const RunError&) {
+    return std::nullopt;  // it cannot be opened: ReadReplayFile says why
+  }
+  return ParseReplayTrajectory(text, path);
 }
 
 std::optional<Trajectory> ParseReplayTrajectory(const std::string& text, const std::string& path) {
@@ -429,12 +435,7 @@ std::optional<Trajectory> ParseReplayTrajectory(const std::string& text, const s
 }
 
 Trajectory ReadTrajectory(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw RunError("cannot read '" + path + "'");
-  std::ostringstream text;
-  text << in.rdbuf();
-  if (!in && !in.eof()) throw RunError("cannot read '" + path + "'");
-  return ParseTrajectory(text.str(), path);
+  return ParseTrajectory(ReadFileCapped(path, kMaxJsonFileBytes), path);
 }
 
 }  // namespace fetchscope

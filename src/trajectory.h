@@ -130,13 +130,15 @@ Trajectory ParseTrajectory(const std::string& text, const std::string& file);
 Trajectory ParseTrajectoryJson(const nlohmann::json& root, const std::string& file);
 
 /// Reads and parses the trajectory file `path` (ParseTrajectory). Throws RunError when it
-/// cannot be read.
+/// cannot be read, UsageError when it is not a regular file or holds more than kMaxJsonFileBytes
+/// (base/confined_file.h).
 Trajectory ReadTrajectory(const std::string& path);
 
 /// For `--policy replay:FILE`: the trajectory in `path` when it is a .json file holding one
 /// (an object with an "episodes" list), read once; nullopt for any other file (bare action rows,
 /// or a file that cannot be read: ReadReplayFile says why). Throws RunError "replay file
-/// PATH: KEY: ..." for a malformed trajectory.
+/// PATH: KEY: ..." for a malformed trajectory, UsageError for a file that is not a regular file
+/// or holds more than kMaxJsonFileBytes.
 std::optional<Trajectory> ReadReplayTrajectory(const std::string& path);
 
 /// As ReadReplayTrajectory, on the bytes `text` of the .json file `path` already read.
