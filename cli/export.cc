@@ -9,6 +9,7 @@
 #include <memory>
 #include <regex>
 
+#include "base/confined_file.h"
 #include "base/errors.h"
 #include "base/stop_signal.h"
 #include "cli/command.h"
@@ -39,14 +40,15 @@ Trajectory ReadInput(const std::string& input) {
   std::error_code ec;
   if (!fs::is_directory(input, ec)) {
     if (!fs::exists(input, ec)) throw UsageError("export: no such file or folder '" + input + "'");
-    return ReadTrajectory(input);
+    return ReadTrajectory(input);  // a regular file of at most kMaxJsonFileBytes
   }
   static const std::regex kEpisodeFile(R"(episode_\d+\.json)");
   std::vector<fs::path> files;
   for (const auto& entry : fs::directory_iterator(input, ec)) {
+    // every one: one that leads outside the folder, or is not a regular file, is refused
     const std::string name = entry.path().filename().string();
-    if (entry.is_regular_file() && std::regex_match(name, kEpisodeFile)) {
-      files.push_back(entry.path());
+    if (std::regex_match(name, kEpisodeFile)) {
+      files.push_back(ResolveInside(input, name, "export: " + Quoted(input) + " holds"));
     }
   }
   if (files.empty()) {

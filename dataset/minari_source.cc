@@ -26,7 +26,10 @@ std::string SeedsFound(const std::vector<MinariEpisode>& episodes) {
 
 bool IsTrajectoryPath(const std::string& path) {
   std::error_code ec;
-  if (fs::is_regular_file(path, ec)) return fs::path(path).extension() != ".hdf5";
+  // any file but a folder (a FIFO, a device too: LoadTrajectorySource refuses those by name)
+  if (fs::exists(path, ec) && !fs::is_directory(path, ec)) {
+    return fs::path(path).extension() != ".hdf5";
+  }
   if (!fs::is_directory(path, ec)) return false;
   const std::regex name("episode_[0-9]+\\.json");
   for (const auto& entry : fs::directory_iterator(path, ec)) {

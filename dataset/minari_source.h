@@ -34,7 +34,8 @@ struct MinariSource {
 MinariSource LoadMinariSource(const MinariSourceRequest& request);
 
 /// True when `path` is a record run folder (holding episode_NNN.json, or no dataset either) or
-/// a file other than an .hdf5 one (a trajectory JSON): what LoadTrajectorySource reads.
+/// a file other than an .hdf5 one (a trajectory JSON; a FIFO or a device too, which
+/// LoadTrajectorySource refuses): what LoadTrajectorySource reads.
 /// Anything else is taken as a Minari dataset.
 bool IsTrajectoryPath(const std::string& path);
 

@@ -21,11 +21,23 @@ struct RecordedRun {
   std::vector<int> expected;                ///< the episodes the run was asked to record
   std::map<int, ManifestEpisode> recorded;  ///< manifest entries by episode index
   std::map<int, std::string> failed;        ///< a worker's failure message by episode index
+  /// Where its files may lie, resolved: `dir`, and for a merged run the folders of the shard
+  /// manifests its `shards` names (merge-manifests DIR... names files in each shard's folder).
+  std::vector<std::filesystem::path> folders;
 };
 
 /// Reads `manifest_path` (a record or merge-manifests manifest). Throws UsageError when the file
-/// is missing or is not a record manifest, RunError when it cannot be read.
+/// is missing or is not a record manifest, or names a file that lies outside its folder (symbolic
+/// links and '..' followed) or is there but is not a regular file; RunError when it cannot be
+/// read.
 RecordedRun ReadRunManifest(const std::filesystem::path& manifest_path);
+
+/// `run.dir / entry` for a file name `entry` of the run's manifest, once checked: it lies inside
+/// one of `run.folders` (symbolic links and '..' followed) and, where it exists, is a regular
+/// file. Throws UsageError "`named_by` 'ENTRY', which lies outside the run folder 'DIR': ..."
+/// (or "..., which is a FIFO, not a regular file ...") otherwise.
+std::filesystem::path RunFile(const RecordedRun& run, const std::string& entry,
+                              const std::string& named_by);
 
 /// Reads the run in folder `dir`: dir/manifest.json. Throws UsageError naming `dir` when it is
 /// not a folder or holds no manifest.json (saying so when it holds shard manifests instead).

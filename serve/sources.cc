@@ -2,8 +2,10 @@
 
 #include <system_error>
 
+#include "base/confined_file.h"
 #include "base/errors.h"
 #include "inspect/report.h"
+#include "run/run_files.h"
 #include "src/trajectory.h"
 
 namespace fetchscope::serve {
@@ -138,7 +140,18 @@ TrajectoryEpisode EpisodeRows(const Source& source, int index) {
   if (file == source.files.end()) {
     throw RunError(source.given + " has no episode " + std::to_string(index));
   }
-  Trajectory t = ReadTrajectory(file->second);
+  {  // checked again now: the folder may have changed since serve opened it
+    const fs::path dir = (fs::path(source.given) / kManifestFileName).parent_path();
+    const std::string prefix = (dir / "").string();
+    std::string entry = file->second;
+    if (entry.rfind(prefix, 0) == 0) entry.erase(0, prefix.size());
+    if (!LiesInside(dir, file->second)) {  // a merged run's shard folder, or refused
+      RunFile(ReadRunFolder(source.given), entry,
+              std::string(kManifestFileName) + " names episode " + std::to_string(index) +
+                  "'s trajectory");
+    }
+  }
+  Trajectory t = ReadTrajectory(file->second);  // a regular file of at most kMaxJsonFileBytes
   if (t.episodes.size() != 1 || t.episodes[0].index != index) {
     throw RunError(file->second + ": holds no single episode " + std::to_string(index));
   }

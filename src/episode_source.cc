@@ -7,6 +7,8 @@
 #include <regex>
 #include <tuple>
 
+#include "base/confined_file.h"
+#include "base/errors.h"
 #include "src/observation_layout.h"
 #include "src/policy.h"
 
@@ -27,6 +29,8 @@ void AddFile(const std::string& file, TrajectorySource* source, bool first) {
     trajectory = ReadTrajectory(file);
   } catch (const RunError& e) {
     throw RunError(std::string("--from: ") + e.what());
+  } catch (const UsageError& e) {  // not a regular file, or too large
+    throw UsageError(std::string("--from: ") + e.what());
   }
   if (first) {
     source->env_id = trajectory.env_id;
@@ -77,8 +81,11 @@ TrajectorySource LoadTrajectorySource(const std::string& path) {
     std::vector<std::string> files;
     const std::regex name("episode_[0-9]+\\.json");
     for (const auto& entry : fs::directory_iterator(path, ec)) {
-      if (entry.is_regular_file() && std::regex_match(entry.path().filename().string(), name)) {
-        files.push_back(entry.path().string());
+      // every one, whatever it is: one that leads outside the folder, or is not a regular file
+      // (a FIFO, a device), is refused rather than read or passed over
+      const std::string file = entry.path().filename().string();
+      if (std::regex_match(file, name)) {
+        files.push_back(ResolveInside(path, file, "--from " + Quoted(path) + " holds").string());
       }
     }
     std::sort(files.begin(), files.end());
@@ -89,8 +96,8 @@ TrajectorySource LoadTrajectorySource(const std::string& path) {
                        "main_data.hdf5)");
     }
     for (size_t i = 0; i < files.size(); ++i) AddFile(files[i], &source, i == 0);
-  } else if (fs::is_regular_file(path, ec)) {
-    AddFile(path, &source, true);
+  } else if (fs::exists(path, ec)) {
+    AddFile(path, &source, true);  // refused unless a regular file (ReadTrajectory)
   } else {
     throw UsageError("--from '" + path +
                      "' does not exist; accepted: a run folder of record, or one trajectory JSON "
