@@ -267,6 +267,34 @@ TEST_F(HostileFolderTest, ServeSourcesRefuseFilesOutside) {
   EXPECT_THROW(serve::EpisodeRows(source, 1), UsageError);
 }
 
+// A merged run (merge-manifests m0 m1) names files in its shards' folders: those stay readable,
+// and a shard the merged manifest claims is no widening of the folder unless a shard manifest is
+// there.
+TEST_F(HostileFolderTest, MergedRunReadsItsShardsFoldersOnly) {
+  for (int i = 0; i < 2; ++i) {
+    const CommandResult r = RunFetchscope(
+        "record --quiet --env-id FetchReach-v4 --policy random --seed 3 --episodes 2 --steps 3 "
+        "--width 32 --height 32 --overlay none --shard " +
+        std::to_string(i) + "/2 --out '" + (tmp_.path() / ("m" + std::to_string(i))).string() +
+        "'");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+  }
+  const fs::path m0 = tmp_.path() / "m0";
+  CommandResult r = RunFetchscope("merge-manifests '" + m0.string() + "' '" +
+                                  (tmp_.path() / "m1").string() + "'");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const serve::Source source = serve::OpenSource(m0.string(), tmp_.path());
+  EXPECT_EQ(serve::EpisodeRows(source, 1).index, 1);  // ../m1/episode_001.json
+  r = Bounded("report '" + m0.string() + "'");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  // a shard claimed in a folder without its shard manifest: no folder of the run
+  json m = json::parse(ReadFile(m0 / "manifest.json"));
+  m["shards"][1]["manifest"] = "../outside/secret.json";
+  std::ofstream(m0 / "manifest.json", std::ios::trunc) << m.dump(2);
+  ExpectRefused(Bounded("report '" + m0.string() + "'"),
+                {"episode 1's video '../m1/episode_001.mp4'", "outside"}, "report, merged");
+}
+
 // The reader itself: the cap holds while reading too (a /proc file says its size is 0).
 TEST(ReadFileCapped, RefusesWhatIsNoRegularFileOrTooLarge) {
   TempDir tmp;
