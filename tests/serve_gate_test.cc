@@ -124,7 +124,8 @@ TEST(ServeGate, TheRouterAnswersEachRequestOfAConnection) {
   ASSERT_NE(second, std::string::npos) << two;
   EXPECT_NE(two.find("no such page: /\\\\xff", second), std::string::npos) << two;
   // the engine's refusal, the method's, the token's (which closes the connection)
-  EXPECT_EQ(server.Answer("GET /api/frame?session=s&source=live HTTP/1.1\r\n" + auth + "\r\n").substr(0, 12),
+  EXPECT_EQ(server.Answer("GET /api/frame?session=s&source=live HTTP/1.1\r\n" + auth + "\r\n")
+                .substr(0, 12),
             "HTTP/1.1 503");
   const std::string method = server.Answer("GET /api/live/step HTTP/1.1\r\n" + auth + "\r\n");
   EXPECT_EQ(method.substr(0, 12), "HTTP/1.1 405") << method;
