@@ -8,18 +8,17 @@
 #   tools/stress-audit.sh build-asan 3 2          # the sanitizer suite's process and signal tests
 #   tools/stress-audit.sh build 3 2               # the Release suite's
 #   tools/stress-audit.sh build-asan 20 4 'ExecClosesItsStdin$'   # one row, 20 times
-# The tests are those of the test binaries below (the ones whose sources signal, wait, sleep or
-# time out; tests/CMakeLists.txt builds a subset of them under the sanitizers), or, with REGEX,
-# the tests whose names match it. Needs stress-ng (apt-get install stress-ng).
+# The tests are those of the test binaries below: the ones whose tests start processes and signal
+# or kill them, end them by a timeout, or wait for a child, a worker or a server (tests/CMakeLists.txt
+# builds a subset of them under the sanitizers); or, with REGEX, the tests whose names match it. Needs stress-ng (apt-get install stress-ng).
 set -euo pipefail
 build=${1:?usage: tools/stress-audit.sh BUILD_DIR [ROUNDS] [LOAD] [REGEX]}
 rounds=${2:-3}
 load=${3:-2}
 regex=${4:-}
-binaries="bad_input_test cli_record_exec_interrupt_test cli_record_from_test cli_record_jobs_test
-  cli_record_kill_anywhere_test cli_serve_test episode_output_test episode_sink_test
-  hostile_folder_test manifest_test minari_test process_test run_folder_test scheduler_test
-  serve_attack_test shard_test shared_node_test signals_test slurm_test"
+binaries="bad_input_test cli_record_exec_interrupt_test cli_record_jobs_test
+  cli_record_kill_anywhere_test cli_serve_test hostile_folder_test minari_test process_test
+  scheduler_test serve_attack_test shared_node_test signals_test slurm_test"
 command -v stress-ng >/dev/null || { echo "stress-audit: stress-ng is not installed" >&2; exit 2; }
 list=$(mktemp)
 trap 'rm -f "$list"; kill "${stress_pid:-0}" 2>/dev/null || true' EXIT
