@@ -116,6 +116,93 @@ Refusal SplitHeader(std::string_view line, std::string_view* name, std::string_v
   return {};
 }
 
+// METHOD SP TARGET SP HTTP/1.x
+Refusal ScreenRequestLine(std::string_view request_line) {
+  const size_t sp1 = request_line.find(' ');
+  const size_t sp2 =
+      sp1 == std::string_view::npos ? std::string_view::npos : request_line.find(' ', sp1 + 1);
+  if (sp1 == std::string_view::npos || sp2 == std::string_view::npos ||
+      request_line.find(' ', sp2 + 1) != std::string_view::npos) {
+    return Refuse(
+        400, "the request line '" + Printable(request_line) + "' is not METHOD /TARGET HTTP/1.1");
+  }
+  const std::string_view method = request_line.substr(0, sp1);
+  const std::string_view version = request_line.substr(sp2 + 1);
+  if (method.empty()) return Refuse(400, "the request line has no method");
+  for (char c : method) {
+    if (!IsTokenChar(static_cast<unsigned char>(c))) {
+      return Refuse(400, "the method '" + Printable(method) + "' is not a method name");
+    }
+  }
+  if (version != "HTTP/1.1" && version != "HTTP/1.0") {
+    return Refuse(version.rfind("HTTP/", 0) == 0 ? 505 : 400,
+                  "the protocol '" + Printable(version) + "' is not HTTP/1.1 or HTTP/1.0");
+  }
+  if (Refusal r = ScreenTarget(request_line.substr(sp1 + 1, sp2 - sp1 - 1))) return r;
+  return {};
+}
+
+// The header lines (after the request line): each NAME: VALUE in text, one Host naming this
+// server, an unambiguous length, and no body.
+Refusal ScreenHeaders(const std::vector<std::string_view>& lines, const HostRules& rules) {
+  int hosts = 0;
+  int lengths = 0;
+  bool chunked = false;
+  std::string_view host;
+  std::string_view length;
+  for (size_t i = 1; i < lines.size(); ++i) {
+    std::string_view name;
+    std::string_view value;
+    if (Refusal r = SplitHeader(lines[i], &name, &value)) return r;
+    const std::string lower = Lower(name);
+    if (lower == "host") {
+      ++hosts;
+      host = value;
+    } else if (lower == "content-length") {
+      ++lengths;
+      length = value;
+    } else if (lower == "transfer-encoding") {
+      chunked = true;
+    }
+  }
+  if (hosts != 1) {
+    return Refuse(400, hosts == 0 ? "the request has no Host header"
+                                  : "the request has " + std::to_string(hosts) + " Host headers");
+  }
+  if (!HostAllowed(host, rules)) {
+    std::string names;
+    for (const std::string& n : rules.names) names += ", " + n;
+    return Refuse(403, "Host '" + Printable(host) +
+                           "' does not name this server: only an IP address" + names +
+                           " (a page under another name, as in DNS rebinding, is refused)");
+  }
+  if (lengths > 1) {
+    return Refuse(400, "the request has " + std::to_string(lengths) +
+                           " Content-Length headers: at most one is accepted");
+  }
+  if (lengths == 1 && chunked) {
+    return Refuse(400, "the request has both Content-Length and Transfer-Encoding: refused");
+  }
+  if (lengths == 1) {
+    bool digits = !length.empty() && length.size() <= 18;
+    for (char c : length) digits = digits && c >= '0' && c <= '9';
+    if (!digits) {
+      return Refuse(400, "Content-Length '" + Printable(length) + "' is not a number of bytes");
+    }
+    if (length.find_first_not_of('0') != std::string_view::npos) {
+      return Refuse(413, "a request body of " + std::string(length) +
+                             " bytes: serve's API takes no body (every parameter goes in the "
+                             "URL's query)");
+    }
+  }
+  if (chunked) {
+    return Refuse(413,
+                  "a request body sent with Transfer-Encoding: serve's API takes no body "
+                  "(every parameter goes in the URL's query)");
+  }
+  return {};
+}
+
 }  // namespace
 
 std::string Printable(std::string_view bytes, size_t max_bytes) {
@@ -221,90 +308,13 @@ Refusal ScreenHead(std::string_view head, const HostRules& rules) {
     rest.remove_prefix(lf + 1);
   }
   if (lines.empty()) return Refuse(400, "the request has no request line");
-  // METHOD SP TARGET SP HTTP/1.x
-  const std::string_view request_line = lines.front();
-  const size_t sp1 = request_line.find(' ');
-  const size_t sp2 =
-      sp1 == std::string_view::npos ? std::string_view::npos : request_line.find(' ', sp1 + 1);
-  if (sp1 == std::string_view::npos || sp2 == std::string_view::npos ||
-      request_line.find(' ', sp2 + 1) != std::string_view::npos) {
-    return Refuse(
-        400, "the request line '" + Printable(request_line) + "' is not METHOD /TARGET HTTP/1.1");
-  }
-  const std::string_view method = request_line.substr(0, sp1);
-  const std::string_view version = request_line.substr(sp2 + 1);
-  if (method.empty()) return Refuse(400, "the request line has no method");
-  for (char c : method) {
-    if (!IsTokenChar(static_cast<unsigned char>(c))) {
-      return Refuse(400, "the method '" + Printable(method) + "' is not a method name");
-    }
-  }
-  if (version != "HTTP/1.1" && version != "HTTP/1.0") {
-    return Refuse(version.rfind("HTTP/", 0) == 0 ? 505 : 400,
-                  "the protocol '" + Printable(version) + "' is not HTTP/1.1 or HTTP/1.0");
-  }
-  if (Refusal r = ScreenTarget(request_line.substr(sp1 + 1, sp2 - sp1 - 1))) return r;
+  if (Refusal r = ScreenRequestLine(lines.front())) return r;
   if (lines.size() - 1 > kMaxHeaderLines) {
     return Refuse(431, "the request has " + std::to_string(lines.size() - 1) +
                            " header lines: at most " + std::to_string(kMaxHeaderLines) +
                            " are accepted");
   }
-  int hosts = 0;
-  int lengths = 0;
-  bool chunked = false;
-  std::string_view host;
-  std::string_view length;
-  for (size_t i = 1; i < lines.size(); ++i) {
-    std::string_view name;
-    std::string_view value;
-    if (Refusal r = SplitHeader(lines[i], &name, &value)) return r;
-    const std::string lower = Lower(name);
-    if (lower == "host") {
-      ++hosts;
-      host = value;
-    } else if (lower == "content-length") {
-      ++lengths;
-      length = value;
-    } else if (lower == "transfer-encoding") {
-      chunked = true;
-    }
-  }
-  if (hosts != 1) {
-    return Refuse(400, hosts == 0 ? "the request has no Host header"
-                                  : "the request has " + std::to_string(hosts) + " Host headers");
-  }
-  if (!HostAllowed(host, rules)) {
-    std::string names;
-    for (const std::string& n : rules.names) names += ", " + n;
-    return Refuse(403, "Host '" + Printable(host) +
-                           "' does not name this server: only an IP address" + names +
-                           " (a page under another name, as in DNS rebinding, is refused)");
-  }
-  if (lengths > 1) {
-    return Refuse(400, "the request has " + std::to_string(lengths) +
-                           " Content-Length headers: at most one is accepted");
-  }
-  if (lengths == 1 && chunked) {
-    return Refuse(400, "the request has both Content-Length and Transfer-Encoding: refused");
-  }
-  if (lengths == 1) {
-    bool digits = !length.empty() && length.size() <= 18;
-    for (char c : length) digits = digits && c >= '0' && c <= '9';
-    if (!digits) {
-      return Refuse(400, "Content-Length '" + Printable(length) + "' is not a number of bytes");
-    }
-    if (length.find_first_not_of('0') != std::string_view::npos) {
-      return Refuse(413, "a request body of " + std::string(length) +
-                             " bytes: serve's API takes no body (every parameter goes in the "
-                             "URL's query)");
-    }
-  }
-  if (chunked) {
-    return Refuse(413,
-                  "a request body sent with Transfer-Encoding: serve's API takes no body "
-                  "(every parameter goes in the URL's query)");
-  }
-  return {};
+  return ScreenHeaders(lines, rules);
 }
 
 }  // namespace fetchscope::serve

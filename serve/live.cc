@@ -42,6 +42,28 @@ TrajectoryStep RowAfterStep(const FetchEnv& env, const StepResult& r, const Acti
   return row;
 }
 
+// The record command that re-renders a saved live episode: its env, seed, replay, steps and
+// assets (given when the command line gave --assets or they are not the bundled ones), and the
+// view the page showed.
+std::string RecordCommand(const std::string& env_id, uint64_t seed, const std::string& policy,
+                          size_t steps, bool assets_given, const AssetSource& assets,
+                          const ViewRequest& view, const fs::path& out) {
+  std::vector<std::string> argv = {
+      "fetchscope",         "record",   "--env-id", env_id,    "--seed",
+      std::to_string(seed), "--policy", policy,     "--steps", std::to_string(steps),
+      "--signals",          "contacts"};  // its trajectory has them
+  if (assets_given || assets.kind != "bundled") {
+    argv.push_back("--assets");
+    argv.push_back(assets.kind == "bundled" ? "bundled" : assets.root);
+  }
+  argv.insert(argv.end(), {"--camera", view.camera, "--overlay", view.overlay_text, "--width",
+                           std::to_string(view.width), "--height", std::to_string(view.height),
+                           "--out", out.string()});
+  std::string command;
+  for (const std::string& arg : argv) command += (command.empty() ? "" : " ") + ShellQuote(arg);
+  return command;
+}
+
 }  // namespace
 
 nlohmann::json Engine::State::LiveData(const LiveEpisode& live) const {
@@ -227,25 +249,10 @@ nlohmann::json Engine::SaveLive(const std::string& session, const ViewRequest& v
           "continued generator), so record cannot reset to it; the files hold its actions";
       return out;
     }
-    std::vector<std::string> argv = {"fetchscope", "record",
-                                     "--env-id",   src.spec->id,
-                                     "--seed",     std::to_string(*live.reset_seed),
-                                     "--policy",   trajectory.policy,
-                                     "--steps",    std::to_string(live.steps.size() - 1),
-                                     "--signals",  "contacts"};  // its trajectory has them
-    if (!options_.assets_flag.empty() || env.assets().kind != "bundled") {
-      argv.push_back("--assets");
-      argv.push_back(env.assets().kind == "bundled" ? "bundled" : env.assets().root);
-    }
-    for (const std::string& flag : {std::string("--camera"), std::string("--overlay")}) {
-      argv.push_back(flag);
-      argv.push_back(flag == "--camera" ? view.camera : view.overlay_text);
-    }
-    argv.insert(argv.end(), {"--width", std::to_string(view.width), "--height",
-                             std::to_string(view.height), "--out", (dir / name).string()});
-    std::string command;
-    for (const std::string& arg : argv) command += (command.empty() ? "" : " ") + ShellQuote(arg);
-    out["command"] = command;
+    const fs::path record_out = dir / name;
+    out["command"] =
+        RecordCommand(src.spec->id, *live.reset_seed, trajectory.policy, live.steps.size() - 1,
+                      !options_.assets_flag.empty(), env.assets(), view, record_out);
     out["record_out"] = (dir / name).string();
     out["episode_file"] = (dir / name /
                            ("episode_" +

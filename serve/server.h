@@ -83,6 +83,9 @@ class Server {
   std::string CookieName() const;
 
  private:
+  /// The checks and handlers around every route: Admit first, the error and exception handlers.
+  void Checks();
+  /// The page and the API.
   void Routes();
   using Handler = std::function<void(const httplib::Request&, httplib::Response&)>;
   /// Registers `handler` for GET (and HEAD) `path`.
