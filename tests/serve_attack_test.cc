@@ -234,13 +234,21 @@ TEST(ServeAttack, ASignalEndsItWithinASecondWhateverTheClientsDo) {
   }
 }
 
-TEST(ServeAttack, BodiesAreRefusedUnreadAndMemoryStaysBounded) {
+// A FetchReach serve with a session open, and the Host line of its address.
+struct Served {
   TempDir dir;
-  ServeProcess serve("--env-id FetchReach-v4", dir.path());
+  ServeProcess serve{"--env-id FetchReach-v4", dir.path()};
+  Api api{serve};
+  std::string s = serve.started() ? api.NewSession() : "";
+  std::string host = "Host: 127.0.0.1:" + std::to_string(serve.port) + "\r\n";
+};
+
+TEST(ServeAttack, BodiesAreRefusedUnreadAndMemoryStaysBounded) {
+  Served served;
+  ServeProcess& serve = served.serve;
   ASSERT_TRUE(serve.started()) << serve.log();
-  Api api(serve);
-  const std::string s = api.NewSession();
-  const std::string host = "Host: 127.0.0.1:" + std::to_string(serve.port) + "\r\n";
+  const std::string& s = served.s;
+  const std::string& host = served.host;
   const double before = RssMiB(serve.pid);
   // a 20 MB chunked body: 413 from its head, nothing of it kept (the answer comes before the
   // body is sent; the server before the gate answered 200 once it had read the whole body)
@@ -273,12 +281,12 @@ TEST(ServeAttack, BodiesAreRefusedUnreadAndMemoryStaysBounded) {
 }
 
 TEST(ServeAttack, MalformedHeadsMethodsAndParametersGetOne4xxLine) {
-  TempDir dir;
-  ServeProcess serve("--env-id FetchReach-v4", dir.path());
+  Served served;
+  ServeProcess& serve = served.serve;
   ASSERT_TRUE(serve.started()) << serve.log();
-  Api api(serve);
-  const std::string s = api.NewSession();
-  const std::string host = "Host: 127.0.0.1:" + std::to_string(serve.port) + "\r\n";
+  Api& api = served.api;
+  const std::string& s = served.s;
+  const std::string& host = served.host;
   const std::string auth = Bearer(serve);
   struct Row {
     std::string name, request;
