@@ -47,6 +47,33 @@ std::string HostName() {
   return name;
 }
 
+// What serve prints once it listens: a warning beyond loopback, the sources, the GL, the URL
+// with its token and the ssh -L line that reaches it from a laptop.
+void PrintHowToOpen(const std::string& host, int port, const std::string& token,
+                    const serve::Engine& engine) {
+  if (host != "127.0.0.1" && host != "localhost" && host != "::1") {
+    std::fprintf(stderr,
+                 "fetchscope: warning: --host %s: serving on more than this machine's loopback; "
+                 "anyone who reaches port %d and has the token can drive it (the default "
+                 "127.0.0.1 with ssh -L is safer)\n",
+                 host.c_str(), port);
+  }
+  // an IPv6 address goes in brackets in a URL (http://[::1]:8765/); every interface (0.0.0.0,
+  // ::) is shown as the loopback address, which the ssh -L line forwards to
+  std::string shown_host = host == "0.0.0.0" ? "127.0.0.1" : host == "::" ? "::1" : host;
+  if (shown_host.find(':') != std::string::npos) shown_host = "[" + shown_host + "]";
+  for (const serve::Source& s : engine.sources()) {
+    std::printf("serve: %s\n", s.title.c_str());
+  }
+  std::printf("serve: GL %s (%s)\n", engine.GlJson()["renderer"].get<std::string>().c_str(),
+              engine.GlJson()["backend"].get<std::string>().c_str());
+  std::printf("serve: open http://%s:%d/?token=%s\n", shown_host.c_str(), port, token.c_str());
+  std::printf("serve: from a laptop: ssh -N -L %d:127.0.0.1:%d %s, then open that URL there\n",
+              port, port, HostName().c_str());
+  std::printf("serve: Ctrl-C stops it\n");
+  std::fflush(stdout);
+}
+
 int RunServe(const ServeOptions& o, const CLI::App& sub) {
   InstallStopSignals();
   const PolicySpec policy = ParsePolicyOptions(o.policy);
@@ -83,27 +110,7 @@ int RunServe(const ServeOptions& o, const CLI::App& sub) {
   server_options.token = token;
   serve::Server server(engine, server_options, serve::ServePage(engine));
   const int port = server.Bind();
-  if (o.host != "127.0.0.1" && o.host != "localhost" && o.host != "::1") {
-    std::fprintf(stderr,
-                 "fetchscope: warning: --host %s: serving on more than this machine's loopback; "
-                 "anyone who reaches port %d and has the token can drive it (the default "
-                 "127.0.0.1 with ssh -L is safer)\n",
-                 o.host.c_str(), port);
-  }
-  // an IPv6 address goes in brackets in a URL (http://[::1]:8765/); every interface (0.0.0.0,
-  // ::) is shown as the loopback address, which the ssh -L line forwards to
-  std::string shown_host = o.host == "0.0.0.0" ? "127.0.0.1" : o.host == "::" ? "::1" : o.host;
-  if (shown_host.find(':') != std::string::npos) shown_host = "[" + shown_host + "]";
-  for (const serve::Source& s : engine.sources()) {
-    std::printf("serve: %s\n", s.title.c_str());
-  }
-  std::printf("serve: GL %s (%s)\n", engine.GlJson()["renderer"].get<std::string>().c_str(),
-              engine.GlJson()["backend"].get<std::string>().c_str());
-  std::printf("serve: open http://%s:%d/?token=%s\n", shown_host.c_str(), port, token.c_str());
-  std::printf("serve: from a laptop: ssh -N -L %d:127.0.0.1:%d %s, then open that URL there\n",
-              port, port, HostName().c_str());
-  std::printf("serve: Ctrl-C stops it\n");
-  std::fflush(stdout);
+  PrintHowToOpen(o.host, port, token, engine);
 
   std::thread listener([&server] { server.Run(); });
   // wait for SIGINT/SIGTERM, freeing idle sessions now and then
