@@ -117,8 +117,13 @@ int RunExport(const ExportOptions& o) {
   run.policy = t.policy;
   run.steps = LongestEpisodeSteps(t);  // the TimeLimit they ran under
   run.source = o.input;
-  MinariOutput output(
-      {o.minari, MinariRoot(o.minari_root), o.overwrite, o.author.name, o.author.email});
+  MinariOutput output({o.minari,
+                       MinariRoot(o.minari_root),
+                       o.overwrite,
+                       o.author.name,
+                       o.author.email,
+                       nullptr,
+                       {}});
   std::string path;
   ProgressReporter progress =
       ProgressReporter::ForLongRuns("export", static_cast<int>(t.episodes.size()), 1, "episodes");

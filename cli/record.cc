@@ -215,7 +215,7 @@ RecordJob ResolveRecord(RecordOptions* options, const PolicySpec& policy,
   if (!o.minari.empty()) {
     job.minari_root_given = o.minari_root;
     job.minari = MinariRequest{o.minari, MinariRoot(o.minari_root), o.overwrite, o.author.name,
-                               o.author.email};
+                               o.author.email, nullptr, {}};
     CheckRecordMinari(job);
   }
   ResolveRecordVideo(o, &plan);

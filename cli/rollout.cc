@@ -9,10 +9,14 @@
 #include "cli/command.h"
 #include "cli/common.h"
 #include "cli/jobs_options.h"
+#include "cli/obs_options.h"
 #include "cli/resolve.h"
+#include "cli/view_options.h"
 #include "dataset/minari_format.h"
+#include "render/view.h"
 #include "run/episode_scheduler.h"
 #include "run/minari_output.h"
+#include "run/pixel_recorder.h"
 #include "run/progress.h"
 #include "run/rollout_run.h"
 #include "src/fetch_env.h"
@@ -36,6 +40,8 @@ struct RolloutOptions {
       false;  // replace an existing Minari dataset, or a --json-out file of another env or seed
   DatasetAuthor author;          // --minari-author, --minari-author-email
   std::string signals = "none";  // --signals
+  ObsOptions obs;                // --obs-camera, --obs-size, --obs-layers, --obs-overlay
+  std::string backend;           // --backend of the images
 };
 
 // parse (AddRollout) -> resolve -> run (RunRolloutJob) -> print.
@@ -53,7 +59,13 @@ int RunRollout(const RolloutOptions& o) {
   const AssetSource& assets = run.env.assets;
   const std::string path = JsonOutPath(o.json_out, "rollout");
   CheckJsonOutReplaces(path, {{"env_id", spec.id}, {"seed", seed}}, o.overwrite);
-  { FetchEnv check(spec, assets); }  // bad assets fail here, before any worker starts
+  ObsSetup obs;
+  PixelLayout layout;
+  {
+    FetchEnv check(spec, assets);  // bad assets fail here, before any worker starts
+    obs = ResolveObs(o.obs, check.model(), kMsaaAuto);
+    if (obs.enabled()) layout = MakePixelLayout(obs, check.model());
+  }
   const int count = static_cast<int>(run.episodes.size());
   RolloutJob job;
   job.spec = &spec;
@@ -68,9 +80,27 @@ int RunRollout(const RolloutOptions& o) {
   job.jobs = ResolveJobs(o.jobs, count);
   job.mode = mode;
   std::optional<MinariOutput> minari;
+  std::optional<PixelStaging> staging;
+  MinariRequest minari_request{
+      o.minari, MinariRoot(o.minari_root), o.overwrite, o.author.name, o.author.email, nullptr, {}};
+  if (obs.enabled()) {
+    ViewOptions view;
+    view.backend = o.backend;
+    const ViewSetup gl = ResolveGlView(view);
+    job.backend = gl.backend;
+    job.gpu = ResolveGpuChoice(gl);
+    job.pixels.setup = obs;
+    job.pixels.layout = layout;
+    job.pixels.layout.raw_rgb = false;  // Minari stores rgb as PNG files
+    job.pixels.layout.png_rgb = true;
+    CheckMinariOutput(minari_request, RolloutOutputRun(job));  // before any folder is made
+    staging.emplace(minari_request.root);
+    job.pixels.staging = staging->path();
+    minari_request.pixels = &job.pixels.layout;
+    minari_request.staging = staging->path();
+  }
   if (!o.minari.empty()) {
-    minari.emplace(MinariRequest{o.minari, MinariRoot(o.minari_root), o.overwrite, o.author.name,
-                                 o.author.email});
+    minari.emplace(minari_request);
     job.output = &*minari;
   }
   // progress on stderr (the JSON may be on stdout): a bar on a terminal, else a line every
@@ -132,9 +162,14 @@ Command AddRollout(CLI::App& app) {
                 "Replace an existing Minari dataset of that id, and let --json-out replace a "
                 "result file of another env, seed or task");
   AddDatasetAuthorOptions(sub, &o->author);
+  AddObsOptions(sub, &o->obs);
+  sub->add_option("--backend", o->backend,
+                  "GL backend of --obs-camera's images: auto, egl or osmesa (default "
+                  "$MUJOCO_GL, else auto)");
   AddJobsOptions(sub, &o->jobs, &o->worker_mode);
   return {sub, [o, sub] {
             o->episodes_given = sub->count("--episodes") > 0;
+            CheckObsUse(sub, o->obs, !o->minari.empty());
             return RunRollout(*o);
           }};
 }

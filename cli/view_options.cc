@@ -169,21 +169,21 @@ void AddViewOptions(CLI::App* sub, ViewOptions* o) {
       });
 }
 
-std::vector<Layer> ParseLayers(const std::string& list) {
+std::vector<Layer> ParseLayers(const std::string& list, const std::string& option) {
   const std::vector<std::string> names = {"rgb", "depth", "segmentation"};
   std::vector<Layer> layers;
   std::set<std::string> seen;
   for (const std::string& token : SplitCommaList(list)) {
     if (token.empty()) {
-      throw UsageError("--layers '" + list +
+      throw UsageError(option + " '" + list +
                        "' has an empty entry; use a comma list of rgb, depth, segmentation");
     }
     if (std::find(names.begin(), names.end(), token) == names.end()) {
-      throw UsageError("--layers: unknown layer '" + token + "'" + DidYouMean(token, names) +
+      throw UsageError(option + ": unknown layer '" + token + "'" + DidYouMean(token, names) +
                        "; use a comma list of rgb, depth, segmentation");
     }
     if (!seen.insert(token).second) {
-      throw UsageError("--layers names '" + token + "' twice; each layer once");
+      throw UsageError(option + " names '" + token + "' twice; each layer once");
     }
     layers.push_back(token == "rgb"     ? Layer::kRgb
                      : token == "depth" ? Layer::kDepth

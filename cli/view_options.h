@@ -81,7 +81,7 @@ std::vector<const VideoFormat*> ParseVideoFormats(const std::string& list);
 /// Parses --layers: a comma list of rgb, depth, segmentation (spaces after the commas allowed),
 /// each once, in the order given. UsageError names an empty, unknown (with "did you mean") or
 /// repeated entry and what is accepted.
-std::vector<Layer> ParseLayers(const std::string& list);
+std::vector<Layer> ParseLayers(const std::string& list, const std::string& option = "--layers");
 
 /// record's --layers: the layers beyond rgb, in the order given (rgb is always recorded: the
 /// episode video, sheet and report need it). Throws as ParseLayers.

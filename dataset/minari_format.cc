@@ -2,6 +2,7 @@
 
 #include <hdf5.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
@@ -39,6 +40,29 @@ std::string BoxJson(const std::string& dtype, int n, const std::string& low,
                     const std::string& high) {
   return "{\"type\": \"Box\", \"dtype\": \"" + dtype + "\", \"shape\": [" + std::to_string(n) +
          "], \"low\": " + RepeatList(low, n) + ", \"high\": " + RepeatList(high, n) + "}";
+}
+
+// A list of `shape` filled with `value`, nested as numpy's tolist() nests it.
+std::string NestedList(const std::string& value, const std::vector<int>& shape, size_t axis = 0) {
+  if (axis == shape.size()) return value;
+  const std::string inner = NestedList(value, shape, axis + 1);
+  std::string s;
+  s.reserve((inner.size() + 2) * static_cast<size_t>(shape[axis]) + 2);
+  s += "[";
+  for (int i = 0; i < shape[axis]; ++i) {
+    if (i) s += ", ";
+    s += inner;
+  }
+  return s + "]";
+}
+
+// serialize_space(Box) of an image Box
+std::string ImageBoxJson(const std::string& dtype, const std::vector<int>& shape,
+                         const std::string& low, const std::string& high) {
+  std::string dims;
+  for (size_t i = 0; i < shape.size(); ++i) dims += (i ? ", " : "") + std::to_string(shape[i]);
+  return "{\"type\": \"Box\", \"dtype\": \"" + dtype + "\", \"shape\": [" + dims +
+         "], \"low\": " + NestedList(low, shape) + ", \"high\": " + NestedList(high, shape) + "}";
 }
 
 }  // namespace
@@ -102,6 +126,33 @@ std::string FetchObservationSpaceJson(int obs_dim) {
   return "{\"type\": \"Dict\", \"subspaces\": {\"achieved_goal\": " + goal +
          ", \"desired_goal\": " + goal +
          ", \"observation\": " + BoxJson("float64", obs_dim, "-Infinity", "Infinity") + "}}";
+}
+
+std::string FetchPixelObservationSpaceJson(int obs_dim, const PixelSpaces& pixels) {
+  const std::string goal = BoxJson("float64", 3, "-Infinity", "Infinity");
+  std::vector<std::string> names = pixels.cameras;
+  std::sort(names.begin(), names.end());  // gymnasium's Dict sorts its keys
+  const auto dict = [&](const std::string& box) {
+    std::string s = "{\"type\": \"Dict\", \"subspaces\": {";
+    for (size_t i = 0; i < names.size(); ++i) {
+      s += (i ? ", " : "") + PythonJsonString(names[i]) + ": " + box;
+    }
+    return s + "}}";
+  };
+  const std::vector<int> hw = {pixels.height, pixels.width};
+  std::string s = "{\"type\": \"Dict\", \"subspaces\": {\"achieved_goal\": " + goal;
+  if (pixels.depth) s += ", \"depth\": " + dict(ImageBoxJson("float32", hw, "0.0", "Infinity"));
+  s += ", \"desired_goal\": " + goal;
+  if (pixels.rgb) {
+    s += ", \"images\": " +
+         dict(ImageBoxJson("uint8", {pixels.height, pixels.width, 3}, "0", "255"));
+  }
+  s += ", \"observation\": " + BoxJson("float64", obs_dim, "-Infinity", "Infinity");
+  if (pixels.segmentation) {
+    s += ", \"segmentation\": " +
+         dict(ImageBoxJson("int32", hw, "-1", std::to_string(pixels.max_segment)));
+  }
+  return s + "}}";
 }
 
 std::string FetchActionSpaceJson() { return BoxJson("float32", 4, "-1.0", "1.0"); }

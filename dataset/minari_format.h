@@ -61,6 +61,21 @@ std::string MinariNamespace(const std::string& id);
 /// the JSON literals -Infinity / Infinity, in Python's json.dumps spacing.
 std::string FetchObservationSpaceJson(int obs_dim);
 
+/// The image keys of a pixel dataset's observation space (dataset/pixel_obs.h).
+struct PixelSpaces {
+  std::vector<std::string> cameras;  ///< camera names
+  int width = 0, height = 0;         ///< pixels
+  bool rgb = false;                  ///< "images": uint8 (H, W, 3) Boxes, 0..255
+  bool depth = false;                ///< "depth": float32 (H, W) Boxes, 0..inf
+  bool segmentation = false;         ///< "segmentation": int32 (H, W) Boxes, -1..max_segment
+  int max_segment = 0;               ///< the largest object index
+};
+
+/// `observation_space` of a pixel dataset: FetchObservationSpaceJson's three Boxes plus, per
+/// layer, a Dict of one Box per camera (keys sorted, as gymnasium's Dict sorts them), each with
+/// its full `low` and `high` as nested lists, as serialize_space writes any Box.
+std::string FetchPixelObservationSpaceJson(int obs_dim, const PixelSpaces& pixels);
+
 /// `action_space`: Box(-1, 1, (4,), float32) in serialize_space's form.
 std::string FetchActionSpaceJson();
 

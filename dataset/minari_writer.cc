@@ -241,6 +241,7 @@ MinariWriter::MinariWriter(const MinariWriteOptions& options)
   }
   temp_exists_ = true;
   obs_dim_ = ObservationSize(options_.spec->has_object);
+  if (options_.pixels) pixels_ = *options_.pixels;
   // the root group tracks and indexes creation order, as h5py's File(track_order=True)
   H5PropList fcpl = NoTimesList(H5P_FILE_CREATE);
   const unsigned order = H5P_CRT_ORDER_TRACKED | H5P_CRT_ORDER_INDEXED;
@@ -268,8 +269,12 @@ MinariWriter::~MinariWriter() {
   }
 }
 
-void MinariWriter::Add(const MinariEpisode& e) {
+void MinariWriter::Add(const MinariEpisode& e, const StagedEpisode* staged) {
   if (!file_) throw RunError("MinariWriter: Add after Commit");
+  if (pixels_.has_value() != (staged != nullptr)) {
+    throw RunError("MinariWriter: episode " + std::to_string(e.id) +
+                   (staged ? " has images the dataset does not hold" : " has no images"));
+  }
   ThrowIfStopped(options_.dataset_id);
   const size_t t = e.rewards.size();
   const size_t d = static_cast<size_t>(obs_dim_);
@@ -320,10 +325,60 @@ void MinariWriter::Add(const MinariEpisode& e) {
   w.Dataset(group.get(), "truncations", boolean.get(), boolean.get(), 1, t, 0,
             e.truncations.data());
   const H5Group infos = w.Group(group.get(), "infos");
+  if (staged) {
+    if (episodes_ == 0) FillCameraGeometry(*staged, &*pixels_);
+    const H5Group obs(H5Gopen2(group.get(), "observations", H5P_DEFAULT));
+    if (!obs) w.Fail("group observations");
+    AddPixels(obs.get(), infos.get(), *staged, t + 1);
+  }
   w.Dataset(infos.get(), "is_success", H5T_IEEE_F32LE, H5T_NATIVE_FLOAT, 4, t + 1, 0,
             e.is_success.data());
   ++episodes_;
   steps_ += static_cast<int64_t>(t);
+}
+
+void MinariWriter::AddPixels(hid_t observations, hid_t infos, const StagedEpisode& staged,
+                             hsize_t rows) {
+  const std::string file = (temp_path_ / "data" / "main_data.hdf5").string();
+  const EpisodeWriter w(file);
+  const PixelLayout& layout = *pixels_;
+  for (ImageLayer layer : layout.layers) {
+    const char* key = layer == ImageLayer::kRgb ? "images" : ImageLayerName(layer);
+    const H5Group group = w.Group(observations, key);
+    for (size_t c = 0; c < layout.cameras.size(); ++c) {
+      if (layer == ImageLayer::kRgb) {  // PNG files: Minari 0.5.3 decodes an image space so
+        WritePngDataset(group.get(), layout.cameras[c].name.c_str(), staged.png[c], file);
+        continue;
+      }
+      const H5Dataset dset = CreateImageDataset(group.get(), layout.cameras[c].name.c_str(), layout,
+                                                layer, rows, false, file);
+      const auto& images = staged.images[c][static_cast<size_t>(layer)];
+      for (hsize_t r = 0; r < rows; ++r) WriteImageChunk(dset.get(), r, images[r], file);
+    }
+  }
+  bool any_moving = false;
+  for (const PixelCamera& c : layout.cameras) any_moving = any_moving || c.moving;
+  if (!any_moving) return;
+  const H5Group poses = w.Group(infos, "camera_pose");
+  for (size_t c = 0; c < layout.cameras.size(); ++c) {
+    if (!layout.cameras[c].moving) continue;
+    const std::vector<double> p = CameraPoses(staged, static_cast<int>(c));
+    w.Dataset(poses.get(), layout.cameras[c].name.c_str(), H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 8,
+              rows, 7, p.data());
+  }
+}
+
+std::string MinariWriter::ObservationSpaceJson() const {
+  if (!pixels_) return FetchObservationSpaceJson(obs_dim_);
+  PixelSpaces spaces;
+  for (const PixelCamera& c : pixels_->cameras) spaces.cameras.push_back(c.name);
+  spaces.width = pixels_->width;
+  spaces.height = pixels_->height;
+  spaces.rgb = pixels_->has(ImageLayer::kRgb);
+  spaces.depth = pixels_->has(ImageLayer::kDepth);
+  spaces.segmentation = pixels_->has(ImageLayer::kSegmentation);
+  spaces.max_segment = static_cast<int>(pixels_->segmentation_legend.size()) - 1;
+  return FetchPixelObservationSpaceJson(obs_dim_, spaces);
 }
 
 std::string MinariWriter::MetadataJson(double dataset_size_mb) const {
@@ -331,7 +386,7 @@ std::string MinariWriter::MetadataJson(double dataset_size_mb) const {
   std::string j = "{\"total_episodes\": " + std::to_string(episodes_) +
                   ", \"total_steps\": " + std::to_string(steps_) +
                   ", \"data_format\": \"hdf5\", \"observation_space\": " +
-                  PythonJsonString(FetchObservationSpaceJson(obs_dim_)) +
+                  PythonJsonString(ObservationSpaceJson()) +
                   ", \"action_space\": " + PythonJsonString(FetchActionSpaceJson()) +
                   ", \"env_spec\": " +
                   PythonJsonString(FetchEnvSpecJson(*options_.spec, options_.max_episode_steps)) +
@@ -354,6 +409,7 @@ std::string MinariWriter::MetadataJson(double dataset_size_mb) const {
     j += (i ? ", " : "") + PythonJsonString(requirements[i]);
   }
   j += "]";
+  if (pixels_) j += ", \"pixels\": " + PixelsJson(*pixels_).dump(-1, ' ', true);
   j += ", \"dataset_size\": " + nlohmann::json(dataset_size_mb).dump() + "}";
   return j;
 }

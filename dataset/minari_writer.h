@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -13,6 +14,7 @@
 #include "base/folder_lock.h"
 #include "dataset/hdf5_handles.h"
 #include "dataset/minari_format.h"
+#include "dataset/pixel_obs.h"
 #include "src/env_spec.h"
 
 namespace fetchscope {
@@ -31,6 +33,8 @@ struct MinariWriteOptions {
   int max_episode_steps = 0;
   std::string code_permalink;  ///< metadata `code_permalink`
   std::string description;     ///< metadata `description` (omitted when empty)
+  /// camera images per step (docs/guide/datasets.md, "Pixel datasets"); null: state only
+  const PixelLayout* pixels = nullptr;
 };
 
 /// Checks the id, refuses an existing dataset unless `overwrite` (UsageError naming the
@@ -64,8 +68,11 @@ class MinariWriter {
   MinariWriter& operator=(const MinariWriter&) = delete;
 
   /// Appends episode_<n> (n = episodes added so far; `episode.id` is ignored and written as
-  /// n). Throws RunError if the arrays disagree with T = rewards.size() or libhdf5 fails.
-  void Add(const MinariEpisode& episode);
+  /// n). With options.pixels, `staged` holds its images (T+1 per camera and layer), stored
+  /// under observations/images|depth|segmentation/NAME and, for a moving camera, its poses
+  /// under infos/camera_pose/NAME. Throws RunError if the arrays disagree with
+  /// T = rewards.size(), images are missing, or libhdf5 fails.
+  void Add(const MinariEpisode& episode, const StagedEpisode* staged = nullptr);
 
   /// Closes the file, writes metadata.json and renames the dataset into place (replacing the
   /// old one when `overwrite`; the old one is removed after the swap). Also writes Minari's
@@ -81,6 +88,8 @@ class MinariWriter {
 
  private:
   std::string MetadataJson(double dataset_size_mb) const;
+  std::string ObservationSpaceJson() const;
+  void AddPixels(hid_t observations, hid_t infos, const StagedEpisode& staged, hsize_t rows);
 
   MinariWriteOptions options_;
   std::filesystem::path final_path_;
@@ -91,6 +100,7 @@ class MinariWriter {
   bool temp_exists_ = false;
   H5File file_;
   int obs_dim_ = 0;
+  std::optional<PixelLayout> pixels_;  // options.pixels, its geometry from the first episode
   int64_t episodes_ = 0;
   int64_t steps_ = 0;
 };

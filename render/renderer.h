@@ -156,6 +156,22 @@ class Renderer {
   void RenderLayer(const mjData* data, const FrameInfo& info, Layer layer,
                    std::vector<uint8_t>* out);
 
+  /// The depth layer as numbers: metres along the view axis (float32, row 0 = top), 0 where
+  /// nothing is hit; RenderLayer(kDepth)'s millimetres are these rounded (to 65.535 m).
+  void RenderDepthMetres(const mjData* data, const FrameInfo& info, std::vector<float>* out);
+
+  /// The segmentation layer as object indices (row 0 = top): the body id of a body's geom,
+  /// model->nbody + site id for a site (the goal marker), -1 for nothing; the objects
+  /// RenderLayer(kSegmentation) colours with SegmentationColor(index).
+  void RenderSegmentIndices(const mjData* data, const FrameInfo& info, std::vector<int32_t>* out);
+
+  /// The GL camera the last view of the last frame was drawn with (position, forward, up and
+  /// frustum): the mean of the scene's left and right eye, as mjr_render draws a mono frame
+  /// (each eye sits half the model's ipd aside). The pose and intrinsics of a one-camera frame.
+  mjvGLCamera view_camera() const {
+    return mjv_averageCamera(&scene_->get()->camera[0], &scene_->get()->camera[1]);
+  }
+
   /// What the segmentation layer of `data` shows at pixel (x, y) of the frame (row 0 = top):
   /// the geom or site there and its body; nullopt for the background, an overlay or a pixel
   /// outside the frame. Renders the layer (as RenderLayer does) to find it.
@@ -277,6 +293,15 @@ class Renderer {
   std::vector<SegmentObject> legend_;
   // Turns the segid colours of a segmentation readback into palette colours; fills legend_.
   void ColourSegments(std::vector<uint8_t>* rgb);
+  // The depth layer's near and far planes (the model's znear/zfar times its extent), and the
+  // distance along the view axis of depth-buffer value d in [0, 1).
+  double DepthNear() const;
+  double DepthFar() const;
+  static double DepthAlongAxis(double d, double znear, double zfar);
+  // Draws the scene without overlays and reads its depth buffer into depth_bottom_up_.
+  void ReadDepth(const mjData* data, const FrameInfo& info);
+  // The palette index of each segid of the last scene (-1: not an object).
+  std::vector<int> SegmentObjectsOfScene() const;
   // Draws the segmentation scene and reads its segid colours (segid + 1, 0 = none) into `out`.
   void DrawSegmentIds(const mjData* data, const FrameInfo& info, std::vector<uint8_t>* out);
   std::vector<uint8_t> pick_ids_;  // Pick's readback, reused

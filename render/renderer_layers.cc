@@ -84,7 +84,6 @@ std::array<uint8_t, 3> SegmentationColor(int index) {
 void Renderer::RenderLayer(const mjData* data, const FrameInfo& info, Layer layer,
                            std::vector<uint8_t>* out) {
   const size_t pixels = static_cast<size_t>(frame_.width) * frame_.height;
-  const mjrRect frame{0, 0, frame_.width, frame_.height};
   if (layer == Layer::kRgb) {
     out->resize(pixels * 3);
     Render(data, info, out->data());
@@ -96,26 +95,79 @@ void Renderer::RenderLayer(const mjData* data, const FrameInfo& info, Layer laye
     return;
   }
 
-  // Depth: the buffer holds d in [0, 1], non-linear; with near n and far f (MuJoCo scales the
-  // model's znear/zfar by the model extent), the distance along the view axis is
-  // n f / (f - d (f - n)). The far plane (d = 1) and anything beyond uint16 millimetres
-  // (65.535 m; MuJoCo's skybox lies ~100 m away) become 0: no measurement.
-  Draw(data, info, /*overlays=*/false);
-  depth_bottom_up_.resize(pixels);
-  mjr_readPixels(nullptr, depth_bottom_up_.data(), frame, context_->get());
-  const double extent = model_->stat.extent;
-  const double znear = model_->vis.map.znear * extent;
-  const double zfar = model_->vis.map.zfar * extent;
+  ReadDepth(data, info);
+  const double znear = DepthNear(), zfar = DepthFar();
   std::vector<uint16_t> millimetres(pixels);
   for (size_t i = 0; i < pixels; ++i) {
     const double d = depth_bottom_up_[i];
     if (d >= 1.0) continue;  // stays 0
-    const double mm = std::round(1000.0 * znear * zfar / (zfar - d * (zfar - znear)));
+    const double mm = std::round(1000.0 * DepthAlongAxis(d, znear, zfar));
     if (mm <= 65535.0) millimetres[i] = static_cast<uint16_t>(mm);
   }
   out->resize(pixels * 2);
   FlipRows(reinterpret_cast<const uint8_t*>(millimetres.data()),
            static_cast<size_t>(frame_.width) * 2, out->data());
+}
+
+// Depth: the buffer holds d in [0, 1], non-linear; with near n and far f (MuJoCo scales the
+// model's znear/zfar by the model extent), the distance along the view axis is
+// n f / (f - d (f - n)). The far plane (d = 1) and, in millimetres, anything beyond uint16
+// (65.535 m; MuJoCo's skybox lies ~100 m away) become 0: no measurement.
+double Renderer::DepthNear() const { return model_->vis.map.znear * model_->stat.extent; }
+double Renderer::DepthFar() const { return model_->vis.map.zfar * model_->stat.extent; }
+double Renderer::DepthAlongAxis(double d, double znear, double zfar) {
+  return znear * zfar / (zfar - d * (zfar - znear));
+}
+
+void Renderer::ReadDepth(const mjData* data, const FrameInfo& info) {
+  Draw(data, info, /*overlays=*/false);
+  depth_bottom_up_.resize(static_cast<size_t>(frame_.width) * frame_.height);
+  mjr_readPixels(nullptr, depth_bottom_up_.data(), mjrRect{0, 0, frame_.width, frame_.height},
+                 context_->get());
+}
+
+void Renderer::RenderDepthMetres(const mjData* data, const FrameInfo& info,
+                                 std::vector<float>* out) {
+  ReadDepth(data, info);
+  const double znear = DepthNear(), zfar = DepthFar();
+  const size_t w = static_cast<size_t>(frame_.width), h = static_cast<size_t>(frame_.height);
+  out->resize(w * h);
+  for (size_t y = 0; y < h; ++y) {  // bottom-up rows to top-down
+    const float* src = depth_bottom_up_.data() + (h - 1 - y) * w;
+    float* dst = out->data() + y * w;
+    for (size_t x = 0; x < w; ++x) {
+      const double d = src[x];
+      dst[x] = d >= 1.0 ? 0.0f : static_cast<float>(DepthAlongAxis(d, znear, zfar));
+    }
+  }
+}
+
+void Renderer::RenderSegmentIndices(const mjData* data, const FrameInfo& info,
+                                    std::vector<int32_t>* out) {
+  DrawSegmentIds(data, info, &pick_ids_);
+  const std::vector<int> object_of = SegmentObjectsOfScene();
+  const size_t pixels = pick_ids_.size() / 3;
+  out->resize(pixels);
+  const uint8_t* p = pick_ids_.data();
+  for (size_t i = 0; i < pixels; ++i, p += 3) {
+    const int id = p[0] + 256 * p[1] + 65536 * p[2];  // segid + 1; 0 = background
+    (*out)[i] = id > 0 && id <= static_cast<int>(object_of.size()) ? object_of[id - 1] : -1;
+  }
+}
+
+std::vector<int> Renderer::SegmentObjectsOfScene() const {
+  const mjvScene& scene = *scene_->get();
+  std::vector<int> object_of(static_cast<size_t>(scene.ngeom), -1);
+  for (int i = 0; i < scene.ngeom; ++i) {
+    const mjvGeom& g = scene.geoms[i];
+    if (g.segid < 0 || g.segid >= scene.ngeom) continue;
+    if (g.objtype == mjOBJ_GEOM && g.objid >= 0 && g.objid < model_->ngeom) {
+      object_of[g.segid] = model_->geom_bodyid[g.objid];
+    } else if (g.objtype == mjOBJ_SITE && g.objid >= 0 && g.objid < model_->nsite) {
+      object_of[g.segid] = model_->nbody + g.objid;
+    }
+  }
+  return object_of;
 }
 
 void Renderer::DrawSegmentIds(const mjData* data, const FrameInfo& info,

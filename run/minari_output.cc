@@ -16,6 +16,7 @@ MinariWriteOptions MinariOptionsFor(const MinariRequest& request, const OutputRu
   if (!request.author.empty()) o.author = request.author;
   o.author_email = request.author_email;
   o.max_episode_steps = run.steps;  // gym.make(id, max_episode_steps=--steps)
+  o.pixels = request.pixels;
   const std::string version = "fetchscope " FETCHSCOPE_VERSION " ";
   if (run.command == "export") {
     o.code_permalink = version + "export " + run.source;
@@ -48,7 +49,14 @@ void MinariOutput::Add(const EpisodeRecord& episode) {
   // episode 0 was reset with the run's seed; the others continued its generator
   const std::optional<uint64_t> seed =
       episode.index == 0 ? std::optional<uint64_t>(seed_) : std::nullopt;
-  writer_->Add(ToMinariEpisode(episode, seed, width_));
+  const MinariEpisode e = ToMinariEpisode(episode, seed, width_);
+  if (!request_.pixels) {
+    writer_->Add(e);
+    return;
+  }
+  const std::filesystem::path staged = StagingFileOf(request_.staging, episode.index);
+  const StagedEpisode images = LoadStagedEpisode(staged, *request_.pixels, e.steps() + 1);
+  writer_->Add(e, &images);
 }
 
 std::string MinariOutput::Finish() {

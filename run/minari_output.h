@@ -9,6 +9,7 @@
 #include <string>
 
 #include "dataset/minari_writer.h"
+#include "dataset/pixel_obs.h"
 #include "run/episode_output.h"
 
 namespace fetchscope {
@@ -20,6 +21,10 @@ struct MinariRequest {
   bool overwrite = false;      ///< --overwrite: replace an existing dataset of that id
   std::string author;          ///< --minari-author ("": "fetchscope")
   std::string author_email;    ///< --minari-author-email ("": none)
+  /// --obs-camera: the images each episode's staging file holds (run/pixel_recorder.h), in
+  /// the folder `staging`; null: state only
+  const PixelLayout* pixels = nullptr;
+  std::filesystem::path staging;
 };
 
 /// The writer's options for `run`'s episodes: the metadata's algorithm (the policy, "unknown"

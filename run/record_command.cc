@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
+#include <optional>
 
 #include "base/errors.h"
 #include "base/stop_signal.h"
@@ -160,6 +161,16 @@ int RecordRun(RecordJob job) {
     std::fprintf(stderr, "fetchscope: note: %s\n", folder.notice().c_str());
   }
   if (folder.already_complete()) return FinishCompleteRun(job, folder);
+  // --obs-camera: the workers' images wait beside the run folder until the dataset is written
+  std::optional<PixelStaging> staging;
+  if (job.plan.pixels.enabled()) {
+    staging.emplace(fs::absolute(job.plan.out).parent_path());
+    job.plan.pixels.staging = staging->path();
+    if (job.minari) {
+      job.minari->staging = staging->path();
+      job.minari->pixels = &job.plan.pixels.layout;
+    }
+  }
   const int early_signal = StopSignal();  // before the scheduler: record nothing
   ProgressReporter progress("record", static_cast<int>(folder.todo().size()), job.plan.steps + 1,
                             job.quiet);

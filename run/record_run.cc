@@ -62,6 +62,7 @@ RecordRunner::RecordRunner(const RecordPlan& plan, int worker)
 
 RecordRunner::~RecordRunner() {
   encoders_.clear();  // aborts and joins whatever is still running (a failure elsewhere)
+  pixels_.reset();
   renderer_.reset();  // the renderer's MuJoCo context is freed with its GL context current
   gl_.reset();
 }
@@ -69,6 +70,7 @@ RecordRunner::~RecordRunner() {
 nlohmann::json RecordRunner::Start() {
   gl_ = CreateViewContext(plan_.view.backend, plan_.gpu, worker_);
   renderer_.emplace(*gl_, sequence_.env().model(), plan_.view.render);
+  if (plan_.pixels.enabled()) pixels_.emplace(plan_.pixels, gl_.get(), sequence_.env().model());
   const size_t frame_bytes = static_cast<size_t>(renderer_->width()) * renderer_->height() * 3;
   pool_.emplace(FramePoolSize(plan_.encoders, plan_.steps, frame_bytes * (1 + plan_.layers.size())),
                 frame_bytes, plan_.layers.size(), gif_scale_.has_value());
@@ -124,8 +126,9 @@ void RecordRunner::Run(int k, WorkerChannel& channel) {
     const auto render_start = Clock::now();
     sim_s += std::chrono::duration<double>(render_start - sim_start).count();
     lap.Into(&sim_cpu);
-    Frame* f = pool_->Acquire();
     FetchEnv& env = render_env_ ? *render_env_ : sequence_.env();
+    if (pixels_) pixels_->Step(env, record);
+    Frame* f = pool_->Acquire();
     FrameInfo info = MakeFrameInfo(env, record);
     AddRelabelled(record.t, &info);
     if (plan_.from) info.ghost = RecordedAchieved(*plan_.from, k, record.t);  // a dataset's own
@@ -159,7 +162,9 @@ void RecordRunner::Run(int k, WorkerChannel& channel) {
   };
   EpisodeRecord episode;
   try {
+    if (pixels_) pixels_->Begin(k);
     episode = PlayEpisode(k, on_step, channel);
+    if (pixels_) pixels_->End();
     const auto drain_start = Clock::now();
     lap.Into(&sim_cpu);  // the last step's
     while (!in_flight.empty()) collect_oldest();

@@ -25,6 +25,7 @@
 #include "render/view.h"
 #include "run/episode_scheduler.h"
 #include "run/manifest.h"
+#include "run/pixel_recorder.h"
 #include "src/assets.h"
 #include "src/env_spec.h"
 #include "src/episode_source.h"
@@ -54,6 +55,8 @@ struct RecordPlan {
   bool hindsight = false;        ///< the hindsight overlay: run the episode first, then render it
   std::vector<Layer> layers;     ///< --layers beyond rgb (depth, segmentation), in the order given
   bool contact_signals = false;  ///< --signals contacts: each step's contacts in the trajectory
+  /// --obs-camera: each step's images (and states) rendered and staged for the dataset
+  PixelPlan pixels;
 };
 
 /// The episode sinks' options for `plan`.
@@ -106,6 +109,7 @@ class RecordRunner : public EpisodeRunner {
   // Lifetime order: the GL context outlives the renderer; encoders go first (they hold frames).
   std::unique_ptr<GlContext> gl_;
   std::optional<Renderer> renderer_;
+  std::optional<PixelRecorder> pixels_;  // --obs-camera's images, on gl_
   std::optional<FramePool> pool_;
   std::deque<std::unique_ptr<EpisodeEncoder>> encoders_;
 };

@@ -7,6 +7,7 @@
 
 #include "base/errors.h"
 #include "dataset/minari_writer.h"
+#include "render/view.h"
 #include "src/episode.h"
 #include "src/fetch_env.h"
 #include "src/policy.h"
@@ -18,21 +19,43 @@ namespace {
 // Plays episodes and reports each as its trajectory JSON entry.
 class RolloutRunner : public EpisodeRunner {
  public:
-  RolloutRunner(const EnvSpec& spec, const AssetSource& assets, const PolicySpec& policy,
-                const PolicyContext& context, int steps, bool contact_signals)
-      : sequence_(std::make_unique<FetchEnv>(spec, assets), MakePolicy(policy, spec, context),
-                  context.seed, steps) {
-    if (contact_signals) sequence_.env().EnableContactSignals();
+  RolloutRunner(const RolloutJob& job, int worker)
+      : job_(job),
+        worker_(worker),
+        sequence_(std::make_unique<FetchEnv>(*job.spec, job.assets),
+                  MakePolicy(job.policy, *job.spec, *job.policy_context), job.policy_context->seed,
+                  job.steps) {
+    if (job.contact_signals) sequence_.env().EnableContactSignals();
+  }
+  ~RolloutRunner() override {
+    pixels_.reset();  // its renderers go while their GL context exists
+    gl_.reset();
+  }
+  nlohmann::json Start() override {
+    if (job_.pixels.enabled()) {
+      if (job_.pixels.setup.enabled()) gl_ = CreateViewContext(job_.backend, job_.gpu, worker_);
+      pixels_.emplace(job_.pixels, gl_.get(), sequence_.env().model());
+    }
+    return nullptr;
   }
   void Run(int k, WorkerChannel& channel) override {
-    const EpisodeRecord episode = sequence_.Play(
-        k, [&](const StepRecord&, const StepResult*) { return !channel.StopRequested(); });
+    if (pixels_) pixels_->Begin(k);
+    const EpisodeRecord episode =
+        sequence_.Play(k, [&](const StepRecord& record, const StepResult*) {
+          if (pixels_) pixels_->Step(sequence_.env(), record);
+          return !channel.StopRequested();
+        });
+    if (pixels_) pixels_->End();
     channel.Progress(static_cast<int>(episode.steps.size()) - 1);
     channel.Done(k, EpisodeJson(episode));
   }
 
  private:
+  const RolloutJob& job_;
+  const int worker_;
   EpisodeSequence sequence_;
+  std::unique_ptr<GlContext> gl_;
+  std::optional<PixelRecorder> pixels_;
 };
 
 // One episode's JSON entry as the trajectory reader reads it back: what the output receives.
@@ -73,10 +96,8 @@ RolloutResult RunRolloutJob(const RolloutJob& job) {
   }
   schedule.jobs = job.jobs;
   schedule.mode = job.mode;
-  const ScheduleResult result = RunEpisodes(schedule, [&](int) {
-    return std::make_unique<RolloutRunner>(*job.spec, job.assets, job.policy, *job.policy_context,
-                                           job.steps, job.contact_signals);
-  });
+  const ScheduleResult result = RunEpisodes(
+      schedule, [&](int worker) { return std::make_unique<RolloutRunner>(job, worker); });
   RolloutResult r;
   if (!result.failures.empty()) {
     if (output) output->Abort();

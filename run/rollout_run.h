@@ -11,8 +11,10 @@
 #include <string>
 #include <vector>
 
+#include "render/gpu_select.h"
 #include "run/episode_output.h"
 #include "run/episode_scheduler.h"
+#include "run/pixel_recorder.h"
 #include "src/assets.h"
 #include "src/env_spec.h"
 #include "src/policy_spec.h"
@@ -32,8 +34,12 @@ struct RolloutJob {
   int jobs = 1;                                   ///< workers (ResolveJobs)
   WorkerMode mode = WorkerMode::kProcess;         ///< --worker-mode
   EpisodeOutput* output = nullptr;                ///< where the episodes go (null: nowhere)
-  bool contact_signals = false;      ///< --signals contacts: each step's contacts in the trajectory
-  std::function<void()> on_episode;  ///< called as each episode is done (progress), if set
+  bool contact_signals = false;  ///< --signals contacts: each step's contacts in the trajectory
+  /// --obs-camera: the images (and states) each worker renders and stages for the output
+  PixelPlan pixels;
+  GlBackend backend = GlBackend::kAuto;  ///< the GL backend of the workers' images
+  GpuChoice gpu;                         ///< their EGL devices
+  std::function<void()> on_episode;      ///< called as each episode is done (progress), if set
 };
 
 /// What a rollout made.

@@ -1,0 +1,143 @@
+#include "run/pixel_recorder.h"
+
+#include <unistd.h>
+
+#include <atomic>
+#include <system_error>
+
+#include "base/errors.h"
+#include "encode/png_io.h"
+#include "render/view.h"
+
+namespace fetchscope {
+namespace {
+
+namespace fs = std::filesystem;
+
+ImageLayer ToImageLayer(Layer layer) {
+  switch (layer) {
+    case Layer::kRgb:
+      return ImageLayer::kRgb;
+    case Layer::kDepth:
+      return ImageLayer::kDepth;
+    case Layer::kSegmentation:
+      return ImageLayer::kSegmentation;
+  }
+  return ImageLayer::kRgb;
+}
+
+std::string NameOf(const mjModel* model, int type, int id) {
+  const char* name = mj_id2name(model, type, id);
+  return name ? std::string(name) : std::string(mju_type2Str(type)) + " " + std::to_string(id);
+}
+
+}  // namespace
+
+PixelLayout MakePixelLayout(const ObsSetup& setup, const mjModel* model) {
+  PixelLayout layout;
+  layout.width = setup.width;
+  layout.height = setup.height;
+  for (Layer l : setup.layers) layout.layers.push_back(ToImageLayer(l));
+  for (const ObsCamera& c : setup.cameras) {
+    PixelCamera camera;
+    camera.name = c.name;
+    camera.camera = c.text;
+    camera.moving = c.moving;
+    layout.cameras.push_back(camera);
+  }
+  std::vector<std::string> bodies;
+  for (int i = 0; i < model->nbody; ++i) bodies.push_back(NameOf(model, mjOBJ_BODY, i));
+  std::vector<std::pair<std::string, std::string>> sites;
+  for (int i = 0; i < model->nsite; ++i) {
+    sites.emplace_back(NameOf(model, mjOBJ_BODY, model->site_bodyid[i]),
+                       NameOf(model, mjOBJ_SITE, i));
+  }
+  layout.segmentation_legend = SegmentationLegend(bodies, sites);
+  layout.overlay = setup.overlay_text;
+  return layout;
+}
+
+size_t FlatMujocoStateSize(const mjModel* model) {
+  return 1 + static_cast<size_t>(model->nq) + model->nv + 7 * static_cast<size_t>(model->nmocap);
+}
+
+std::vector<double> FlatMujocoState(const mjModel* model, const mjData* data) {
+  std::vector<double> s;
+  s.reserve(FlatMujocoStateSize(model));
+  s.push_back(data->time);
+  s.insert(s.end(), data->qpos, data->qpos + model->nq);
+  s.insert(s.end(), data->qvel, data->qvel + model->nv);
+  s.insert(s.end(), data->mocap_pos, data->mocap_pos + 3 * model->nmocap);
+  s.insert(s.end(), data->mocap_quat, data->mocap_quat + 4 * model->nmocap);
+  return s;
+}
+
+PixelStaging::PixelStaging(const fs::path& parent) {
+  static std::atomic<int> counter{0};
+  std::error_code ec;
+  fs::create_directories(parent, ec);
+  path_ =
+      parent / (".fetchscope-pixels-" + std::to_string(getpid()) + "-" + std::to_string(counter++));
+  if (!fs::create_directory(path_, ec) || ec) {
+    const std::string why = ec ? ec.message() : "it exists";
+    path_.clear();
+    throw RunError("cannot make the image staging folder in '" + parent.string() + "': " + why);
+  }
+}
+
+PixelStaging::~PixelStaging() {
+  std::error_code ec;
+  if (!path_.empty()) fs::remove_all(path_, ec);
+}
+
+PixelRecorder::PixelRecorder(const PixelPlan& plan, GlContext* gl, mjModel* model) : plan_(plan) {
+  if (plan_.setup.enabled()) renderer_.emplace(*gl, model, plan_.setup);
+}
+
+PixelRecorder::~PixelRecorder() = default;
+
+void PixelRecorder::Begin(int index) {
+  writer_.reset();
+  writer_ = std::make_unique<PixelStagingWriter>(StagingFileOf(plan_.staging, index),
+                                                 plan_.layout.deflate_level);
+}
+
+void PixelRecorder::Step(const FetchEnv& env, const StepRecord& record) {
+  if (!writer_) throw RunError("PixelRecorder: Step before Begin");
+  const int t = record.t;
+  if (plan_.layout.states) writer_->AddState(t, FlatMujocoState(env.model(), env.data()));
+  if (!renderer_) return;
+  renderer_->Render(env.data(), MakeFrameInfo(env, record));
+  const PixelLayout& layout = plan_.layout;
+  for (size_t c = 0; c < renderer_->cameras(); ++c) {
+    const ObsImages& im = renderer_->images(c);
+    const int camera = static_cast<int>(c);
+    if (layout.has(ImageLayer::kRgb)) {
+      if (layout.raw_rgb)
+        writer_->AddImage(camera, ImageLayer::kRgb, t, im.rgb.data(), im.rgb.size());
+      if (layout.png_rgb) {
+        writer_->AddPng(camera, t,
+                        EncodePng(layout.width, layout.height, 3, 8, im.rgb.data(), false,
+                                  "image of camera " + layout.cameras[c].name));
+      }
+    }
+    if (layout.has(ImageLayer::kDepth)) {
+      writer_->AddImage(camera, ImageLayer::kDepth, t, im.depth.data(), im.depth.size() * 4);
+    }
+    if (layout.has(ImageLayer::kSegmentation)) {
+      writer_->AddImage(camera, ImageLayer::kSegmentation, t, im.segmentation.data(),
+                        im.segmentation.size() * 4);
+    }
+    const ObsCameraGeometry& g = im.geometry;
+    std::array<double, 12> numbers = {g.fovy, g.fx, g.fy, g.cx, g.cy};
+    std::copy(g.pose.begin(), g.pose.end(), numbers.begin() + 5);
+    writer_->AddGeometry(camera, t, numbers);
+  }
+}
+
+void PixelRecorder::End() {
+  if (writer_) writer_->Close();
+  writer_.reset();
+}
+
+}  // namespace fetchscope

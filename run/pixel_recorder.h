@@ -1,0 +1,76 @@
+// Pixel observations in a worker (docs/guide/datasets.md, "Pixel datasets"): each step of an
+// episode rendered by ObsRenderer (render/obs_view.h), compressed on the worker's own core and
+// appended to the episode's staging file (dataset/pixel_obs.h), which the dataset outputs copy
+// in episode order. The staging folder lives beside what is written and goes with the run.
+#pragma once
+
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "dataset/pixel_obs.h"
+#include "render/gl_context.h"
+#include "render/obs_view.h"
+#include "src/episode.h"
+#include "src/fetch_env.h"
+
+namespace fetchscope {
+
+/// What every worker renders and stages, decided by the parent.
+struct PixelPlan {
+  ObsSetup setup;                 ///< cameras, size, layers, overlay (none: no images)
+  PixelLayout layout;             ///< what the outputs store (geometry filled as they go)
+  std::filesystem::path staging;  ///< the staging folder (PixelStaging)
+  bool enabled() const { return setup.enabled() || layout.states; }
+};
+
+/// The layout `setup` gives on `model`: size, layers, the cameras (names, --camera text,
+/// moving), the segmentation legend of the model's bodies and sites.
+PixelLayout MakePixelLayout(const ObsSetup& setup, const mjModel* model);
+
+/// The MuJoCo state robomimic's `states` stores: time, qpos, qvel, mocap_pos, mocap_quat.
+std::vector<double> FlatMujocoState(const mjModel* model, const mjData* data);
+/// Its length on `model`.
+size_t FlatMujocoStateSize(const mjModel* model);
+
+/// A staging folder, `.fetchscope-pixels-<pid>-<n>` in `parent` (created if needed), removed
+/// with everything in it when this goes.
+class PixelStaging {
+ public:
+  /// Throws RunError naming the folder when it cannot be made.
+  explicit PixelStaging(const std::filesystem::path& parent);
+  ~PixelStaging();
+  PixelStaging(const PixelStaging&) = delete;
+  PixelStaging& operator=(const PixelStaging&) = delete;
+  const std::filesystem::path& path() const { return path_; }
+
+ private:
+  std::filesystem::path path_;
+};
+
+/// One worker's pixel observations: its renderer (made on the worker's GL context) and the
+/// staging file of the episode in hand.
+class PixelRecorder {
+ public:
+  /// `gl` (current on this thread; null when no camera is observed) and `model` outlive the
+  /// recorder. Throws UsageError as
+  /// Renderer does.
+  PixelRecorder(const PixelPlan& plan, GlContext* gl, mjModel* model);
+  ~PixelRecorder();
+
+  /// Opens episode `index`'s staging file (replacing one a failed try left).
+  void Begin(int index);
+  /// Renders and stages the images of `env`'s current state, step `record.t`.
+  void Step(const FetchEnv& env, const StepRecord& record);
+  /// Closes the episode's staging file. Throws RunError where it could not be written.
+  void End();
+
+ private:
+  const PixelPlan& plan_;
+  std::optional<ObsRenderer> renderer_;
+  std::unique_ptr<PixelStagingWriter> writer_;
+};
+
+}  // namespace fetchscope
