@@ -22,6 +22,7 @@
 #include "cli/command.h"
 #include "cli/common.h"
 #include "cli/jobs_options.h"
+#include "cli/obs_options.h"
 #include "cli/record_from.h"
 #include "cli/resolve.h"
 #include "cli/shard_options.h"
@@ -84,6 +85,7 @@ struct RecordOptions {
   std::string minari_root;       // --minari-root
   DatasetAuthor author;          // --minari-author, --minari-author-email
   double tolerance = 1e-6;       // --tolerance: record --from DATASET
+  ObsOptions obs;                // --obs-camera, --obs-size, --obs-layers, --obs-overlay
 };
 
 // record --from: the recorded episodes' indices, ascending.
@@ -172,6 +174,19 @@ void ResolveRecordWorld(const RecordOptions& o, RecordJob* job) {
     plan.video.height = frame.height;
     job->model_path = env.model_path();
     if (plan.from) VerifyRecording(env, *plan.from);  // an edited recording stops here
+    // --obs-camera: the dataset's images, at the run's --msaa (as render draws them)
+    const ObsSetup obs = ResolveObs(o.obs, env.model(), plan.view.render.msaa_samples);
+    if (obs.enabled()) {
+      if (o.resume) {
+        throw UsageError(
+            "--obs-camera cannot --resume: the images of the episodes already "
+            "recorded are gone; record the run again with --overwrite");
+      }
+      plan.pixels.setup = obs;
+      plan.pixels.layout = MakePixelLayout(obs, env.model());
+      plan.pixels.layout.raw_rgb = false;  // Minari stores rgb as PNG files
+      plan.pixels.layout.png_rgb = true;
+    }
   }
   ValidateVideoOptions(plan.video);
 }
@@ -214,8 +229,9 @@ RecordJob ResolveRecord(RecordOptions* options, const PolicySpec& policy,
   job.resume = o.resume;
   if (!o.minari.empty()) {
     job.minari_root_given = o.minari_root;
-    job.minari = MinariRequest{o.minari, MinariRoot(o.minari_root), o.overwrite, o.author.name,
-                               o.author.email, nullptr, {}};
+    job.minari = MinariRequest{
+        o.minari, MinariRoot(o.minari_root), o.overwrite, o.author.name, o.author.email, nullptr,
+        {}};
     CheckRecordMinari(job);
   }
   ResolveRecordVideo(o, &plan);
@@ -343,8 +359,10 @@ Command AddRecord(CLI::App& app) {
   sub->add_flag("--no-report", o->no_report,
                 "Do not write the run's HTML report (index.html; see `fetchscope report`)");
   AddFromOption(sub, &o->from, &o->tolerance);
+  AddObsOptions(sub, &o->obs);
   return {sub, [o, sub] {
             o->episodes_given = sub->count("--episodes") > 0;
+            CheckObsUse(sub, o->obs, !o->minari.empty());
             if (!o->from.empty()) return RunRecordFrom(*o, *sub, CommandLine());
             return RunRecordPolicy(*o, CommandLine());
           }};

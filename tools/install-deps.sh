@@ -13,7 +13,7 @@ packages=(cmake g++ make pkg-config
   libeigen3-dev libpng-dev libavcodec-dev libavformat-dev libavutil-dev libswscale-dev
   libavfilter-dev libssl-dev libfreetype-dev libfontconfig-dev fonts-dejavu-core libhdf5-dev
   libcli11-dev nlohmann-json3-dev libgtest-dev libcpp-httplib-dev libturbojpeg0-dev
-  ffmpeg python3 python3-numpy python3-h5py
+  ffmpeg python3 python3-numpy python3-h5py python3-pil
   binutils xz-utils ccache
   chromium)
 # Node.js and npm: Debian's, unless a Node.js (e.g. NodeSource's, which bundles npm) is present

@@ -86,11 +86,17 @@ for cam in pixels["cameras"]:
         if not (0 <= ui < seg.shape[1] and 0 <= vi < seg.shape[0]):
             continue
         window = seg[max(0, vi - 1):vi + 2, max(0, ui - 1):ui + 2]
-        if object_id not in window:
-            fail(f"{name} t={t}: the object projects to ({u:.1f}, {v:.1f}), which shows "
-                 f"{sorted(set(window.flatten().tolist()))}, not the object {object_id}")
-        # the pixel's depth, back-projected, lands on the object (a 5 cm cube)
         z = float(d[vi, ui])
+        if object_id not in window:
+            # only something nearer than the object may hide it (the arm above it)
+            if not (0 < z < p_cv[2] - 0.02):
+                fail(f"{name} t={t}: the object projects to ({u:.1f}, {v:.1f}), which shows "
+                     f"{sorted(set(window.flatten().tolist()))} at {z:.3f} m, not the object "
+                     f"{object_id} at {p_cv[2]:.3f} m")
+            continue
+        if seg[vi, ui] != object_id:
+            continue
+        # the pixel's depth, back-projected, lands on the object (a 5 cm cube)
         back = np.array([(ui - K[0, 2]) / K[0, 0] * z, (vi - K[1, 2]) / K[1, 1] * z, z])
         world = pos + R @ np.array([back[0], -back[1], -back[2]])
         miss = np.linalg.norm(world - obs["achieved_goal"][t])

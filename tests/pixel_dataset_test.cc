@@ -1,0 +1,263 @@
+// Pixel datasets (docs/guide/datasets.md, "Pixel datasets"): each step's camera images in the
+// Minari dataset of rollout, record and record --from, checked against `fetchscope render` and
+// read back with h5py and PIL (tests/pixel/check_pixel_dataset.py): rgb bit for bit, depth within
+// 1 mm, segmentation naming the same objects, the stored intrinsics and poses projecting the
+// object onto its own pixels, state fields bitwise equal to a dataset without images.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "test_util.h"
+
+namespace fetchscope {
+namespace {
+
+namespace fs = std::filesystem;
+using fetchscope::testing::PythonWithH5py;
+using fetchscope::testing::ReadFile;
+using fetchscope::testing::RunCommand;
+using fetchscope::testing::RunFetchscope;
+using fetchscope::testing::SourceDir;
+using fetchscope::testing::TempDir;
+
+// Python with h5py, numpy and PIL, or "".
+std::string PythonWithPil() {
+  const std::string py = PythonWithH5py();
+  if (py.empty() || RunCommand(py + " -c 'import PIL' 2>&1").exit_code != 0) return "";
+  return py;
+}
+
+std::string Checker() { return (SourceDir() / "tests/pixel/check_pixel_dataset.py").string(); }
+
+// Renders camera `name` (--camera `camera`) of FetchPush's scripted episode 0 at each step, as
+// RENDER_DIR/NAME_tT.png with its depth and segmentation.
+void RenderSteps(const fs::path& dir, const std::string& name, const std::string& camera,
+                 const std::string& size, std::initializer_list<int> steps) {
+  const auto x = size.find('x');
+  for (int t : steps) {
+    const auto r = RunFetchscope(
+        "render --env-id FetchPush-v4 --policy scripted --seed 3 --overlay none --layers "
+        "rgb,depth,segmentation --steps " +
+        std::to_string(t) + " --camera " + camera + " --width " + size.substr(0, x) + " --height " +
+        size.substr(x + 1) + " -o " + (dir / (name + "_t" + std::to_string(t) + ".png")).string());
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+  }
+}
+
+TEST(PixelDataset, RolloutImagesAreRendersPixelsAndTheCamerasProjectTheObject) {
+  const std::string py = PythonWithPil();
+  if (py.empty()) GTEST_SKIP() << "python3-h5py, python3-numpy or python3-pil is not installed";
+  unsetenv("DISPLAY");
+  TempDir tmp;
+  const std::string root = " --minari-root " + (tmp.path() / "ds").string();
+  // a fixed model camera, the tracking camera and a free camera whose commas stay its own
+  const std::string cameras =
+      " --obs-camera external_camera_0 --obs-camera grip=track"
+      " --obs-camera top=free:lookat=1.3,0.75,0.45,distance=1.1,azimuth=180,elevation=-75";
+  auto r = RunFetchscope(
+      "rollout --env-id FetchPush-v4 --policy scripted --seed 3 --episodes 2 --steps 12 --jobs 2 "
+      "--minari tt/pix-v0 --obs-layers depth,rgb,segmentation --obs-size 64x48" +
+      cameras + root);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  r = RunFetchscope(
+      "rollout --env-id FetchPush-v4 --policy scripted --seed 3 --episodes 2 --steps 12 "
+      "--minari tt/plain-v0" +
+      root);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const fs::path renders = tmp.path() / "renders";
+  fs::create_directories(renders);
+  RenderSteps(renders, "external_camera_0", "external_camera_0", "64x48", {0, 6, 12});
+  RenderSteps(renders, "grip", "track", "64x48", {0, 6, 12});
+  RenderSteps(renders, "top", "free:lookat=1.3,0.75,0.45,distance=1.1,azimuth=180,elevation=-75",
+              "64x48", {0, 6, 12});
+  r = RunCommand(py + " " + Checker() + " " + (tmp.path() / "ds/tt/pix-v0").string() + " " +
+                 renders.string() + " 0,6,12 object0 " + (tmp.path() / "ds/tt/plain-v0").string() +
+                 " 2>&1");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  // nothing of the staging is left beside the datasets
+  for (const auto& entry : fs::directory_iterator(tmp.path() / "ds")) {
+    EXPECT_EQ(entry.path().filename().string().rfind(".fetchscope-pixels", 0), std::string::npos)
+        << entry.path();
+  }
+}
+
+TEST(PixelDataset, MetadataDescribesTheCamerasAndTheLayout) {
+  const std::string py = PythonWithPil();
+  if (py.empty()) GTEST_SKIP() << "python3-h5py, python3-numpy or python3-pil is not installed";
+  unsetenv("DISPLAY");
+  TempDir tmp;
+  const fs::path ds = tmp.path() / "ds";
+  auto r = RunFetchscope(
+      "rollout --env-id FetchReach-v4 --policy zero --episodes 1 --steps 3 --minari tt/meta-v0 "
+      "--obs-camera external_camera_0 --obs-camera gripper_camera_rgb --obs-size 40x30 "
+      "--minari-root " +
+      ds.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const std::string script = R"PY(
+import io, json, sys
+import h5py, numpy as np
+from PIL import Image
+d = sys.argv[1]
+m = json.load(open(d + "/data/metadata.json"))
+p = m["pixels"]
+assert p["layers"] == ["rgb"], p["layers"]
+assert (p["width"], p["height"]) == (40, 30)
+cams = {c["name"]: c for c in p["cameras"]}
+assert list(cams) == ["external_camera_0", "gripper_camera_rgb"], list(cams)
+g = cams["gripper_camera_rgb"]
+assert g["moving"] is True and "pose" not in g, g
+assert abs(g["fovy"] - 50) < 1e-4, g["fovy"]
+assert abs(g["fy"] - 15 / np.tan(np.radians(25))) < 1e-3 and g["fx"] == g["fy"], g
+assert (g["cx"], g["cy"]) == (19.5, 14.5), g
+assert g["K"] == [[g["fx"], 0.0, g["cx"]], [0.0, g["fy"], g["cy"]], [0.0, 0.0, 1.0]]
+space = json.loads(m["observation_space"].replace("-Infinity", "-1e999").replace("Infinity", "1e999"))
+sub = space["subspaces"]
+assert list(sub) == ["achieved_goal", "desired_goal", "images", "observation"], list(sub)
+box = sub["images"]["subspaces"]["gripper_camera_rgb"]
+assert box["dtype"] == "uint8" and box["shape"] == [30, 40, 3], box
+assert np.array(box["low"]).shape == (30, 40, 3) and np.array(box["high"]).max() == 255
+f = h5py.File(d + "/data/main_data.hdf5", "r")
+e = f["episode_0"]
+pose = e["infos/camera_pose/gripper_camera_rgb"][()]
+assert pose.shape == (4, 7), pose.shape
+assert np.allclose(np.linalg.norm(pose[:, 3:], axis=1), 1)
+im = e["observations/images/gripper_camera_rgb"]
+assert im.shape == (4,), im.shape
+a = np.array(Image.open(io.BytesIO(im[2].tobytes())))
+assert a.shape == (30, 40, 3) and a.dtype == np.uint8, a.shape
+print("ok")
+)PY";
+  const fs::path file = tmp.path() / "meta.py";
+  std::ofstream(file) << script;
+  r = RunCommand(py + " " + file.string() + " " + (ds / "tt/meta-v0").string() + " 2>&1");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+}
+
+TEST(PixelDataset, RecordAndRecordFromWriteTheSameBytesWhateverTheJobs) {
+  const std::string py = PythonWithPil();
+  if (py.empty()) GTEST_SKIP() << "python3-h5py, python3-numpy or python3-pil is not installed";
+  unsetenv("DISPLAY");
+  TempDir tmp;
+  const std::string ds = (tmp.path() / "ds").string();
+  const std::string common =
+      " --env-id FetchPickAndPlace-v4 --policy scripted --episodes 3 --steps 10 --format webm "
+      "--width 64 --height 64 --no-report -q --obs-camera external_camera_0 --obs-camera "
+      "gripper_camera_rgb --obs-layers rgb,depth --obs-size 48x48 --minari-root " +
+      ds;
+  for (int jobs : {1, 2}) {
+    const std::string j = std::to_string(jobs);
+    const auto r = RunFetchscope("record" + common + " --jobs " + j + " --minari tt/rec" + j +
+                                 "-v0 --out " + (tmp.path() / ("run" + j)).string());
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+  }
+  EXPECT_EQ(ReadFile(tmp.path() / "ds/tt/rec1-v0/data/main_data.hdf5"),
+            ReadFile(tmp.path() / "ds/tt/rec2-v0/data/main_data.hdf5"));
+  // the run's replay writes the same images
+  const auto r = RunFetchscope("record --from " + (tmp.path() / "run1").string() +
+                               " --format webm --width 64 --height 64 --no-report -q "
+                               "--obs-camera external_camera_0 --obs-camera gripper_camera_rgb "
+                               "--obs-layers rgb,depth --obs-size 48x48 --minari tt/from-v0 "
+                               "--minari-root " +
+                               ds + " --out " + (tmp.path() / "from").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const std::string script =
+      "import h5py, sys\n"
+      "a = h5py.File(sys.argv[1], 'r'); b = h5py.File(sys.argv[2], 'r')\n"
+      "for e in a:\n"
+      "  for k in ('images', 'depth'):\n"
+      "    for c in a[e]['observations'][k]:\n"
+      "      x, y = a[e]['observations'][k][c], b[e]['observations'][k][c]\n"
+      "      assert len(x) == len(y) == 11, (len(x), len(y))\n"
+      "      for t in range(len(x)):\n"
+      "        assert x[t].tobytes() == y[t].tobytes(), (e, k, c, t)\n"
+      "print('ok')\n";
+  const auto c = RunCommand(py + " -c \"" + script + "\" " +
+                            (tmp.path() / "ds/tt/rec1-v0/data/main_data.hdf5").string() + " " +
+                            (tmp.path() / "ds/tt/from-v0/data/main_data.hdf5").string() + " 2>&1");
+  EXPECT_EQ(c.exit_code, 0) << c.output;
+  for (const auto& entry : fs::directory_iterator(tmp.path())) {
+    EXPECT_EQ(entry.path().filename().string().rfind(".fetchscope-pixels", 0), std::string::npos)
+        << entry.path();
+  }
+}
+
+TEST(PixelDataset, ADataCollectorDatasetBecomesAPixelDatasetWithItsFieldsCopied) {
+  const std::string py = PythonWithPil();
+  if (py.empty()) GTEST_SKIP() << "python3-h5py, python3-numpy or python3-pil is not installed";
+  unsetenv("DISPLAY");
+  TempDir tmp;
+  const fs::path root = tmp.path() / "ds";
+  const fs::path rollout = tmp.path() / "collector.json";
+  auto r = RunFetchscope(
+      "rollout --env-id FetchPickAndPlace-v4 --policy random --episodes 2 --steps 8 --seed 11 "
+      "--json-out " +
+      rollout.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  r = RunCommand(py + " " + (SourceDir() / "tests/data/minari/minari_in_h5py.py").string() + " " +
+                 root.string() + " mine/collector-v0 collector " + rollout.string() + " 2>&1");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  r = RunFetchscope("record --from " + (root / "mine/collector-v0").string() +
+                    " --width 40 --height 40 --format webm --no-report -q --out " +
+                    (tmp.path() / "run").string() + " --minari mine/pixels-v0 --minari-root " +
+                    root.string() + " --obs-camera external_camera_0 --obs-size 32x32");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const std::string script =
+      "import h5py, sys\n"
+      "a = h5py.File(sys.argv[1], 'r'); b = h5py.File(sys.argv[2], 'r')\n"
+      "assert sorted(a) == sorted(b), (sorted(a), sorted(b))\n"
+      "for e in a:\n"
+      "  for k in ('actions', 'observations/observation', 'observations/achieved_goal',\n"
+      "            'observations/desired_goal', 'terminations', 'truncations'):\n"
+      "    assert a[e][k][()].tobytes() == b[e][k][()].tobytes(), (e, k)\n"
+      "  assert b[e]['observations/images/external_camera_0'].shape == (9,)\n"
+      "print('ok')\n";
+  r = RunCommand(py + " -c \"" + script + "\" " +
+                 (root / "mine/collector-v0/data/main_data.hdf5").string() + " " +
+                 (root / "mine/pixels-v0/data/main_data.hdf5").string() + " 2>&1");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+}
+
+// Each bad value: one line naming it, a non-zero exit, no dataset and no staging folder.
+TEST(PixelDataset, BadInputIsOneLineAndWritesNothing) {
+  unsetenv("DISPLAY");
+  TempDir tmp;
+  const std::string base =
+      "rollout --env-id FetchPush-v4 --policy zero --episodes 1 --steps 2 "
+      "--minari-root " +
+      (tmp.path() / "ds").string();
+  const struct {
+    std::string args, expect;
+  } cases[] = {
+      {" --minari tt/x-v0 --obs-camera nosuchcam", "nosuchcam"},
+      {" --minari tt/x-v0 --obs-camera external_camera_0 --obs-size 0x10", "--obs-size '0x10'"},
+      {" --minari tt/x-v0 --obs-camera external_camera_0 --obs-size 100000x5",
+       "--obs-size '100000x5'"},
+      {" --minari tt/x-v0 --obs-camera a=external_camera_0 --obs-camera a=track",
+       "'a' is given twice"},
+      {" --obs-camera external_camera_0", "give --minari"},
+      {" --minari tt/x-v0 --obs-size 64x64", "--obs-size applies to the images of --obs-camera"},
+      {" --minari tt/x-v0 --obs-camera track", "needs a NAME="},
+      {" --minari tt/x-v0 --obs-camera external_camera_0,track", "names 2 cameras"},
+      {" --minari tt/x-v0 --obs-camera external_camera_0 --obs-layers rgb,normals",
+       "--obs-layers: unknown layer 'normals'"},
+  };
+  for (const auto& c : cases) {
+    const auto r = RunFetchscope(base + c.args);
+    EXPECT_NE(r.exit_code, 0) << c.args;
+    EXPECT_NE(r.output.find(c.expect), std::string::npos) << c.args << "\n" << r.output;
+    EXPECT_EQ(fetchscope::testing::LineCount(r.output), 1) << c.args << "\n" << r.output;
+    EXPECT_EQ(r.output.find("terminate"), std::string::npos) << r.output;
+    EXPECT_FALSE(fs::exists(tmp.path() / "ds/tt/x-v0")) << c.args;
+  }
+  if (fs::exists(tmp.path() / "ds")) {
+    for (const auto& entry : fs::recursive_directory_iterator(tmp.path() / "ds")) {
+      EXPECT_EQ(entry.path().filename().string().rfind(".fetchscope-pixels", 0), std::string::npos)
+          << entry.path();
+    }
+  }
+}
+
+}  // namespace
+}  // namespace fetchscope
