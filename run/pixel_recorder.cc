@@ -117,7 +117,7 @@ void PixelRecorder::Step(const FetchEnv& env, const StepRecord& record) {
         writer_->AddImage(camera, ImageLayer::kRgb, t, im.rgb.data(), im.rgb.size());
       if (layout.png_rgb) {
         writer_->AddPng(camera, t,
-                        EncodePng(layout.width, layout.height, 3, 8, im.rgb.data(), false,
+                        EncodePng(layout.width, layout.height, 3, 8, im.rgb.data(), true,
                                   "image of camera " + layout.cameras[c].name));
       }
     }
