@@ -54,7 +54,7 @@ struct PixelLayout {
   bool raw_rgb = true;                  ///< rgb staged as gzip chunks (robomimic's arrays)
   bool png_rgb = false;                 ///< rgb staged as PNG files (Minari's images)
   size_t state_size = 0;                ///< numbers per state, when they do
-  /// gzip level chosen by measurement (BENCHMARKS.md, "Pixel datasets")
+  /// gzip level of depth and segmentation chunks (a middle level; not yet chosen by measurement)
   static constexpr int kDefaultDeflate = 4;
 
   bool has(ImageLayer layer) const;
