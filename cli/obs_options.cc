@@ -29,6 +29,31 @@ void AddObsOptions(CLI::App* sub, ObsOptions* o) {
       ->capture_default_str();
 }
 
+void AddRobomimicOptions(CLI::App* sub, RobomimicOptions* o) {
+  sub->add_option("--robomimic", o->file,
+                  "Also write the episodes in robomimic's HDF5 layout to this file (.hdf5): "
+                  "data/demo_N with obs, next_obs, actions, rewards, dones and MuJoCo states "
+                  "(docs/guide/datasets.md, \"robomimic\")");
+  sub->add_flag(
+      "--no-next-obs", o->no_next_obs,
+      "--robomimic: leave out next_obs (half the images; robomimic's --exclude-next-obs)");
+  sub->add_option("--valid-fraction", o->valid_fraction,
+                  "--robomimic: write mask/train and mask/valid, this share of the demos (0 <= F "
+                  "< 1) in valid, spread evenly");
+}
+
+PixelPlan PlanPixels(const ObsSetup& setup, const mjModel* model, bool minari, bool robomimic) {
+  PixelPlan plan;
+  if (!setup.enabled() && !robomimic) return plan;
+  plan.setup = setup;
+  plan.layout = MakePixelLayout(setup, model);
+  plan.layout.png_rgb = minari;     // Minari 0.5.3 decodes an image space's steps with PIL
+  plan.layout.raw_rgb = robomimic;  // robomimic reads uint8 arrays
+  plan.layout.states = robomimic;
+  plan.layout.state_size = FlatMujocoStateSize(model);
+  return plan;
+}
+
 ObsCamera ParseObsCamera(const std::string& value, const mjModel* model) {
   static const std::regex kNamed(R"(^([A-Za-z0-9_][A-Za-z0-9_-]*)=(.*)$)");
   static const std::regex kName(R"(^[A-Za-z0-9_][A-Za-z0-9_-]*$)");
@@ -118,7 +143,20 @@ ObsSetup ResolveObs(const ObsOptions& o, const mjModel* model, int msaa_samples)
   return setup;
 }
 
-void CheckObsUse(const CLI::App* sub, const ObsOptions& o, bool has_dataset) {
+void CheckObsUse(const CLI::App* sub, const ObsOptions& o, bool has_dataset,
+                 const RobomimicOptions& robomimic) {
+  if (robomimic.file.empty()) {
+    for (const char* option : {"--no-next-obs", "--valid-fraction"}) {
+      if (sub->count(option)) {
+        throw UsageError(std::string(option) +
+                         " applies to the file of --robomimic; give --robomimic FILE.hdf5");
+      }
+    }
+  }
+  if (!(robomimic.valid_fraction >= 0 && robomimic.valid_fraction < 1)) {
+    throw UsageError("--valid-fraction " + std::to_string(robomimic.valid_fraction) +
+                     ": use a share of the demos from 0 up to (not including) 1, e.g. 0.1");
+  }
   if (o.cameras.empty()) {
     for (const char* option : {"--obs-size", "--obs-layers", "--obs-overlay"}) {
       if (sub->count(option)) {

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "render/obs_view.h"
+#include "run/pixel_recorder.h"
 
 namespace fetchscope::cli {
 
@@ -19,6 +20,21 @@ struct ObsOptions {
   std::string layers = "rgb";        ///< --obs-layers
   std::string overlay = "none";      ///< --obs-overlay
 };
+
+/// --robomimic and its options as typed.
+struct RobomimicOptions {
+  std::string file;           ///< --robomimic FILE.hdf5
+  bool no_next_obs = false;   ///< --no-next-obs
+  double valid_fraction = 0;  ///< --valid-fraction
+};
+
+/// Adds --robomimic, --no-next-obs and --valid-fraction to `sub`.
+void AddRobomimicOptions(CLI::App* sub, RobomimicOptions* options);
+
+/// What the workers stage for the datasets asked for: `setup`'s images (rgb as PNG files for a
+/// Minari dataset, as gzip chunks for a robomimic file) and, for robomimic, the MuJoCo state of
+/// every step. Disabled (nothing staged) without images and without robomimic.
+PixelPlan PlanPixels(const ObsSetup& setup, const mjModel* model, bool minari, bool robomimic);
 
 /// Adds the four options to `sub`.
 void AddObsOptions(CLI::App* sub, ObsOptions* options);
@@ -38,7 +54,9 @@ void ParseObsSize(const std::string& text, int* width, int* height);
 ObsSetup ResolveObs(const ObsOptions& options, const mjModel* model, int msaa_samples);
 
 /// Refuses --obs-size/--obs-layers/--obs-overlay given without --obs-camera (`sub` tells what
-/// was given), and --obs-camera without a dataset to write (`has_dataset`).
-void CheckObsUse(const CLI::App* sub, const ObsOptions& options, bool has_dataset);
+/// was given), --obs-camera without a dataset to write (`has_dataset`), --no-next-obs and
+/// --valid-fraction without --robomimic, and a --valid-fraction outside [0, 1).
+void CheckObsUse(const CLI::App* sub, const ObsOptions& options, bool has_dataset,
+                 const RobomimicOptions& robomimic);
 
 }  // namespace fetchscope::cli

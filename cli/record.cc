@@ -86,6 +86,7 @@ struct RecordOptions {
   DatasetAuthor author;          // --minari-author, --minari-author-email
   double tolerance = 1e-6;       // --tolerance: record --from DATASET
   ObsOptions obs;                // --obs-camera, --obs-size, --obs-layers, --obs-overlay
+  RobomimicOptions robomimic;    // --robomimic, --no-next-obs, --valid-fraction
 };
 
 // record --from: the recorded episodes' indices, ascending.
@@ -234,6 +235,12 @@ RecordJob ResolveRecord(RecordOptions* options, const PolicySpec& policy,
         {}};
     CheckRecordMinari(job);
   }
+  if (!o.robomimic.file.empty()) {
+    job.robomimic =
+        RobomimicRequest{o.robomimic.file,           o.overwrite, !o.robomimic.no_next_obs,
+                         o.robomimic.valid_fraction, nullptr,     {}};
+    CheckRecordRobomimic(job);
+  }
   ResolveRecordVideo(o, &plan);
   job.formats_text = o.formats;
   job.episodes = from ? FromEpisodes(*from) : ShardEpisodes(job.shard, run.episodes);
@@ -360,9 +367,11 @@ Command AddRecord(CLI::App& app) {
                 "Do not write the run's HTML report (index.html; see `fetchscope report`)");
   AddFromOption(sub, &o->from, &o->tolerance);
   AddObsOptions(sub, &o->obs);
+  AddRobomimicOptions(sub, &o->robomimic);
   return {sub, [o, sub] {
             o->episodes_given = sub->count("--episodes") > 0;
-            CheckObsUse(sub, o->obs, !o->minari.empty());
+            CheckObsUse(sub, o->obs, !o->minari.empty() || !o->robomimic.file.empty(),
+                        o->robomimic);
             if (!o->from.empty()) return RunRecordFrom(*o, *sub, CommandLine());
             return RunRecordPolicy(*o, CommandLine());
           }};

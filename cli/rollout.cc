@@ -1,6 +1,7 @@
 // fetchscope rollout: episodes without rendering, written as trajectory JSON. --jobs runs them
 // on the episode scheduler's worker processes; the JSON is byte-identical to --jobs 1.
 #include <cstdio>
+#include <filesystem>
 #include <optional>
 
 #include "base/errors.h"
@@ -18,12 +19,15 @@
 #include "run/minari_output.h"
 #include "run/pixel_recorder.h"
 #include "run/progress.h"
+#include "run/robomimic_output.h"
 #include "run/rollout_run.h"
 #include "src/fetch_env.h"
 #include "src/trajectory.h"
 
 namespace fetchscope::cli {
 namespace {
+
+namespace fs = std::filesystem;
 
 struct RolloutOptions {
   EnvOptions env;
@@ -41,7 +45,62 @@ struct RolloutOptions {
   DatasetAuthor author;          // --minari-author, --minari-author-email
   std::string signals = "none";  // --signals
   ObsOptions obs;                // --obs-camera, --obs-size, --obs-layers, --obs-overlay
+  RobomimicOptions robomimic;    // --robomimic, --no-next-obs, --valid-fraction
   std::string backend;           // --backend of the images
+};
+
+// The datasets a rollout writes (--minari, --robomimic), their destinations checked now, and the
+// staging folder of the images and states the workers stage for them.
+class DatasetOutputs {
+ public:
+  DatasetOutputs(const RolloutOptions& o, const OutputRun& run, PixelPlan pixels, RolloutJob* job)
+      : o_(o) {
+    MinariRequest minari{
+        o.minari, MinariRoot(o.minari_root), o.overwrite, o.author.name, o.author.email, nullptr,
+        {}};
+    RobomimicRequest robomimic{o.robomimic.file,           o.overwrite, !o.robomimic.no_next_obs,
+                               o.robomimic.valid_fraction, nullptr,     {}};
+    job->pixels = std::move(pixels);
+    if (job->pixels.enabled()) {
+      if (job->pixels.setup.enabled()) {
+        ViewOptions view;
+        view.backend = o.backend;
+        const ViewSetup gl = ResolveGlView(view);
+        job->backend = gl.backend;
+        job->gpu = ResolveGpuChoice(gl);
+      }
+      // the destinations first: nothing is made for a run that cannot write them
+      if (!o.minari.empty()) CheckMinariOutput(minari, run);
+      if (!o.robomimic.file.empty()) CheckRobomimicOutput(robomimic);
+      staging_.emplace(!o.minari.empty() ? minari.root
+                                         : fs::absolute(o.robomimic.file).parent_path());
+      job->pixels.staging = staging_->path();
+      minari.pixels = job->pixels.setup.enabled() ? &job->pixels.layout : nullptr;
+      minari.staging = robomimic.staging = staging_->path();
+      robomimic.pixels = &job->pixels.layout;
+    }
+    std::vector<EpisodeOutput*> all;
+    if (!o.minari.empty()) all.push_back(&minari_.emplace(minari));
+    if (!o.robomimic.file.empty()) all.push_back(&robomimic_.emplace(robomimic));
+    if (all.size() == 1) output_ = all.front();
+    if (all.size() == 2) output_ = &both_.emplace(all);
+  }
+  EpisodeOutput* output() { return output_; }
+  // "wrote ..." lines for what was written
+  std::string Wrote() const {
+    std::string s;
+    if (minari_) s += "wrote Minari dataset " + o_.minari + " at " + minari_->written() + "\n";
+    if (robomimic_) s += "wrote robomimic file " + o_.robomimic.file + "\n";
+    return s;
+  }
+
+ private:
+  const RolloutOptions& o_;
+  std::optional<PixelStaging> staging_;
+  std::optional<MinariOutput> minari_;
+  std::optional<RobomimicOutput> robomimic_;
+  std::optional<EpisodeOutputs> both_;
+  EpisodeOutput* output_ = nullptr;
 };
 
 // parse (AddRollout) -> resolve -> run (RunRolloutJob) -> print.
@@ -59,12 +118,12 @@ int RunRollout(const RolloutOptions& o) {
   const AssetSource& assets = run.env.assets;
   const std::string path = JsonOutPath(o.json_out, "rollout");
   CheckJsonOutReplaces(path, {{"env_id", spec.id}, {"seed", seed}}, o.overwrite);
-  ObsSetup obs;
-  PixelLayout layout;
+  const bool robomimic = !o.robomimic.file.empty();
+  PixelPlan pixels;
   {
     FetchEnv check(spec, assets);  // bad assets fail here, before any worker starts
-    obs = ResolveObs(o.obs, check.model(), kMsaaAuto);
-    if (obs.enabled()) layout = MakePixelLayout(obs, check.model());
+    pixels = PlanPixels(ResolveObs(o.obs, check.model(), kMsaaAuto), check.model(),
+                        !o.minari.empty(), robomimic);
   }
   const int count = static_cast<int>(run.episodes.size());
   RolloutJob job;
@@ -79,30 +138,8 @@ int RunRollout(const RolloutOptions& o) {
   job.episodes = run.episodes;
   job.jobs = ResolveJobs(o.jobs, count);
   job.mode = mode;
-  std::optional<MinariOutput> minari;
-  std::optional<PixelStaging> staging;
-  MinariRequest minari_request{
-      o.minari, MinariRoot(o.minari_root), o.overwrite, o.author.name, o.author.email, nullptr, {}};
-  if (obs.enabled()) {
-    ViewOptions view;
-    view.backend = o.backend;
-    const ViewSetup gl = ResolveGlView(view);
-    job.backend = gl.backend;
-    job.gpu = ResolveGpuChoice(gl);
-    job.pixels.setup = obs;
-    job.pixels.layout = layout;
-    job.pixels.layout.raw_rgb = false;  // Minari stores rgb as PNG files
-    job.pixels.layout.png_rgb = true;
-    CheckMinariOutput(minari_request, RolloutOutputRun(job));  // before any folder is made
-    staging.emplace(minari_request.root);
-    job.pixels.staging = staging->path();
-    minari_request.pixels = &job.pixels.layout;
-    minari_request.staging = staging->path();
-  }
-  if (!o.minari.empty()) {
-    minari.emplace(minari_request);
-    job.output = &*minari;
-  }
+  DatasetOutputs outputs(o, RolloutOutputRun(job), std::move(pixels), &job);
+  job.output = outputs.output();
   // progress on stderr (the JSON may be on stdout): a bar on a terminal, else a line every
   // FETCHSCOPE_PROGRESS_INTERVAL (30 s) of a long run
   ProgressReporter progress = ProgressReporter::ForLongRuns("rollout", count, o.steps, "steps");
@@ -125,7 +162,7 @@ int RunRollout(const RolloutOptions& o) {
               TrajectoryJson(spec, assets, seed, o.policy.policy, std::move(result.episodes)));
     wrote += "wrote " + path + "\n";
   }
-  if (minari) wrote += "wrote Minari dataset " + o.minari + " at " + result.output + "\n";
+  wrote += outputs.Wrote();
   std::printf("%s: %d episode(s) of %d steps, policy %s, seed %s: success %d/%d (%s)\n%s",
               spec.id.c_str(), count, o.steps, o.policy.policy.c_str(), o.env.seed.c_str(),
               result.successes, count, PercentText(result.successes, count).c_str(), wrote.c_str());
@@ -163,13 +200,15 @@ Command AddRollout(CLI::App& app) {
                 "result file of another env, seed or task");
   AddDatasetAuthorOptions(sub, &o->author);
   AddObsOptions(sub, &o->obs);
+  AddRobomimicOptions(sub, &o->robomimic);
   sub->add_option("--backend", o->backend,
                   "GL backend of --obs-camera's images: auto, egl or osmesa (default "
                   "$MUJOCO_GL, else auto)");
   AddJobsOptions(sub, &o->jobs, &o->worker_mode);
   return {sub, [o, sub] {
             o->episodes_given = sub->count("--episodes") > 0;
-            CheckObsUse(sub, o->obs, !o->minari.empty());
+            CheckObsUse(sub, o->obs, !o->minari.empty() || !o->robomimic.file.empty(),
+                        o->robomimic);
             return RunRollout(*o);
           }};
 }

@@ -61,9 +61,9 @@ void MinariOutput::Add(const EpisodeRecord& episode) {
 
 std::string MinariOutput::Finish() {
   if (!writer_) throw RunError("Minari dataset '" + request_.dataset_id + "': not begun");
-  const std::string path = writer_->Commit().string();
+  written_ = writer_->Commit().string();
   writer_.reset();
-  return path;
+  return written_;
 }
 
 }  // namespace fetchscope

@@ -50,10 +50,13 @@ class MinariOutput : public EpisodeOutput {
   void Abort() override { writer_.reset(); }
 
   const MinariRequest& request() const { return request_; }
+  /// The dataset's folder, once Finish has put it in place ("" before).
+  const std::string& written() const { return written_; }
 
  private:
   MinariRequest request_;
   std::unique_ptr<MinariWriter> writer_;  // between Begin and Finish
+  std::string written_;
   uint64_t seed_ = 0;
   int width_ = 0;  // observation values per row
 };

@@ -94,32 +94,48 @@ ScheduleResult ScheduleRecord(const RecordJob& job, const RunFolder& folder,
   return RecordEpisodes(job.plan, schedule);
 }
 
-// The run folder's episode files, read back as export reads them, written as the dataset.
-int WriteRecordMinari(const RecordJob& job) {
+// The run folder's episode files, read back as export reads them, written as the datasets.
+int WriteRecordDatasets(const RecordJob& job) {
   const std::string& out = job.plan.out;
-  const MinariRequest& minari = *job.minari;
   const TrajectorySource run = LoadTrajectorySource(out);
   Trajectory t;
   t.env_id = run.env_id;
   t.seed = run.seed;
   t.policy = run.policy;
   for (const auto& [k, episode] : run.episodes) t.episodes.push_back(episode);
-  std::string path;
-  const std::string advice =
-      "; the run is kept in " + out + ": `fetchscope export " + out + " --minari " +
-      minari.dataset_id +
-      (job.minari_root_given.empty() ? "" : " --minari-root " + job.minari_root_given) +
-      (job.overwrite ? " --overwrite" : "") + "` writes the dataset from it";
+  std::string advice, what;
+  std::optional<MinariOutput> minari;
+  std::optional<RobomimicOutput> robomimic;
+  std::vector<EpisodeOutput*> outputs;
+  if (job.minari) {
+    what = "record --minari";
+    outputs.push_back(&minari.emplace(*job.minari));
+    // a dataset of state alone can be written again from the run folder
+    if (!job.plan.pixels.enabled()) {
+      advice = "; the run is kept in " + out + ": `fetchscope export " + out + " --minari " +
+               job.minari->dataset_id +
+               (job.minari_root_given.empty() ? "" : " --minari-root " + job.minari_root_given) +
+               (job.overwrite ? " --overwrite" : "") + "` writes the dataset from it";
+    }
+  }
+  if (job.robomimic) {
+    what = what.empty() ? "record --robomimic" : "record --minari/--robomimic";
+    outputs.push_back(&robomimic.emplace(*job.robomimic));
+  }
+  EpisodeOutputs all(outputs);
   try {
-    MinariOutput output(minari);
-    path = WriteEpisodes(t, RecordOutputRun(job), output);
+    WriteEpisodes(t, RecordOutputRun(job), all);
   } catch (const MinariInterrupted& e) {
-    std::fprintf(stderr, "record --minari: %s%s\n", e.what(), advice.c_str());
+    std::fprintf(stderr, "%s: %s%s\n", what.c_str(), e.what(), advice.c_str());
     return 128 + e.signal;
   } catch (const std::exception& e) {
-    throw RunError("record --minari: " + std::string(e.what()) + advice);
+    throw RunError(what + ": " + std::string(e.what()) + advice);
   }
-  std::printf("wrote Minari dataset %s at %s\n", minari.dataset_id.c_str(), path.c_str());
+  if (minari) {
+    std::printf("wrote Minari dataset %s at %s\n", job.minari->dataset_id.c_str(),
+                minari->written().c_str());
+  }
+  if (robomimic) std::printf("wrote robomimic file %s\n", job.robomimic->file.c_str());
   return 0;
 }
 
@@ -136,6 +152,15 @@ OutputRun RecordOutputRun(const RecordJob& job) {
   run.episodes = job.episodes_requested;
   run.steps = plan.steps;
   return run;
+}
+
+void CheckRecordRobomimic(const RecordJob& job) {
+  if (job.shard.sharded()) {
+    throw UsageError(
+        "record --robomimic: a shard records part of the run; write the file from "
+        "a whole run");
+  }
+  CheckRobomimicOutput(*job.robomimic);
 }
 
 void CheckRecordMinari(const RecordJob& job) {
@@ -166,9 +191,13 @@ int RecordRun(RecordJob job) {
   if (job.plan.pixels.enabled()) {
     staging.emplace(fs::absolute(job.plan.out).parent_path());
     job.plan.pixels.staging = staging->path();
-    if (job.minari) {
+    if (job.minari && job.plan.pixels.setup.enabled()) {
       job.minari->staging = staging->path();
       job.minari->pixels = &job.plan.pixels.layout;
+    }
+    if (job.robomimic) {
+      job.robomimic->staging = staging->path();
+      job.robomimic->pixels = &job.plan.pixels.layout;
     }
   }
   const int early_signal = StopSignal();  // before the scheduler: record nothing
@@ -219,7 +248,7 @@ int RecordRun(RecordJob job) {
     throw RunError(DescribeFailures(result) + "; the manifest lists the missing episodes (" +
                    std::to_string(result.missing.size()) + "): --resume records them");
   }
-  return job.minari ? WriteRecordMinari(job) : 0;
+  return job.minari || job.robomimic ? WriteRecordDatasets(job) : 0;
 }
 
 }  // namespace fetchscope

@@ -18,6 +18,7 @@
 #include "run/minari_output.h"
 #include "run/node_probe.h"
 #include "run/record_run.h"
+#include "run/robomimic_output.h"
 #include "run/shard.h"
 #include "src/episode_source.h"
 
@@ -43,6 +44,7 @@ struct RecordJob {
   std::string command_line;                ///< as typed (the manifest's)
   std::string minari_root_given;  ///< --minari-root as given (empty: none), for the export advice
   std::optional<MinariRequest> minari;               ///< --minari: the dataset written after
+  std::optional<RobomimicRequest> robomimic;         ///< --robomimic: the file written after
   std::string model_path;                            ///< the model file the env loaded
   std::chrono::steady_clock::time_point wall_start;  ///< when the command started
   /// Writes the run's report (inspect/, above this layer) for the manifest at this path.
@@ -63,6 +65,10 @@ OutputRun RecordOutputRun(const RecordJob& job);
 /// Checks `job.minari` (set, with plan, shard and overwrite) now, before the run: UsageError for
 /// a shard (export writes a sharded run's dataset), else as CheckMinariOutput.
 void CheckRecordMinari(const RecordJob& job);
+
+/// Checks `job.robomimic` now, before the run: UsageError for a shard, else as
+/// CheckRobomimicOutput.
+void CheckRecordRobomimic(const RecordJob& job);
 
 /// Runs `job` after cli/record.cc resolved it: probes the node, opens the run folder, records,
 /// writes the manifest, the summary, the report and the Minari dataset. Returns the exit status

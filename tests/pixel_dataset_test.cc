@@ -219,6 +219,86 @@ TEST(PixelDataset, ADataCollectorDatasetBecomesAPixelDatasetWithItsFieldsCopied)
   EXPECT_EQ(r.exit_code, 0) << r.output;
 }
 
+// --robomimic beside --minari: robomimic's layout, the same pixels as the Minari dataset (obs
+// row t = step t, next_obs row t = step t + 1), states, dones, masks; the same bytes for any
+// --jobs; --no-next-obs leaves next_obs out.
+TEST(PixelDataset, RobomimicFileHoldsRobomimicsLayoutAndTheSamePixels) {
+  const std::string py = PythonWithPil();
+  if (py.empty()) GTEST_SKIP() << "python3-h5py, python3-numpy or python3-pil is not installed";
+  unsetenv("DISPLAY");
+  TempDir tmp;
+  const std::string ds = (tmp.path() / "ds").string();
+  const std::string common =
+      "rollout --env-id FetchPickAndPlace-v4 --policy scripted --episodes 5 --steps 12 "
+      "--obs-camera external_camera_0 --obs-camera grip=track --obs-layers rgb,depth "
+      "--obs-size 40x32 --minari-root " +
+      ds;
+  for (int jobs : {1, 2}) {
+    const std::string j = std::to_string(jobs);
+    const auto r = RunFetchscope(common + " --jobs " + j + " --minari tt/both" + j +
+                                 "-v0 --valid-fraction 0.2 --robomimic " +
+                                 (tmp.path() / ("rm" + j + ".hdf5")).string());
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("wrote robomimic file"), std::string::npos) << r.output;
+  }
+  EXPECT_EQ(ReadFile(tmp.path() / "rm1.hdf5"), ReadFile(tmp.path() / "rm2.hdf5"));
+  auto r =
+      RunFetchscope(common + " --no-next-obs --robomimic " + (tmp.path() / "lean.hdf5").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const std::string script = R"PY(
+import io, json, sys
+import h5py, numpy as np
+from PIL import Image
+rm = h5py.File(sys.argv[1], "r")
+mi = h5py.File(sys.argv[2] + "/data/main_data.hdf5", "r")
+lean = h5py.File(sys.argv[3], "r")
+data = rm["data"]
+demos = sorted(data.keys(), key=lambda k: int(k[5:]))  # as get_dataset_info.py sorts them
+assert demos == ["demo_%d" % i for i in range(5)], demos
+env = json.loads(data.attrs["env_args"])
+assert list(env) == ["env_name", "type", "env_kwargs"] and env["type"] == 2, env
+assert env["env_name"] == "FetchPickAndPlace-v4" and env["env_kwargs"]["max_episode_steps"] == 12
+assert data.attrs["total"] == sum(data[d].attrs["num_samples"] for d in demos) == 60
+assert [m.decode() for m in rm["mask/valid"][()]] == ["demo_4"], rm["mask/valid"][()]
+assert [m.decode() for m in rm["mask/train"][()]] == ["demo_%d" % i for i in range(4)]
+for i, d in enumerate(demos):
+    g, e = data[d], mi["episode_%d" % i]
+    n = g.attrs["num_samples"]
+    assert n == 12 and g["actions"].dtype == np.float64 and g["actions"].shape == (12, 4)
+    assert np.array_equal(g["actions"][()], e["actions"][()].astype(np.float64))
+    assert np.array_equal(g["rewards"][()], e["rewards"][()].astype(np.float64))
+    assert g["dones"].dtype == np.int64 and g["dones"][-1] == 1
+    assert np.array_equal(g["dones"][:-1], e["infos/is_success"][1:-1].astype(np.int64))
+    st = g["states"][()]
+    assert st.dtype == np.float64 and st.shape[0] == 12
+    assert np.allclose(np.diff(st[:, 0]), 0.04), st[:, 0]  # time, 20 substeps of 2 ms
+    for k in ("observation", "achieved_goal", "desired_goal"):
+        assert np.array_equal(g["obs"][k][()], e["observations"][k][:-1]), k
+        assert np.array_equal(g["next_obs"][k][()], e["observations"][k][1:]), k
+    for cam in ("external_camera_0", "grip"):
+        im = g["obs"][cam + "_image"]
+        assert im.dtype == np.uint8 and im.shape == (12, 32, 40, 3), im.shape
+        dp = g["obs"][cam + "_depth"]
+        assert dp.dtype == np.float32 and dp.shape == (12, 32, 40, 1), dp.shape
+        for t in (0, 5, 11):
+            png = np.array(Image.open(io.BytesIO(e["observations/images"][cam][t].tobytes())))
+            assert np.array_equal(im[t], png), (d, cam, t)
+            nxt = np.array(Image.open(io.BytesIO(e["observations/images"][cam][t + 1].tobytes())))
+            assert np.array_equal(g["next_obs"][cam + "_image"][t], nxt), (d, cam, t)
+            assert np.array_equal(dp[t][..., 0], e["observations/depth"][cam][t]), (d, cam, t)
+        assert np.array_equal(g["obs"][cam + "_camera_pose"][()], e["infos/camera_pose"][cam][:-1])
+    assert "next_obs" not in lean["data"][d] and "obs" in lean["data"][d]
+    assert "mask" not in lean
+print("ok")
+)PY";
+  const fs::path file = tmp.path() / "robomimic.py";
+  std::ofstream(file) << script;
+  r = RunCommand(py + " " + file.string() + " " + (tmp.path() / "rm1.hdf5").string() + " " +
+                 (tmp.path() / "ds/tt/both1-v0").string() + " " +
+                 (tmp.path() / "lean.hdf5").string() + " 2>&1");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+}
+
 // Each bad value: one line naming it, a non-zero exit, no dataset and no staging folder.
 TEST(PixelDataset, BadInputIsOneLineAndWritesNothing) {
   unsetenv("DISPLAY");
@@ -242,6 +322,10 @@ TEST(PixelDataset, BadInputIsOneLineAndWritesNothing) {
       {" --minari tt/x-v0 --obs-camera external_camera_0,track", "names 2 cameras"},
       {" --minari tt/x-v0 --obs-camera external_camera_0 --obs-layers rgb,normals",
        "--obs-layers: unknown layer 'normals'"},
+      {" --minari tt/x-v0 --no-next-obs", "--no-next-obs applies to the file of --robomimic"},
+      {" --robomimic " + (tmp.path() / "r.hdf5").string() + " --valid-fraction 1",
+       "--valid-fraction 1"},
+      {" --robomimic " + (tmp.path() / "r.txt").string(), "ending in .hdf5 or .h5"},
   };
   for (const auto& c : cases) {
     const auto r = RunFetchscope(base + c.args);
@@ -250,6 +334,7 @@ TEST(PixelDataset, BadInputIsOneLineAndWritesNothing) {
     EXPECT_EQ(fetchscope::testing::LineCount(r.output), 1) << c.args << "\n" << r.output;
     EXPECT_EQ(r.output.find("terminate"), std::string::npos) << r.output;
     EXPECT_FALSE(fs::exists(tmp.path() / "ds/tt/x-v0")) << c.args;
+    EXPECT_FALSE(fs::exists(tmp.path() / "r.hdf5")) << c.args;
   }
   if (fs::exists(tmp.path() / "ds")) {
     for (const auto& entry : fs::recursive_directory_iterator(tmp.path() / "ds")) {
