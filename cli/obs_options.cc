@@ -42,6 +42,30 @@ void AddRobomimicOptions(CLI::App* sub, RobomimicOptions* o) {
                   "< 1) in valid, spread evenly");
 }
 
+void AddEpisodeSelectionOptions(CLI::App* sub, EpisodeSelectionOptions* o) {
+  sub->add_option("--keep", o->keep,
+                  "Episodes the dataset keeps: all, or successful (those whose last step is a "
+                  "success; the command says how many were tried, the dataset's metadata "
+                  "`selection` lists the kept episodes' run indices)")
+      ->capture_default_str();
+  sub->add_option("--stop-after-success", o->stop_after_success,
+                  "End each episode K steps after its first success (0: at it), complete and "
+                  "truncated there; the episodes are otherwise those of the run without it")
+      ->check(CLI::Range(0, 1000000));
+}
+
+bool KeepSuccessful(const EpisodeSelectionOptions& o, bool has_dataset) {
+  if (o.keep != "all" && o.keep != "successful") {
+    throw UsageError("--keep '" + o.keep + "': use all or successful");
+  }
+  if (o.keep == "successful" && !has_dataset) {
+    throw UsageError(
+        "--keep successful chooses the episodes of a dataset: give --minari ID or "
+        "--robomimic FILE.hdf5");
+  }
+  return o.keep == "successful";
+}
+
 PixelPlan PlanPixels(const ObsSetup& setup, const mjModel* model, bool minari, bool robomimic) {
   PixelPlan plan;
   if (!setup.enabled() && !robomimic) return plan;

@@ -28,6 +28,19 @@ struct RobomimicOptions {
   double valid_fraction = 0;  ///< --valid-fraction
 };
 
+/// --keep and --stop-after-success as typed.
+struct EpisodeSelectionOptions {
+  std::string keep = "all";     ///< --keep: all or successful
+  int stop_after_success = -1;  ///< --stop-after-success K (-1: not given)
+};
+
+/// Adds --keep and --stop-after-success to `sub`.
+void AddEpisodeSelectionOptions(CLI::App* sub, EpisodeSelectionOptions* options);
+
+/// True for --keep successful; refuses another value than all or successful, and successful
+/// without a dataset to write (`has_dataset`). Throws UsageError naming the value.
+bool KeepSuccessful(const EpisodeSelectionOptions& options, bool has_dataset);
+
 /// Adds --robomimic, --no-next-obs and --valid-fraction to `sub`.
 void AddRobomimicOptions(CLI::App* sub, RobomimicOptions* options);
 

@@ -72,21 +72,22 @@ struct RecordOptions {
   bool quiet = false;
   int jobs = 1;  // workers; 0 = one per core
   std::string worker_mode = "process";
-  std::string shard;             // "I/N"; empty: from the environment, else the whole run
-  int shard_count = 0;           // with JOB_COMPLETION_INDEX; 0 = not given
-  bool overwrite = false;        // replace the run already in --out
-  bool resume = false;           // continue the run already in --out
-  bool episodes_given = false;   // --episodes was on the command line
-  bool no_report = false;        // no index.html (inspect/report.h)
-  std::string from;              // record --from: a run folder or trajectory JSON
-  std::string layers = "rgb";    // --layers: rgb plus depth, segmentation
-  std::string signals = "none";  // --signals: none, contacts
-  std::string minari;            // --minari: also write the run as this Minari dataset
-  std::string minari_root;       // --minari-root
-  DatasetAuthor author;          // --minari-author, --minari-author-email
-  double tolerance = 1e-6;       // --tolerance: record --from DATASET
-  ObsOptions obs;                // --obs-camera, --obs-size, --obs-layers, --obs-overlay
-  RobomimicOptions robomimic;    // --robomimic, --no-next-obs, --valid-fraction
+  std::string shard;                  // "I/N"; empty: from the environment, else the whole run
+  int shard_count = 0;                // with JOB_COMPLETION_INDEX; 0 = not given
+  bool overwrite = false;             // replace the run already in --out
+  bool resume = false;                // continue the run already in --out
+  bool episodes_given = false;        // --episodes was on the command line
+  bool no_report = false;             // no index.html (inspect/report.h)
+  std::string from;                   // record --from: a run folder or trajectory JSON
+  std::string layers = "rgb";         // --layers: rgb plus depth, segmentation
+  std::string signals = "none";       // --signals: none, contacts
+  std::string minari;                 // --minari: also write the run as this Minari dataset
+  std::string minari_root;            // --minari-root
+  DatasetAuthor author;               // --minari-author, --minari-author-email
+  double tolerance = 1e-6;            // --tolerance: record --from DATASET
+  ObsOptions obs;                     // --obs-camera, --obs-size, --obs-layers, --obs-overlay
+  RobomimicOptions robomimic;         // --robomimic, --no-next-obs, --valid-fraction
+  EpisodeSelectionOptions selection;  // --keep, --stop-after-success
 };
 
 // record --from: the recorded episodes' indices, ascending.
@@ -235,6 +236,18 @@ RecordJob ResolveRecord(RecordOptions* options, const PolicySpec& policy,
         {}};
     CheckRecordMinari(job);
   }
+  job.keep_successful = KeepSuccessful(o.selection, !o.minari.empty() || !o.robomimic.file.empty());
+  if (o.selection.stop_after_success >= 0 && from) {
+    throw UsageError(
+        "--stop-after-success does not apply to record --from: the recording's "
+        "episodes keep their own lengths");
+  }
+  if (o.selection.stop_after_success >= 0 && o.resume) {
+    throw UsageError(
+        "--stop-after-success cannot --resume (the manifest does not record it); "
+        "record the run again with --overwrite");
+  }
+  plan.stop_after_success = o.selection.stop_after_success;
   if (!o.robomimic.file.empty()) {
     job.robomimic =
         RobomimicRequest{o.robomimic.file,           o.overwrite, !o.robomimic.no_next_obs,
@@ -368,6 +381,7 @@ Command AddRecord(CLI::App& app) {
   AddFromOption(sub, &o->from, &o->tolerance);
   AddObsOptions(sub, &o->obs);
   AddRobomimicOptions(sub, &o->robomimic);
+  AddEpisodeSelectionOptions(sub, &o->selection);
   return {sub, [o, sub] {
             o->episodes_given = sub->count("--episodes") > 0;
             CheckObsUse(sub, o->obs, !o->minari.empty() || !o->robomimic.file.empty(),

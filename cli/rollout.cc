@@ -42,11 +42,12 @@ struct RolloutOptions {
   std::string minari_root;  // --minari-root
   bool overwrite =
       false;  // replace an existing Minari dataset, or a --json-out file of another env or seed
-  DatasetAuthor author;          // --minari-author, --minari-author-email
-  std::string signals = "none";  // --signals
-  ObsOptions obs;                // --obs-camera, --obs-size, --obs-layers, --obs-overlay
-  RobomimicOptions robomimic;    // --robomimic, --no-next-obs, --valid-fraction
-  std::string backend;           // --backend of the images
+  DatasetAuthor author;               // --minari-author, --minari-author-email
+  std::string signals = "none";       // --signals
+  ObsOptions obs;                     // --obs-camera, --obs-size, --obs-layers, --obs-overlay
+  RobomimicOptions robomimic;         // --robomimic, --no-next-obs, --valid-fraction
+  EpisodeSelectionOptions selection;  // --keep, --stop-after-success
+  std::string backend;                // --backend of the images
 };
 
 // The datasets a rollout writes (--minari, --robomimic), their destinations checked now, and the
@@ -138,8 +139,13 @@ int RunRollout(const RolloutOptions& o) {
   job.episodes = run.episodes;
   job.jobs = ResolveJobs(o.jobs, count);
   job.mode = mode;
+  job.stop_after_success = o.selection.stop_after_success;
   DatasetOutputs outputs(o, RolloutOutputRun(job), std::move(pixels), &job);
   job.output = outputs.output();
+  std::optional<SuccessfulEpisodes> successful;
+  if (KeepSuccessful(o.selection, job.output != nullptr)) {
+    job.output = &successful.emplace(*job.output);
+  }
   // progress on stderr (the JSON may be on stdout): a bar on a terminal, else a line every
   // FETCHSCOPE_PROGRESS_INTERVAL (30 s) of a long run
   ProgressReporter progress = ProgressReporter::ForLongRuns("rollout", count, o.steps, "steps");
@@ -161,6 +167,10 @@ int RunRollout(const RolloutOptions& o) {
     WriteJson(path,
               TrajectoryJson(spec, assets, seed, o.policy.policy, std::move(result.episodes)));
     wrote += "wrote " + path + "\n";
+  }
+  if (successful) {
+    wrote += "kept " + std::to_string(successful->kept().size()) + " successful episode(s) of " +
+             std::to_string(successful->tried()) + " tried\n";
   }
   wrote += outputs.Wrote();
   std::printf("%s: %d episode(s) of %d steps, policy %s, seed %s: success %d/%d (%s)\n%s",
@@ -201,6 +211,7 @@ Command AddRollout(CLI::App& app) {
   AddDatasetAuthorOptions(sub, &o->author);
   AddObsOptions(sub, &o->obs);
   AddRobomimicOptions(sub, &o->robomimic);
+  AddEpisodeSelectionOptions(sub, &o->selection);
   sub->add_option("--backend", o->backend,
                   "GL backend of --obs-camera's images: auto, egl or osmesa (default "
                   "$MUJOCO_GL, else auto)");

@@ -410,6 +410,7 @@ std::string MinariWriter::MetadataJson(double dataset_size_mb) const {
   }
   j += "]";
   if (pixels_) j += ", \"pixels\": " + PixelsJson(*pixels_).dump(-1, ' ', true);
+  if (!selection_.is_null()) j += ", \"selection\": " + selection_.dump(-1, ' ', true);
   j += ", \"dataset_size\": " + nlohmann::json(dataset_size_mb).dump() + "}";
   return j;
 }

@@ -74,6 +74,9 @@ class MinariWriter {
   /// T = rewards.size(), images are missing, or libhdf5 fails.
   void Add(const MinariEpisode& episode, const StagedEpisode* staged = nullptr);
 
+  /// Stores `selection` (which of the run's episodes these are) as metadata.json's "selection".
+  void SetSelection(const nlohmann::json& selection) { selection_ = selection; }
+
   /// Closes the file, writes metadata.json and renames the dataset into place (replacing the
   /// old one when `overwrite`; the old one is removed after the swap). Also writes Minari's
   /// `namespace_metadata.json` ({}) into namespace folders that have none. Returns the final
@@ -100,7 +103,9 @@ class MinariWriter {
   bool temp_exists_ = false;
   H5File file_;
   int obs_dim_ = 0;
-  std::optional<PixelLayout> pixels_;  // options.pixels, its geometry from the first episode
+  std::optional<PixelLayout> pixels_;
+  nlohmann::json selection_;  // null: every episode of the run  // options.pixels, its geometry
+                              // from the first episode
   int64_t episodes_ = 0;
   int64_t steps_ = 0;
 };

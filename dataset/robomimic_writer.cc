@@ -193,6 +193,7 @@ fs::path RobomimicWriter::Commit() {
   w.StringAttribute(data_.get(), "env_args",
                     RobomimicEnvArgs(*options_.spec, options_.max_episode_steps));
   w.StringAttribute(data_.get(), "pixels", PixelsJson(pixels_).dump(4));
+  if (!selection_.is_null()) w.StringAttribute(data_.get(), "selection", selection_.dump(4));
   if (options_.valid_fraction > 0) {
     const std::vector<int> valid = ValidDemos(demos_, options_.valid_fraction);
     std::vector<std::string> train_names, valid_names;

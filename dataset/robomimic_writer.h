@@ -7,6 +7,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
@@ -46,6 +47,9 @@ class RobomimicWriter {
   /// obs row t is the state before action t, next_obs row t the state after it.
   void Add(const MinariEpisode& episode, const StagedEpisode& staged);
 
+  /// Stores `selection` (which of the run's episodes these are) as data's attr "selection".
+  void SetSelection(const nlohmann::json& selection) { selection_ = selection; }
+
   /// Writes the masks and data's attrs, closes the file and renames it into place. Returns the
   /// final path.
   std::filesystem::path Commit();
@@ -57,6 +61,7 @@ class RobomimicWriter {
   std::string temp_;
   H5File file_;
   H5Group data_;
+  nlohmann::json selection_;
   int demos_ = 0;
   int64_t total_ = 0;
 };

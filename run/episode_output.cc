@@ -2,6 +2,7 @@
 
 #include <algorithm>
 
+#include "base/errors.h"
 #include "dataset/minari_writer.h"
 
 namespace fetchscope {
@@ -51,6 +52,31 @@ std::string WriteEpisodes(const Trajectory& trajectory, const OutputRun& run, Ep
     output.Abort();
     throw;
   }
+}
+
+void SuccessfulEpisodes::Begin(const OutputRun& run) {
+  seed_ = run.seed;
+  inner_.Begin(run);
+}
+
+void SuccessfulEpisodes::Add(const EpisodeRecord& episode) {
+  ++tried_;
+  if (episode.steps.empty() || !episode.steps.back().is_success) return;
+  kept_.push_back(episode.index);
+  inner_.Add(episode);
+}
+
+std::string SuccessfulEpisodes::Finish() {
+  if (kept_.empty()) {
+    throw RunError("--keep successful: none of the " + std::to_string(tried_) +
+                   " episode(s) ended in success; nothing written");
+  }
+  inner_.SetSelection({{"keep", "successful"},
+                       {"tried", tried_},
+                       {"kept", kept_.size()},
+                       {"seed", seed_},
+                       {"episodes", kept_}});
+  return inner_.Finish();
 }
 
 }  // namespace fetchscope

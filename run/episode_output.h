@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <functional>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
@@ -46,6 +47,29 @@ class EpisodeOutput {
   virtual std::string Finish() = 0;
   /// Drops what was written; nothing is left under the final name. Safe to call at any point.
   virtual void Abort() = 0;
+  /// Before Finish: which of the run's episodes were kept and why (--keep successful), stored
+  /// with the output ({"keep", "tried", "kept", "seed", "episodes": [run indices]}).
+  virtual void SetSelection(const nlohmann::json& selection) { (void)selection; }
+};
+
+/// --keep successful: only the episodes whose last step is a success go on to `inner` (renumbered
+/// there in order); Finish tells `inner` which were kept (SetSelection) and refuses to write an
+/// output of no episode.
+class SuccessfulEpisodes : public EpisodeOutput {
+ public:
+  explicit SuccessfulEpisodes(EpisodeOutput& inner) : inner_(inner) {}
+  void Begin(const OutputRun& run) override;
+  void Add(const EpisodeRecord& episode) override;
+  std::string Finish() override;
+  void Abort() override { inner_.Abort(); }
+  int tried() const { return tried_; }                    ///< episodes offered
+  const std::vector<int>& kept() const { return kept_; }  ///< their run indices
+
+ private:
+  EpisodeOutput& inner_;
+  uint64_t seed_ = 0;
+  int tried_ = 0;
+  std::vector<int> kept_;
 };
 
 /// Episodes that finish in any order (the scheduler reports them as workers finish), handed to

@@ -59,6 +59,10 @@ void MinariOutput::Add(const EpisodeRecord& episode) {
   writer_->Add(e, &images);
 }
 
+void MinariOutput::SetSelection(const nlohmann::json& selection) {
+  if (writer_) writer_->SetSelection(selection);
+}
+
 std::string MinariOutput::Finish() {
   if (!writer_) throw RunError("Minari dataset '" + request_.dataset_id + "': not begun");
   written_ = writer_->Commit().string();

@@ -48,6 +48,7 @@ class MinariOutput : public EpisodeOutput {
   void Add(const EpisodeRecord& episode) override;
   std::string Finish() override;
   void Abort() override { writer_.reset(); }
+  void SetSelection(const nlohmann::json& selection) override;
 
   const MinariRequest& request() const { return request_; }
   /// The dataset's folder, once Finish has put it in place ("" before).

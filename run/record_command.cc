@@ -123,13 +123,19 @@ int WriteRecordDatasets(const RecordJob& job) {
     outputs.push_back(&robomimic.emplace(*job.robomimic));
   }
   EpisodeOutputs all(outputs);
+  SuccessfulEpisodes successful(all);
+  EpisodeOutput& output = job.keep_successful ? static_cast<EpisodeOutput&>(successful) : all;
   try {
-    WriteEpisodes(t, RecordOutputRun(job), all);
+    WriteEpisodes(t, RecordOutputRun(job), output);
   } catch (const MinariInterrupted& e) {
     std::fprintf(stderr, "%s: %s%s\n", what.c_str(), e.what(), advice.c_str());
     return 128 + e.signal;
   } catch (const std::exception& e) {
     throw RunError(what + ": " + std::string(e.what()) + advice);
+  }
+  if (job.keep_successful) {
+    std::printf("kept %zu successful episode(s) of %d tried\n", successful.kept().size(),
+                successful.tried());
   }
   if (minari) {
     std::printf("wrote Minari dataset %s at %s\n", job.minari->dataset_id.c_str(),

@@ -45,6 +45,7 @@ struct RecordJob {
   std::string minari_root_given;  ///< --minari-root as given (empty: none), for the export advice
   std::optional<MinariRequest> minari;               ///< --minari: the dataset written after
   std::optional<RobomimicRequest> robomimic;         ///< --robomimic: the file written after
+  bool keep_successful = false;                      ///< --keep successful
   std::string model_path;                            ///< the model file the env loaded
   std::chrono::steady_clock::time_point wall_start;  ///< when the command started
   /// Writes the run's report (inspect/, above this layer) for the manifest at this path.

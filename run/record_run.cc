@@ -58,6 +58,7 @@ RecordRunner::RecordRunner(const RecordPlan& plan, int worker)
           MakePolicy(plan.from ? PolicySpec::Zero() : plan.policy, *plan.spec, plan.policy_context),
           plan.seed, plan.steps) {
   if (plan.contact_signals) sequence_.env().EnableContactSignals();
+  sequence_.SetStopAfterSuccess(plan.stop_after_success);
 }
 
 RecordRunner::~RecordRunner() {

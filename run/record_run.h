@@ -57,6 +57,7 @@ struct RecordPlan {
   bool contact_signals = false;  ///< --signals contacts: each step's contacts in the trajectory
   /// --obs-camera: each step's images (and states) rendered and staged for the dataset
   PixelPlan pixels;
+  int stop_after_success = -1;  ///< --stop-after-success K (-1: off)
 };
 
 /// The episode sinks' options for `plan`.

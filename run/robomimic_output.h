@@ -33,6 +33,9 @@ class RobomimicOutput : public EpisodeOutput {
   void Add(const EpisodeRecord& episode) override;
   std::string Finish() override;
   void Abort() override { writer_.reset(); }
+  void SetSelection(const nlohmann::json& selection) override {
+    if (writer_) writer_->SetSelection(selection);
+  }
 
  private:
   RobomimicRequest request_;
@@ -50,6 +53,9 @@ class EpisodeOutputs : public EpisodeOutput {
   void Add(const EpisodeRecord& episode) override;
   std::string Finish() override;
   void Abort() override;
+  void SetSelection(const nlohmann::json& selection) override {
+    for (EpisodeOutput* o : outputs_) o->SetSelection(selection);
+  }
 
  private:
   std::vector<EpisodeOutput*> outputs_;

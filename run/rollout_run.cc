@@ -26,6 +26,7 @@ class RolloutRunner : public EpisodeRunner {
                   MakePolicy(job.policy, *job.spec, *job.policy_context), job.policy_context->seed,
                   job.steps) {
     if (job.contact_signals) sequence_.env().EnableContactSignals();
+    sequence_.SetStopAfterSuccess(job.stop_after_success);
   }
   ~RolloutRunner() override {
     pixels_.reset();  // its renderers go while their GL context exists

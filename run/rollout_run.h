@@ -39,6 +39,7 @@ struct RolloutJob {
   PixelPlan pixels;
   GlBackend backend = GlBackend::kAuto;  ///< the GL backend of the workers' images
   GpuChoice gpu;                         ///< their EGL devices
+  int stop_after_success = -1;           ///< --stop-after-success K (-1: off)
   std::function<void()> on_episode;      ///< called as each episode is done (progress), if set
 };
 

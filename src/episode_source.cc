@@ -69,8 +69,25 @@ EpisodeRecord EpisodeSequence::Play(int k, const StepCallback& on_step) {
     policy_->SkipEpisode(steps_);
   }
   next_ = k + 1;
-  return RunEpisode(*env_, *policy_, k, k == 0 ? std::optional<uint64_t>(seed_) : std::nullopt,
-                    steps_, on_step);
+  const std::optional<uint64_t> seed = k == 0 ? std::optional<uint64_t>(seed_) : std::nullopt;
+  if (stop_after_success_ < 0) return RunEpisode(*env_, *policy_, k, seed, steps_, on_step);
+  int first_success = -1;
+  bool cut = false;
+  const StepCallback until_success = [&](const StepRecord& r, const StepResult* result) {
+    const bool go_on = !on_step || on_step(r, result);
+    if (r.t >= 1 && r.is_success && first_success < 0) first_success = r.t;
+    if (go_on && first_success >= 0 && r.t >= first_success + stop_after_success_ && r.t < steps_) {
+      cut = true;
+      return false;
+    }
+    return go_on;
+  };
+  EpisodeRecord episode = RunEpisode(*env_, *policy_, k, seed, steps_, until_success);
+  if (cut) {
+    episode.complete = true;
+    policy_->SkipEpisode(steps_ - (static_cast<int>(episode.steps.size()) - 1));
+  }
+  return episode;
 }
 
 TrajectorySource LoadTrajectorySource(const std::string& path) {

@@ -35,6 +35,13 @@ class EpisodeSequence {
   /// Plays episode k (k greater than any played before), calling `on_step` as RunEpisode does.
   EpisodeRecord Play(int k, const StepCallback& on_step = nullptr);
 
+  /// --stop-after-success K: end each episode K steps after its first success after a step
+  /// (t >= 1), complete (a shorter episode, truncated as Minari marks every episode's end); the
+  /// policy's generator then moves on as if the episode had run all its steps, so that every
+  /// episode is the start of the same episode of a run without the option, whatever --jobs. -1:
+  /// off.
+  void SetStopAfterSuccess(int k) { stop_after_success_ = k; }
+
   FetchEnv& env() { return *env_; }      ///< the environment
   Policy& policy() { return *policy_; }  ///< the policy
   int steps() const { return steps_; }   ///< steps per episode
@@ -45,6 +52,7 @@ class EpisodeSequence {
   uint64_t seed_;
   int steps_;
   int next_ = 0;  // the episode the generators stand at
+  int stop_after_success_ = -1;
 };
 
 /// How a dataset episode starts (record --from DATASET): reset with its own seed, or, where it

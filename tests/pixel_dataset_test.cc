@@ -9,6 +9,7 @@
 #include <fstream>
 #include <string>
 
+#include "src/trajectory.h"
 #include "test_util.h"
 
 namespace fetchscope {
@@ -299,6 +300,66 @@ print("ok")
   EXPECT_EQ(r.exit_code, 0) << r.output;
 }
 
+// --stop-after-success K cuts an episode K steps after its first success and leaves every episode
+// the start of the same episode without it (the random policy's draws included), whatever --jobs;
+// --keep successful keeps the successes, says how many were tried and lists them.
+TEST(EpisodeSelection, StopAfterSuccessCutsAndKeepSuccessfulKeepsTheSuccesses) {
+  const std::string py = PythonWithH5py();
+  if (py.empty()) GTEST_SKIP() << "python3-h5py is not installed";
+  TempDir tmp;
+  const std::string run =
+      "rollout --env-id FetchReach-v4 --policy random --episodes 30 --steps 50 --seed 5 ";
+  const fs::path full = tmp.path() / "full.json", cut = tmp.path() / "cut.json";
+  auto r = RunFetchscope(run + "--json-out " + full.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  r = RunFetchscope(run + "--jobs 2 --stop-after-success 2 --json-out " + cut.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const Trajectory a = ReadTrajectory(full.string()), b = ReadTrajectory(cut.string());
+  ASSERT_EQ(a.episodes.size(), b.episodes.size());
+  int shorter = 0;
+  std::vector<int> successes;
+  for (size_t k = 0; k < a.episodes.size(); ++k) {
+    const TrajectoryEpisode &x = a.episodes[k], &y = b.episodes[k];
+    if (x.steps.back().is_success) successes.push_back(static_cast<int>(k));
+    ASSERT_LE(y.steps.size(), x.steps.size());
+    EXPECT_TRUE(y.complete);
+    nlohmann::json prefix = StepsJson(x);
+    prefix.erase(prefix.begin() + static_cast<long>(y.steps.size()), prefix.end());
+    EXPECT_EQ(StepsJson(y), prefix) << "episode " << k;
+    if (y.steps.size() < x.steps.size()) {
+      ++shorter;
+      int first = -1;  // it ends 2 steps after its first success after a step
+      for (size_t t = 1; t < x.steps.size() && first < 0; ++t) {
+        if (x.steps[t].is_success) first = static_cast<int>(t);
+      }
+      EXPECT_EQ(static_cast<int>(y.steps.size()) - 1, first + 2) << "episode " << k;
+    }
+  }
+  EXPECT_GE(shorter, 1);  // the seed makes some: the check above ran
+  ASSERT_FALSE(successes.empty());
+  r = RunFetchscope(run + "--keep successful --minari tt/keep-v0 --minari-root " +
+                    (tmp.path() / "ds").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("kept " + std::to_string(successes.size()) +
+                          " successful episode(s) of 30 tried"),
+            std::string::npos)
+      << r.output;
+  const nlohmann::json meta =
+      nlohmann::json::parse(ReadFile(tmp.path() / "ds/tt/keep-v0/data/metadata.json"));
+  EXPECT_EQ(meta.at("total_episodes").get<size_t>(), successes.size());
+  EXPECT_EQ(meta.at("selection").at("episodes").get<std::vector<int>>(), successes);
+  EXPECT_EQ(meta.at("selection").at("tried").get<int>(), 30);
+  // no success at all: nothing written, one line
+  r = RunFetchscope(
+      "rollout --env-id FetchReach-v4 --policy zero --episodes 2 --steps 3 --keep successful "
+      "--minari tt/none-v0 --minari-root " +
+      (tmp.path() / "ds").string());
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.output.find("none of the 2 episode(s) ended in success"), std::string::npos)
+      << r.output;
+  EXPECT_FALSE(fs::exists(tmp.path() / "ds/tt/none-v0"));
+}
+
 // Each bad value: one line naming it, a non-zero exit, no dataset and no staging folder.
 TEST(PixelDataset, BadInputIsOneLineAndWritesNothing) {
   unsetenv("DISPLAY");
@@ -326,6 +387,8 @@ TEST(PixelDataset, BadInputIsOneLineAndWritesNothing) {
       {" --robomimic " + (tmp.path() / "r.hdf5").string() + " --valid-fraction 1",
        "--valid-fraction 1"},
       {" --robomimic " + (tmp.path() / "r.txt").string(), "ending in .hdf5 or .h5"},
+      {" --minari tt/x-v0 --keep some", "--keep 'some': use all or successful"},
+      {" --keep successful", "--keep successful chooses the episodes of a dataset"},
   };
   for (const auto& c : cases) {
     const auto r = RunFetchscope(base + c.args);
