@@ -68,6 +68,7 @@ struct RecordOptions {
   int gif_fps = 10;
   int gif_width = 320;
   int sheet_every = 0;
+  bool no_sheets = false;  // --no-sheets
   std::string out = "out";
   bool quiet = false;
   int jobs = 1;  // workers; 0 = one per core
@@ -221,7 +222,7 @@ RecordJob ResolveRecord(RecordOptions* options, const PolicySpec& policy,
   o.episodes = run.policy_context.episodes;  // a replayed trajectory: one past its last
   job.view_text = {o.view.camera, o.view.overlay, o.view.msaa, o.view.gpu};
   plan.out = o.out;
-  plan.sheet_every = o.sheet_every;
+  plan.sheet_every = o.no_sheets ? -1 : o.sheet_every;
   job.shard = ResolveRecordShard(o);
   job.mode = ParseWorkerMode(o.worker_mode);
   job.worker_mode = o.worker_mode;
@@ -317,6 +318,10 @@ void AddRecordVideoOptions(CLI::App* sub, RecordOptions* o) {
          "Contact sheet: every K-th frame (0: about 12 tiles); the last frame is always included")
       ->capture_default_str()
       ->check(CLI::Range(0, 1000));
+  sub->add_flag("--no-sheets", o->no_sheets,
+                "No contact sheets (episode_NNN_sheet.png), when the point of the run is its "
+                "dataset or videos; the report shows no thumbnails")
+      ->excludes("--sheet-every");
 }
 
 // --minari with its root and author, --overwrite and --resume.

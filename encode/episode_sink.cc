@@ -81,8 +81,10 @@ std::string GifHudNote(const EpisodeSinkOptions& options, int tile_width, int ti
 EpisodeEncoder::EpisodeEncoder(const EpisodeSinkOptions& options, int k, FramePool* pool,
                                EpisodeDone done)
     : options_(options), k_(k), pool_(*pool), done_(std::move(done)), name_(EpisodeFileStem(k)) {
-  const std::vector<int> indices = SheetFrameIndices(options.steps + 1, options.sheet_every);
-  on_sheet_.insert(indices.begin(), indices.end());
+  if (options.sheet_every >= 0) {  // -1: --no-sheets
+    const std::vector<int> indices = SheetFrameIndices(options.steps + 1, options.sheet_every);
+    on_sheet_.insert(indices.begin(), indices.end());
+  }
   // the writers open here, on the render thread, so a bad folder fails before any frame
   for (const VideoFormat* format : options.formats) {
     writers_.emplace_back(
@@ -171,7 +173,7 @@ void EpisodeEncoder::Body() {
     }
     if (item.second == Command::kClose && !error_) {
       try {
-        if (held && !on_sheet_.count(held->t)) AddTile(*held);
+        if (held && options_.sheet_every >= 0 && !on_sheet_.count(held->t)) AddTile(*held);
         pool_.Release(held);
         held = nullptr;
         Finalize();
@@ -208,9 +210,11 @@ void EpisodeEncoder::Finalize() {
   std::snprintf(title, sizeof(title), "%s  seed %s  policy %s  episode %d%s", o.env_id.c_str(),
                 o.seed_text.c_str(), o.policy.c_str(), k_, complete ? "" : "  (interrupted)");
   CpuLap lap;
-  const SheetImage sheet = MakeContactSheet(title, tiles_);
-  WritePng((fs::path(o.out) / (name_ + "_sheet.png")).string(), sheet.width, sheet.height, 3, 8,
-           sheet.rgb.data(), /*fast=*/true);
+  if (o.sheet_every >= 0) {
+    const SheetImage sheet = MakeContactSheet(title, tiles_);
+    WritePng((fs::path(o.out) / (name_ + "_sheet.png")).string(), sheet.width, sheet.height, 3, 8,
+             sheet.rgb.data(), /*fast=*/true);
+  }
   lap.Into(&cpu_.sheet);
   // the episode's trajectory file, through the one trajectory writer
   Trajectory trajectory;
@@ -248,7 +252,7 @@ void EpisodeEncoder::Finalize() {
   }
   const VideoWriter& first = writers_.front();
   entry.video = fs::path(first.path()).filename().string();
-  entry.sheet = name_ + "_sheet.png";
+  if (o.sheet_every >= 0) entry.sheet = name_ + "_sheet.png";
   entry.trajectory = name_ + ".json";
   entry.frames = first.frames_written();
   entry.steps = steps;

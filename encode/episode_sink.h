@@ -36,14 +36,14 @@ namespace fetchscope {
 /// What every episode sink of a run shares: where the files go, how they are encoded, and what
 /// their titles, tags and trajectories name.
 struct EpisodeSinkOptions {
-  std::string out;                   ///< the run folder
-  std::string env_id;                ///< the env spec's id
-  uint64_t seed = 0;                 ///< the run's seed (tags, trajectory)
-  std::string seed_text;             ///< the seed as given on the command line (sheet titles)
-  std::string policy;                ///< the policy as given (titles, tags, trajectory)
-  AssetSource assets;                ///< the trajectory's "assets"
-  int steps = 50;                    ///< steps per episode: steps + 1 frames (sheet tiles)
-  int sheet_every = 0;               ///< every K-th frame on the sheet (SheetFrameIndices)
+  std::string out;        ///< the run folder
+  std::string env_id;     ///< the env spec's id
+  uint64_t seed = 0;      ///< the run's seed (tags, trajectory)
+  std::string seed_text;  ///< the seed as given on the command line (sheet titles)
+  std::string policy;     ///< the policy as given (titles, tags, trajectory)
+  AssetSource assets;     ///< the trajectory's "assets"
+  int steps = 50;         ///< steps per episode: steps + 1 frames (sheet tiles)
+  int sheet_every = 0;    ///< every K-th frame on the sheet (SheetFrameIndices); -1: none
   std::vector<std::string> cameras;  ///< the camera of each view, in order (depth scales)
   VideoOptions video;                ///< size and codec decided; format and tags set per file
   /// video formats, rows of VideoFormats(), in --format order

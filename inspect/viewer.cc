@@ -220,7 +220,7 @@ std::vector<PageBlock> AddEpisodeViewers(const fs::path& dir, const Manifest& ma
     e["viewer"] = false;
     e["thumbs"] = nullptr;
     const int k = e["index"].get<int>();
-    if (e["sheet"].is_string()) {
+    if (e["sheet"].is_string() && !e["sheet"].get<std::string>().empty()) {
       try {
         const auto size = PngSize(dir / e["sheet"].get<std::string>());
         const int tiles = SheetTileCount(e.value("frames", 0), steps_requested, every);

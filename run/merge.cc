@@ -104,7 +104,7 @@ bool HasFiles(const ManifestEpisode& e, const fs::path& folder,
   std::vector<std::pair<std::string, std::string>> needed;  // what, file
   for (const EpisodeVideo& v : EpisodeVideos(e)) needed.emplace_back("video", v.file);
   if (needed.empty()) needed.emplace_back("video", "");
-  needed.emplace_back("sheet", e.sheet);
+  if (!e.sheet.empty()) needed.emplace_back("sheet", e.sheet);  // none with --no-sheets
   needed.emplace_back("trajectory", e.trajectory);
   bool files = true;
   for (const auto& [what, name] : needed) {

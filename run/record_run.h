@@ -45,7 +45,7 @@ struct RecordPlan {
   int steps = 50;                 ///< steps per episode
   ViewSetup view;                 ///< render options (cameras resolved), backend, GPU request
   std::string out;                ///< the run folder
-  int sheet_every = 0;            ///< contact sheet: every K-th frame (0: about 12 tiles)
+  int sheet_every = 0;            ///< contact sheet: every K-th frame (0: about 12 tiles; -1: none)
   VideoOptions video;             ///< codec already decided; format and metadata set per file
   std::vector<const VideoFormat*> formats;  ///< --format: rows of VideoFormats(), as given
   GpuChoice gpu;                            ///< EGL devices, worker w on devices[w % size]

@@ -297,7 +297,8 @@ bool RunFolder::PlanResume(const fs::path& out, const std::string& quoted, const
         !std::binary_search(request_.episodes.begin(), request_.episodes.end(), k))
       continue;
     // its video, sheet and trajectory, and every other file it names, all there
-    bool files = !e.video.empty() && !e.sheet.empty() && !e.trajectory.empty();
+    bool files = !e.video.empty() && (!e.sheet.empty() || request_.parameters.sheet_every < 0) &&
+                 !e.trajectory.empty();
     for (const std::string& file : e.FileNames()) {
       files = files && fs::is_regular_file(out / file, ec);
     }

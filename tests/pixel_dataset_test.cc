@@ -360,6 +360,31 @@ TEST(EpisodeSelection, StopAfterSuccessCutsAndKeepSuccessfulKeepsTheSuccesses) {
   EXPECT_FALSE(fs::exists(tmp.path() / "ds/tt/none-v0"));
 }
 
+// record --no-sheets: no contact sheet, a manifest without one, a report, and --resume keeps the
+// episodes recorded so.
+TEST(DatasetRun, NoSheetsWritesNoSheetAndResumes) {
+  unsetenv("DISPLAY");
+  TempDir tmp;
+  const std::string out = (tmp.path() / "run").string();
+  const std::string args =
+      "record --env-id FetchReach-v4 --policy scripted --steps 6 --width "
+      "48 --height 48 --format webm --no-sheets --out " +
+      out;
+  auto r = RunFetchscope(args + " --episodes 2");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  r = RunFetchscope(args + " --episodes 3 --resume");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  for (const auto& entry : fs::directory_iterator(out)) {
+    EXPECT_EQ(entry.path().string().find("sheet"), std::string::npos) << entry.path();
+  }
+  const nlohmann::json m = nlohmann::json::parse(ReadFile(fs::path(out) / "manifest.json"));
+  EXPECT_EQ(m.at("sheet_every").get<int>(), -1);
+  ASSERT_EQ(m.at("episodes").size(), 3u);
+  for (const auto& e : m.at("episodes")) EXPECT_FALSE(e.contains("sheet")) << e.dump();
+  EXPECT_TRUE(fs::exists(fs::path(out) / "index.html"));
+  EXPECT_NE(r.output.find("2 kept by --resume"), std::string::npos) << r.output;
+}
+
 // Each bad value: one line naming it, a non-zero exit, no dataset and no staging folder.
 TEST(PixelDataset, BadInputIsOneLineAndWritesNothing) {
   unsetenv("DISPLAY");
