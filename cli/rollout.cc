@@ -142,9 +142,9 @@ int RunRollout(const RolloutOptions& o) {
   job.stop_after_success = o.selection.stop_after_success;
   DatasetOutputs outputs(o, RolloutOutputRun(job), std::move(pixels), &job);
   job.output = outputs.output();
-  std::optional<SuccessfulEpisodes> successful;
+  std::optional<SelectedEpisodes> successful;
   if (KeepSuccessful(o.selection, job.output != nullptr)) {
-    job.output = &successful.emplace(*job.output);
+    job.output = &successful.emplace(*job.output, true, 0, 1);
   }
   // progress on stderr (the JSON may be on stdout): a bar on a terminal, else a line every
   // FETCHSCOPE_PROGRESS_INTERVAL (30 s) of a long run

@@ -78,10 +78,18 @@ json SpaceJson(const std::string& label, const json& value, const char* key) {
 int CheckObservationSpace(const std::string& label, const json& space) {
   const char* expected =
       "observation_space is not a Fetch space: expected a Dict of achieved_goal (3), "
-      "desired_goal (3) and observation (10 or 25), each a float64 Box";
+      "desired_goal (3) and observation (10 or 25), each a float64 Box (and, in a pixel "
+      "dataset, Dicts images, depth, segmentation)";
   if (!space.is_object() || space.value("type", json()) != "Dict") Fail(label, expected);
   const json subspaces = space.value("subspaces", json());
-  if (!subspaces.is_object() || subspaces.size() != 3) Fail(label, expected);
+  if (!subspaces.is_object()) Fail(label, expected);
+  size_t images = 0;  // a pixel dataset's image Dicts (docs/guide/datasets.md), not read here
+  for (const char* key : {"images", "depth", "segmentation"}) {
+    if (!subspaces.contains(key)) continue;
+    if (subspaces[key].value("type", json()) != "Dict") Fail(label, expected);
+    ++images;
+  }
+  if (subspaces.size() != 3 + images) Fail(label, expected);
   for (const char* goal : {"achieved_goal", "desired_goal"}) {
     if (!subspaces.contains(goal) || BoxWidth(subspaces[goal], "float64") != 3) {
       Fail(label, expected);

@@ -54,28 +54,38 @@ std::string WriteEpisodes(const Trajectory& trajectory, const OutputRun& run, Ep
   }
 }
 
-void SuccessfulEpisodes::Begin(const OutputRun& run) {
+void SelectedEpisodes::Begin(const OutputRun& run) {
   seed_ = run.seed;
+  run_ = {{"env_id", run.spec->id},
+          {"seed", run.seed},
+          {"policy", run.policy},
+          {"steps", run.steps},
+          {"episodes", run.episodes}};
   inner_.Begin(run);
 }
 
-void SuccessfulEpisodes::Add(const EpisodeRecord& episode) {
+void SelectedEpisodes::Add(const EpisodeRecord& episode) {
   ++tried_;
-  if (episode.steps.empty() || !episode.steps.back().is_success) return;
+  if (keep_successful_ && (episode.steps.empty() || !episode.steps.back().is_success)) return;
   kept_.push_back(episode.index);
   inner_.Add(episode);
 }
 
-std::string SuccessfulEpisodes::Finish() {
+std::string SelectedEpisodes::Finish() {
   if (kept_.empty()) {
     throw RunError("--keep successful: none of the " + std::to_string(tried_) +
                    " episode(s) ended in success; nothing written");
   }
-  inner_.SetSelection({{"keep", "successful"},
-                       {"tried", tried_},
-                       {"kept", kept_.size()},
-                       {"seed", seed_},
-                       {"episodes", kept_}});
+  if (keep_successful_ || shard_count_ > 1) {
+    nlohmann::json selection = {{"keep", keep_successful_ ? "successful" : "all"}};
+    if (shard_count_ > 1) selection["shard"] = {shard_index_, shard_count_};
+    selection["run"] = run_;
+    selection["tried"] = tried_;
+    selection["kept"] = kept_.size();
+    selection["seed"] = seed_;
+    selection["episodes"] = kept_;
+    inner_.SetSelection(selection);
+  }
   return inner_.Finish();
 }
 

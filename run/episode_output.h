@@ -8,6 +8,7 @@
 #include <functional>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -28,6 +29,9 @@ struct OutputRun {
   int episodes = 0;               ///< the episodes asked for (--episodes)
   int steps = 0;                  ///< the TimeLimit they ran under (--steps)
   std::string source;             ///< export: the run folder or file exported ("" otherwise)
+  /// record --from DATASET: each episode's own reset seed (nullopt: none), by index, which the
+  /// new dataset keeps; empty otherwise (episode 0 has `seed`, the others continue it)
+  std::map<int, std::optional<uint64_t>> episode_seeds;
 };
 
 /// Receives finished episodes, in episode order (ascending index), between Begin and Finish.
@@ -52,12 +56,19 @@ class EpisodeOutput {
   virtual void SetSelection(const nlohmann::json& selection) { (void)selection; }
 };
 
-/// --keep successful: only the episodes whose last step is a success go on to `inner` (renumbered
-/// there in order); Finish tells `inner` which were kept (SetSelection) and refuses to write an
-/// output of no episode.
-class SuccessfulEpisodes : public EpisodeOutput {
+/// Which of a run's episodes an output holds, and why: --keep successful (only the episodes whose
+/// last step is a success go on, renumbered in order) and a shard of the run (--shard I/N). Where
+/// either applies, Finish tells `inner` (SetSelection): {"keep": "all" | "successful", "shard":
+/// [I, N] (sharded only), "run": {"env_id", "seed", "policy", "steps", "episodes"}, "tried",
+/// "kept", "seed", "episodes": [the kept episodes' run indices]}, which merge-datasets reads to put
+/// shards back together. Refuses to write an output of no episode.
+class SelectedEpisodes : public EpisodeOutput {
  public:
-  explicit SuccessfulEpisodes(EpisodeOutput& inner) : inner_(inner) {}
+  SelectedEpisodes(EpisodeOutput& inner, bool keep_successful, int shard_index, int shard_count)
+      : inner_(inner),
+        keep_successful_(keep_successful),
+        shard_index_(shard_index),
+        shard_count_(shard_count) {}
   void Begin(const OutputRun& run) override;
   void Add(const EpisodeRecord& episode) override;
   std::string Finish() override;
@@ -67,6 +78,9 @@ class SuccessfulEpisodes : public EpisodeOutput {
 
  private:
   EpisodeOutput& inner_;
+  bool keep_successful_;
+  int shard_index_, shard_count_;
+  nlohmann::json run_;
   uint64_t seed_ = 0;
   int tried_ = 0;
   std::vector<int> kept_;

@@ -41,14 +41,17 @@ void MinariOutput::Begin(const OutputRun& run) {
   writer_.reset();
   writer_ = std::make_unique<MinariWriter>(MinariOptionsFor(request_, run));
   seed_ = run.seed;
+  episode_seeds_ = run.episode_seeds;
   width_ = ObservationSize(run.spec->has_object);
 }
 
 void MinariOutput::Add(const EpisodeRecord& episode) {
   if (!writer_) throw RunError("Minari dataset '" + request_.dataset_id + "': not begun");
   // episode 0 was reset with the run's seed; the others continued its generator
-  const std::optional<uint64_t> seed =
-      episode.index == 0 ? std::optional<uint64_t>(seed_) : std::nullopt;
+  std::optional<uint64_t> seed = episode.index == 0 ? std::optional<uint64_t>(seed_) : std::nullopt;
+  if (const auto own = episode_seeds_.find(episode.index); own != episode_seeds_.end()) {
+    seed = own->second;  // a re-rendered dataset's episodes keep their own seeds
+  }
   const MinariEpisode e = ToMinariEpisode(episode, seed, width_);
   if (!request_.pixels) {
     writer_->Add(e);

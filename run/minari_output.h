@@ -59,7 +59,8 @@ class MinariOutput : public EpisodeOutput {
   std::unique_ptr<MinariWriter> writer_;  // between Begin and Finish
   std::string written_;
   uint64_t seed_ = 0;
-  int width_ = 0;  // observation values per row
+  std::map<int, std::optional<uint64_t>> episode_seeds_;  // OutputRun::episode_seeds
+  int width_ = 0;                                         // observation values per row
 };
 
 }  // namespace fetchscope

@@ -123,8 +123,9 @@ int WriteRecordDatasets(const RecordJob& job) {
     outputs.push_back(&robomimic.emplace(*job.robomimic));
   }
   EpisodeOutputs all(outputs);
-  SuccessfulEpisodes successful(all);
-  EpisodeOutput& output = job.keep_successful ? static_cast<EpisodeOutput&>(successful) : all;
+  SelectedEpisodes selected(all, job.keep_successful, job.shard.index, job.shard.count);
+  EpisodeOutput& output =
+      job.keep_successful || job.shard.sharded() ? static_cast<EpisodeOutput&>(selected) : all;
   try {
     WriteEpisodes(t, RecordOutputRun(job), output);
   } catch (const MinariInterrupted& e) {
@@ -134,8 +135,8 @@ int WriteRecordDatasets(const RecordJob& job) {
     throw RunError(what + ": " + std::string(e.what()) + advice);
   }
   if (job.keep_successful) {
-    std::printf("kept %zu successful episode(s) of %d tried\n", successful.kept().size(),
-                successful.tried());
+    std::printf("kept %zu successful episode(s) of %d tried\n", selected.kept().size(),
+                selected.tried());
   }
   if (minari) {
     std::printf("wrote Minari dataset %s at %s\n", job.minari->dataset_id.c_str(),
@@ -157,6 +158,9 @@ OutputRun RecordOutputRun(const RecordJob& job) {
   run.policy = plan.policy.text;
   run.episodes = job.episodes_requested;
   run.steps = plan.steps;
+  if (plan.from && plan.from->dataset) {
+    for (const auto& [k, start] : plan.from->starts) run.episode_seeds[k] = start.seed;
+  }
   return run;
 }
 

@@ -217,6 +217,26 @@ TEST(PixelDataset, ADataCollectorDatasetBecomesAPixelDatasetWithItsFieldsCopied)
   r = RunCommand(py + " -c \"" + script + "\" " +
                  (root / "mine/collector-v0/data/main_data.hdf5").string() + " " +
                  (root / "mine/pixels-v0/data/main_data.hdf5").string() + " 2>&1");
+  EXPECT_EQ(r.exit_code, 0)
+      << r.output;  // a pixel dataset is a dataset record --from reads: the same images again
+  r = RunFetchscope("record --from " + (root / "mine/pixels-v0").string() +
+                    " --width 40 --height 40 --format webm --no-report -q --out " +
+                    (tmp.path() / "again").string() + " --minari mine/again-v0 --minari-root " +
+                    root.string() + " --obs-camera external_camera_0 --obs-size 32x32");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const std::string same =
+      "import h5py, sys\n"
+      "a = h5py.File(sys.argv[1], 'r'); b = h5py.File(sys.argv[2], 'r')\n"
+      "for e in a:\n"
+      "  for k in ('actions', 'observations/observation', "
+      "'observations/images/external_camera_0'):\n"
+      "    x, y = a[e][k], b[e][k]\n"
+      "    assert len(x) == len(y) and all(x[i].tobytes() == y[i].tobytes() for i in "
+      "range(len(x))), (e, k)\n"
+      "print('ok')\n";
+  r = RunCommand(py + " -c \"" + same + "\" " +
+                 (root / "mine/pixels-v0/data/main_data.hdf5").string() + " " +
+                 (root / "mine/again-v0/data/main_data.hdf5").string() + " 2>&1");
   EXPECT_EQ(r.exit_code, 0) << r.output;
 }
 
