@@ -31,6 +31,7 @@ Command AddRecord(CLI::App& parent);
 Command AddBench(CLI::App& parent);
 Command AddProbeActions(CLI::App& parent);
 Command AddMergeManifests(CLI::App& parent);
+Command AddMergeDatasets(CLI::App& parent);
 Command AddGolden(CLI::App& parent);
 Command AddListGpus(CLI::App& parent);
 Command AddReport(CLI::App& parent);
@@ -42,7 +43,8 @@ Command AddHelp(CLI::App& parent);
 inline constexpr AddCommandFn kCommands[] = {
     AddListEnvs, AddDescribe, AddRewardCheck,  AddRandomEpisodes, AddAnatomy,
     AddRollout,  AddExport,   AddDatasets,     AddRender,         AddListCameras,
-    AddRecord,   AddBench,    AddProbeActions, AddMergeManifests, AddGolden,
-    AddListGpus, AddReport,   AddCompare,      AddServe,          AddHelp};
+    AddRecord,   AddBench,    AddProbeActions, AddMergeManifests, AddMergeDatasets,
+    AddGolden,   AddListGpus, AddReport,       AddCompare,        AddServe,
+    AddHelp};
 
 }  // namespace fetchscope::cli

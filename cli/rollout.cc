@@ -12,6 +12,7 @@
 #include "cli/jobs_options.h"
 #include "cli/obs_options.h"
 #include "cli/resolve.h"
+#include "cli/shard_options.h"
 #include "cli/view_options.h"
 #include "dataset/minari_format.h"
 #include "render/view.h"
@@ -47,6 +48,8 @@ struct RolloutOptions {
   ObsOptions obs;                     // --obs-camera, --obs-size, --obs-layers, --obs-overlay
   RobomimicOptions robomimic;         // --robomimic, --no-next-obs, --valid-fraction
   EpisodeSelectionOptions selection;  // --keep, --stop-after-success
+  std::string shard;                  // --shard I/N
+  int shard_count = 0;                // --shard-count (with JOB_COMPLETION_INDEX)
   std::string backend;                // --backend of the images
 };
 
@@ -126,7 +129,11 @@ int RunRollout(const RolloutOptions& o) {
     pixels = PlanPixels(ResolveObs(o.obs, check.model(), kMsaaAuto), check.model(),
                         !o.minari.empty(), robomimic);
   }
-  const int count = static_cast<int>(run.episodes.size());
+  // a shard plays its share of the run's episodes (episode k in shard k mod N), each as in the
+  // whole run; merge-datasets puts the shards' datasets together
+  const Shard shard = ResolveShard(o.shard, o.shard_count);
+  const std::vector<int> episodes = ShardEpisodes(shard, run.episodes);
+  const int count = static_cast<int>(episodes.size());
   RolloutJob job;
   job.spec = &spec;
   job.assets = assets;
@@ -136,15 +143,17 @@ int RunRollout(const RolloutOptions& o) {
   job.policy_context = &run.policy_context;
   job.steps = o.steps;
   job.contact_signals = ParseContactSignals(o.signals);
-  job.episodes = run.episodes;
+  job.episodes = episodes;
+  job.episodes_requested = static_cast<int>(run.episodes.size());
   job.jobs = ResolveJobs(o.jobs, count);
   job.mode = mode;
   job.stop_after_success = o.selection.stop_after_success;
   DatasetOutputs outputs(o, RolloutOutputRun(job), std::move(pixels), &job);
   job.output = outputs.output();
   std::optional<SelectedEpisodes> successful;
-  if (KeepSuccessful(o.selection, job.output != nullptr)) {
-    job.output = &successful.emplace(*job.output, true, 0, 1);
+  const bool keep = KeepSuccessful(o.selection, job.output != nullptr);
+  if (job.output && (keep || shard.sharded())) {
+    job.output = &successful.emplace(*job.output, keep, shard.index, shard.count);
   }
   // progress on stderr (the JSON may be on stdout): a bar on a terminal, else a line every
   // FETCHSCOPE_PROGRESS_INTERVAL (30 s) of a long run
@@ -168,7 +177,7 @@ int RunRollout(const RolloutOptions& o) {
               TrajectoryJson(spec, assets, seed, o.policy.policy, std::move(result.episodes)));
     wrote += "wrote " + path + "\n";
   }
-  if (successful) {
+  if (successful && keep) {
     wrote += "kept " + std::to_string(successful->kept().size()) + " successful episode(s) of " +
              std::to_string(successful->tried()) + " tried\n";
   }
@@ -212,6 +221,14 @@ Command AddRollout(CLI::App& app) {
   AddObsOptions(sub, &o->obs);
   AddRobomimicOptions(sub, &o->robomimic);
   AddEpisodeSelectionOptions(sub, &o->selection);
+  sub->add_option(
+      "--shard", o->shard,
+      "Play only shard I of N (0 <= I < N): episodes k with k mod N = I, each as in the "
+      "whole run; its dataset records the shard, and merge-datasets joins the shards' "
+      "datasets. Without it: JOB_COMPLETION_INDEX (with --shard-count) or "
+      "SLURM_ARRAY_TASK_ID/COUNT if set");
+  sub->add_option("--shard-count", o->shard_count,
+                  "Number of shards when the index comes from JOB_COMPLETION_INDEX");
   sub->add_option("--backend", o->backend,
                   "GL backend of --obs-camera's images: auto, egl or osmesa (default "
                   "$MUJOCO_GL, else auto)");

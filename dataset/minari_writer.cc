@@ -337,6 +337,25 @@ void MinariWriter::Add(const MinariEpisode& e, const StagedEpisode* staged) {
   steps_ += static_cast<int64_t>(t);
 }
 
+void MinariWriter::AddCopy(hid_t source, const std::string& episode, int64_t steps,
+                           const std::string& label) {
+  if (!file_) throw RunError("MinariWriter: Add after Commit");
+  ThrowIfStopped(options_.dataset_id);
+  const std::string name = "episode_" + std::to_string(episodes_);
+  const std::string file = (temp_path_ / "data" / "main_data.hdf5").string();
+  if (H5Ocopy(source, episode.c_str(), file_.get(), name.c_str(), H5P_DEFAULT, H5P_DEFAULT) < 0) {
+    throw RunError(Hdf5WriteError(file, "could not copy " + episode + " of " + label));
+  }
+  const H5Group group(H5Gopen2(file_.get(), name.c_str(), H5P_DEFAULT));
+  const H5Attribute id(group ? H5Aopen(group.get(), "id", H5P_DEFAULT) : -1);
+  const int64_t n = episodes_;
+  if (!id || H5Awrite(id.get(), H5T_NATIVE_INT64, &n) < 0) {
+    throw RunError(Hdf5WriteError(file, "could not renumber " + name));
+  }
+  ++episodes_;
+  steps_ += steps;
+}
+
 void MinariWriter::AddPixels(hid_t observations, hid_t infos, const StagedEpisode& staged,
                              hsize_t rows) {
   const std::string file = (temp_path_ / "data" / "main_data.hdf5").string();

@@ -74,6 +74,11 @@ class MinariWriter {
   /// T = rewards.size(), images are missing, or libhdf5 fails.
   void Add(const MinariEpisode& episode, const StagedEpisode* staged = nullptr);
 
+  /// Appends episode_<n> as a copy of group `episode` of the open HDF5 file `source` (another
+  /// dataset of the same layout: a shard), its `id` rewritten to n; `steps` its total_steps.
+  /// Throws RunError naming `label` (the source) where libhdf5 cannot.
+  void AddCopy(hid_t source, const std::string& episode, int64_t steps, const std::string& label);
+
   /// Stores `selection` (which of the run's episodes these are) as metadata.json's "selection".
   void SetSelection(const nlohmann::json& selection) { selection_ = selection; }
 

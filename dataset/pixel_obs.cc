@@ -93,6 +93,45 @@ nlohmann::json PixelsJson(const PixelLayout& layout) {
   return j;
 }
 
+PixelLayout PixelLayoutFromJson(const nlohmann::json& j, const std::string& label) {
+  PixelLayout layout;
+  try {
+    layout.width = j.at("width").get<int>();
+    layout.height = j.at("height").get<int>();
+    for (const auto& l : j.at("layers")) {
+      const std::string name = l.get<std::string>();
+      if (name == "rgb")
+        layout.layers.push_back(ImageLayer::kRgb);
+      else if (name == "depth")
+        layout.layers.push_back(ImageLayer::kDepth);
+      else if (name == "segmentation")
+        layout.layers.push_back(ImageLayer::kSegmentation);
+      else
+        throw RunError("unknown layer '" + name + "'");
+    }
+    layout.overlay = j.at("overlay").get<std::string>();
+    layout.deflate_level = j.at("gzip_level").get<int>();
+    if (j.contains("segmentation_legend")) layout.segmentation_legend = j["segmentation_legend"];
+    for (const auto& c : j.at("cameras")) {
+      PixelCamera cam;
+      cam.name = c.at("name").get<std::string>();
+      cam.camera = c.at("camera").get<std::string>();
+      cam.moving = c.at("moving").get<bool>();
+      cam.fovy = c.at("fovy").get<double>();
+      cam.fx = c.at("fx").get<double>();
+      cam.fy = c.at("fy").get<double>();
+      cam.cx = c.at("cx").get<double>();
+      cam.cy = c.at("cy").get<double>();
+      if (!cam.moving) cam.pose = c.at("pose").get<std::array<double, 7>>();
+      layout.cameras.push_back(std::move(cam));
+    }
+  } catch (const std::exception& e) {
+    throw RunError(label + ": its pixels description is not one fetchscope wrote (" +
+                   std::string(e.what()) + ")");
+  }
+  return layout;
+}
+
 PixelStagingWriter::PixelStagingWriter(const fs::path& path, int deflate_level)
     : path_(path), level_(deflate_level) {
   file_ = std::fopen(path.c_str(), "wb");

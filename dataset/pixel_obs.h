@@ -71,6 +71,10 @@ struct PixelLayout {
 /// CamerasJson's cameras and conventions, and the segmentation legend.
 nlohmann::json PixelsJson(const PixelLayout& layout);
 
+/// The layout PixelsJson described (merge-datasets reads a shard's back). Throws RunError naming
+/// `label` where a key is missing or mistyped.
+PixelLayout PixelLayoutFromJson(const nlohmann::json& pixels, const std::string& label);
+
 /// Writes one episode's staging file. Every method throws RunError naming the file where the
 /// system refuses (a full disk).
 class PixelStagingWriter {

@@ -117,8 +117,8 @@ void CheckRobomimicDestination(const RobomimicWriteOptions& options) {
 
 RobomimicWriter::RobomimicWriter(const RobomimicWriteOptions& options)
     : options_(options), parents_(options.file.string()) {
-  if (!options_.spec || !options_.pixels || !options_.pixels->states) {
-    throw RunError("RobomimicWriter: no env spec or no staged states");
+  if ((!options_.spec && options_.env_args.empty()) || !options_.pixels) {
+    throw RunError("RobomimicWriter: no env spec or no layout");
   }
   CheckRobomimicDestination(options_);
   SilenceHdf5Errors();
@@ -187,11 +187,23 @@ void RobomimicWriter::Add(const MinariEpisode& e, const StagedEpisode& staged) {
   total_ += static_cast<int64_t>(n);
 }
 
+void RobomimicWriter::AddCopy(hid_t source, const std::string& demo, int64_t samples,
+                              const std::string& label) {
+  const std::string name = "demo_" + std::to_string(demos_);
+  if (H5Ocopy(source, demo.c_str(), data_.get(), name.c_str(), H5P_DEFAULT, H5P_DEFAULT) < 0) {
+    Writer{temp_}.Fail(demo + " of " + label + " (copying it)");
+  }
+  ++demos_;
+  total_ += samples;
+}
+
 fs::path RobomimicWriter::Commit() {
   const Writer w{temp_};
   w.Int64Attribute(data_.get(), "total", total_);
   w.StringAttribute(data_.get(), "env_args",
-                    RobomimicEnvArgs(*options_.spec, options_.max_episode_steps));
+                    options_.env_args.empty()
+                        ? RobomimicEnvArgs(*options_.spec, options_.max_episode_steps)
+                        : options_.env_args);
   w.StringAttribute(data_.get(), "pixels", PixelsJson(pixels_).dump(4));
   if (!selection_.is_null()) w.StringAttribute(data_.get(), "selection", selection_.dump(4));
   if (options_.valid_fraction > 0) {

@@ -28,6 +28,7 @@ struct RobomimicWriteOptions {
   const PixelLayout* pixels = nullptr;  ///< images and states (layout.states must be set)
   bool next_obs = true;                 ///< write next_obs (robomimic's --exclude-next-obs: off)
   double valid_fraction = 0;            ///< mask/valid's share of the demos (0: no mask)
+  std::string env_args;                 ///< merge-datasets: a shard's env_args, kept as it is
 };
 
 /// Refuses an existing file without `overwrite` (UsageError naming it), a name not ending in
@@ -46,6 +47,10 @@ class RobomimicWriter {
   /// Appends demo_<n> from `episode` (T steps) and its staged images and states (T+1 rows):
   /// obs row t is the state before action t, next_obs row t the state after it.
   void Add(const MinariEpisode& episode, const StagedEpisode& staged);
+
+  /// Appends demo_<n> as a copy of `demo` (e.g. "data/demo_3") of the open HDF5 file `source`
+  /// (a shard), whose num_samples is `samples`. Throws RunError naming `label`.
+  void AddCopy(hid_t source, const std::string& demo, int64_t samples, const std::string& label);
 
   /// Stores `selection` (which of the run's episodes these are) as data's attr "selection".
   void SetSelection(const nlohmann::json& selection) { selection_ = selection; }

@@ -164,24 +164,12 @@ OutputRun RecordOutputRun(const RecordJob& job) {
   return run;
 }
 
-void CheckRecordRobomimic(const RecordJob& job) {
-  if (job.shard.sharded()) {
-    throw UsageError(
-        "record --robomimic: a shard records part of the run; write the file from "
-        "a whole run");
-  }
-  CheckRobomimicOutput(*job.robomimic);
-}
+void CheckRecordRobomimic(const RecordJob& job) { CheckRobomimicOutput(*job.robomimic); }
 
 void CheckRecordMinari(const RecordJob& job) {
-  if (job.shard.sharded()) {
-    throw UsageError(
-        "record --minari: a shard records part of the run; once every shard is "
-        "done, `fetchscope export " +
-        job.plan.out + " --minari " + job.minari->dataset_id + "`");
-  }
   // an existing id or an unwritable datasets folder fails now, not after the run (an existing
-  // one is replaced after the run, atomically, with --overwrite)
+  // one is replaced after the run, atomically, with --overwrite). A shard writes its own dataset,
+  // which records the shard: merge-datasets joins them.
   CheckMinariOutput(*job.minari, RecordOutputRun(job));
 }
 

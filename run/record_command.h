@@ -63,12 +63,10 @@ struct RecordJob {
 /// episodes_requested).
 OutputRun RecordOutputRun(const RecordJob& job);
 
-/// Checks `job.minari` (set, with plan, shard and overwrite) now, before the run: UsageError for
-/// a shard (export writes a sharded run's dataset), else as CheckMinariOutput.
+/// Checks `job.minari` (set, with plan and overwrite) now, before the run, as CheckMinariOutput.
 void CheckRecordMinari(const RecordJob& job);
 
-/// Checks `job.robomimic` now, before the run: UsageError for a shard, else as
-/// CheckRobomimicOutput.
+/// Checks `job.robomimic` now, before the run, as CheckRobomimicOutput.
 void CheckRecordRobomimic(const RecordJob& job);
 
 /// Runs `job` after cli/record.cc resolved it: probes the node, opens the run folder, records,

@@ -77,7 +77,8 @@ OutputRun RolloutOutputRun(const RolloutJob& job) {
   run.seed = job.seed;
   run.seed_text = job.seed_text;
   run.policy = job.policy.text;
-  run.episodes = static_cast<int>(job.episodes.size());
+  run.episodes =
+      job.episodes_requested > 0 ? job.episodes_requested : static_cast<int>(job.episodes.size());
   run.steps = job.steps;
   return run;
 }

@@ -31,9 +31,10 @@ struct RolloutJob {
   const PolicyContext* policy_context = nullptr;  ///< each worker's policy is made with it
   int steps = 50;                                 ///< steps per episode
   std::vector<int> episodes;                      ///< the episodes to play, ascending
-  int jobs = 1;                                   ///< workers (ResolveJobs)
-  WorkerMode mode = WorkerMode::kProcess;         ///< --worker-mode
-  EpisodeOutput* output = nullptr;                ///< where the episodes go (null: nowhere)
+  int episodes_requested = 0;  ///< the run's episodes (a shard plays some of them; 0: all)
+  int jobs = 1;                ///< workers (ResolveJobs)
+  WorkerMode mode = WorkerMode::kProcess;  ///< --worker-mode
+  EpisodeOutput* output = nullptr;         ///< where the episodes go (null: nowhere)
   bool contact_signals = false;  ///< --signals contacts: each step's contacts in the trajectory
   /// --obs-camera: the images (and states) each worker renders and stages for the output
   PixelPlan pixels;

@@ -549,7 +549,7 @@ TEST(MinariCommands, RolloutAndExportRoundTrip) {
 
 // record --minari: the run folder's episodes as a dataset, the bytes export makes of the same
 // folder, and replaying it on the env: bit for bit (random policy: float32 actions). A shard
-// holds part of a run and is refused.
+// writes its part, recording the shard.
 TEST(MinariCommands, RecordMinariReplaysBitForBit) {
   unsetenv("DISPLAY");
   TempDir tmp;
@@ -576,9 +576,16 @@ TEST(MinariCommands, RecordMinariReplaysBitForBit) {
     EXPECT_EQ(divergence.first_step, -1) << divergence.where;
     EXPECT_EQ(divergence.max_difference, 0.0);
   }
-  r = RunFetchscope(record + "--shard 0/2 --overwrite --minari rec/shard-v0");
-  EXPECT_EQ(r.exit_code, 2) << r.output;
-  EXPECT_NE(r.output.find("a shard records part of the run"), std::string::npos) << r.output;
+  // a shard writes its own dataset, which records the shard (merge-datasets joins them)
+  std::string shard_run = record;
+  shard_run.replace(shard_run.find(out.string()), out.string().size(),
+                    (tmp.path() / "shard").string());
+  r = RunFetchscope(shard_run + "--shard 0/2 --minari rec/shard-v0");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const json shard =
+      json::parse(ReadFile(root / "rec/shard-v0/data/metadata.json")).at("selection");
+  EXPECT_EQ(shard.at("shard"), json::array({0, 2}));
+  EXPECT_EQ(shard.at("episodes"), json::array({0}));
 }
 
 // --- Writing datasets as Minari's own tools would, and leaving nothing behind

@@ -405,6 +405,69 @@ TEST(DatasetRun, NoSheetsWritesNoSheetAndResumes) {
   EXPECT_NE(r.output.find("2 kept by --resume"), std::string::npos) << r.output;
 }
 
+// rollout --shard I/N writes one dataset per shard; merge-datasets joins them, in any order, into
+// the dataset of the whole run (every group, dataset, attribute and value the same; metadata.json
+// the same but for the id), Minari and robomimic alike; shards of another run, a shard twice or
+// one missing are refused.
+TEST(DatasetShards, MergeGivesTheWholeRunsDataset) {
+  const std::string py = PythonWithPil();
+  if (py.empty()) GTEST_SKIP() << "python3-h5py, python3-numpy or python3-pil is not installed";
+  unsetenv("DISPLAY");
+  TempDir tmp;
+  const fs::path ds = tmp.path() / "ds";
+  const std::string run =
+      "rollout --env-id FetchPush-v4 --policy random --episodes 7 --steps 8 --seed 4 "
+      "--obs-camera external_camera_0 --obs-size 32x32 --obs-layers rgb,depth --minari-root " +
+      ds.string();
+  auto r = RunFetchscope(run + " --minari tt/whole-v0 --robomimic " +
+                         (tmp.path() / "whole.hdf5").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  for (int i = 0; i < 3; ++i) {
+    const std::string n = std::to_string(i);
+    r = RunFetchscope(run + " --shard " + n + "/3 --minari tt/s" + n + "-v0 --robomimic " +
+                      (tmp.path() / ("s" + n + ".hdf5")).string());
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+  }
+  const std::string root = " --minari-root " + ds.string();
+  r = RunFetchscope("merge-datasets --minari tt/merged-v0 tt/s2-v0 tt/s0-v0 tt/s1-v0" + root);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("3 shard(s), 7 episode(s)"), std::string::npos) << r.output;
+  const fs::path s0 = tmp.path() / "s0.hdf5", s1 = tmp.path() / "s1.hdf5",
+                 s2 = tmp.path() / "s2.hdf5";
+  r = RunFetchscope("merge-datasets --robomimic " + (tmp.path() / "merged.hdf5").string() + " " +
+                    s1.string() + " " + s2.string() + " " + s0.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const std::string same = py + " " + (SourceDir() / "tests/pixel/same_hdf5.py").string() + " ";
+  r = RunCommand(same + (ds / "tt/whole-v0/data/main_data.hdf5").string() + " " +
+                 (ds / "tt/merged-v0/data/main_data.hdf5").string() + " 2>&1");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  r = RunCommand(same + (tmp.path() / "whole.hdf5").string() + " " +
+                 (tmp.path() / "merged.hdf5").string() + " 2>&1");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  std::string merged_meta = ReadFile(ds / "tt/merged-v0/data/metadata.json");
+  const std::string id = "\"tt/merged-v0\"";
+  merged_meta.replace(merged_meta.find(id), id.size(), "\"tt/whole-v0\"");
+  EXPECT_EQ(merged_meta, ReadFile(ds / "tt/whole-v0/data/metadata.json"));
+  // refused, each in one line, nothing written
+  r = RunFetchscope("merge-datasets --minari tt/bad-v0 tt/s0-v0 tt/s1-v0" + root);
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.output.find("missing shard(s) 2 of 3"), std::string::npos) << r.output;
+  r = RunFetchscope("merge-datasets --minari tt/bad-v0 tt/s0-v0 tt/s0-v0 tt/s1-v0 tt/s2-v0" + root);
+  EXPECT_NE(r.output.find("is shard 0 again"), std::string::npos) << r.output;
+  r = RunFetchscope("merge-datasets --minari tt/bad-v0 tt/whole-v0" + root);
+  EXPECT_NE(r.output.find("records no shard of a run"), std::string::npos) << r.output;
+  r = RunFetchscope(
+      "rollout --env-id FetchPush-v4 --policy random --episodes 7 --steps 8 --seed 5 "
+      "--obs-camera external_camera_0 --obs-size 32x32 --obs-layers rgb,depth --shard 1/3 "
+      "--minari tt/other-v0" +
+      root);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  r = RunFetchscope("merge-datasets --minari tt/bad-v0 tt/s0-v0 tt/other-v0 tt/s2-v0" + root);
+  EXPECT_NE(r.output.find("is a shard of another run"), std::string::npos) << r.output;
+  EXPECT_EQ(fetchscope::testing::LineCount(r.output), 1) << r.output;
+  EXPECT_FALSE(fs::exists(ds / "tt/bad-v0"));
+}
+
 // Each bad value: one line naming it, a non-zero exit, no dataset and no staging folder.
 TEST(PixelDataset, BadInputIsOneLineAndWritesNothing) {
   unsetenv("DISPLAY");

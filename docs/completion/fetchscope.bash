@@ -22,6 +22,7 @@ _fetchscope() {
       ':bench') cmd='bench' ;;
       ':probe-actions') cmd='probe-actions' ;;
       ':merge-manifests') cmd='merge-manifests' ;;
+      ':merge-datasets') cmd='merge-datasets' ;;
       ':golden') cmd='golden' ;;
       'golden:check') cmd='golden check' ;;
       'golden:update') cmd='golden update' ;;
@@ -72,13 +73,13 @@ _fetchscope() {
   esac
   local words=''
   case $cmd in
-    '') words='list-envs describe reward-check random-episodes anatomy rollout export datasets render list-cameras record bench probe-actions merge-manifests golden list-gpus report compare serve help --help --version' ;;
+    '') words='list-envs describe reward-check random-episodes anatomy rollout export datasets render list-cameras record bench probe-actions merge-manifests merge-datasets golden list-gpus report compare serve help --help --version' ;;
     'list-envs') words='--help -h --json' ;;
     'describe') words='--help -h --env-id --assets --json-out --overwrite' ;;
     'reward-check') words='--help -h --env-id --assets --seed --n-steps --json-out --overwrite' ;;
     'random-episodes') words='--help -h --env-id --assets --seed --n-episodes --json-out --overwrite --jobs -j --worker-mode' ;;
     'anatomy') words='--help -h --env-id --assets --seed --out --width --height --backend --msaa --no-card --overwrite' ;;
-    'rollout') words='--help -h --env-id --assets --seed --episodes --steps --policy --exec-timeout --replay-dtype --signals --json-out --minari --minari-root --overwrite --minari-author --minari-author-email --obs-camera --obs-size --obs-layers --obs-overlay --robomimic --no-next-obs --valid-fraction --keep --stop-after-success --backend --jobs -j --worker-mode' ;;
+    'rollout') words='--help -h --env-id --assets --seed --episodes --steps --policy --exec-timeout --replay-dtype --signals --json-out --minari --minari-root --overwrite --minari-author --minari-author-email --obs-camera --obs-size --obs-layers --obs-overlay --robomimic --no-next-obs --valid-fraction --keep --stop-after-success --shard --shard-count --backend --jobs -j --worker-mode' ;;
     'export') words='--help -h --minari --minari-root --overwrite --include-incomplete --minari-author --minari-author-email' ;;
     'datasets') words='--help -h --minari-root --json' ;;
     'render') words='--help -h --env-id --assets --seed --camera --overlay --width --height --hud-position --hud-opacity --backend --msaa --readback --gpu --steps --policy --layers --output -o --verbose -v' ;;
@@ -87,6 +88,7 @@ _fetchscope() {
     'bench') words='--help -h --what --serve-width --serve-height --soak-frames --width --height --assets --seconds --backends --no-peers --json-out' ;;
     'probe-actions') words='--help -h --env-id --assets --seed --camera --overlay --width --height --hud-position --hud-opacity --backend --msaa --readback --gpu --steps --magnitudes --out --json-out' ;;
     'merge-manifests') words='--help -h --out --quiet -q --no-report' ;;
+    'merge-datasets') words='--help -h --minari --minari-root --robomimic --valid-fraction --overwrite --quiet -q' ;;
     'golden') words='check update --help -h' ;;
     'golden check') words='--help -h --golden-dir --backend --gpu --only --genuine-assets --out' ;;
     'golden update') words='--help -h --golden-dir --backend --gpu --only --genuine-assets' ;;
@@ -94,11 +96,11 @@ _fetchscope() {
     'report') words='--help -h --quiet -q' ;;
     'compare') words='--help -h --out --tolerance --pixel-tolerance --states-only --quiet -q' ;;
     'serve') words='--help -h --env-id --assets --seed --policy --exec-timeout --replay-dtype --camera --overlay --width --height --hud-position --hud-opacity --backend --msaa --readback --gpu --minari-root --host --port --token-file --save-dir --max-sessions --max-queued --idle-timeout' ;;
-    'help') words='--help -h --markdown --man --bash-completion --examples-dir list-envs describe reward-check random-episodes anatomy rollout export datasets render list-cameras record bench probe-actions merge-manifests golden list-gpus report compare serve help' ;;
+    'help') words='--help -h --markdown --man --bash-completion --examples-dir list-envs describe reward-check random-episodes anatomy rollout export datasets render list-cameras record bench probe-actions merge-manifests merge-datasets golden list-gpus report compare serve help' ;;
   esac
   local paths=''
   case $cmd in
-    'export'|'merge-manifests'|'report'|'compare'|'serve') paths=1 ;;
+    'export'|'merge-manifests'|'merge-datasets'|'report'|'compare'|'serve') paths=1 ;;
   esac
   if [[ $cur == -* || -z $paths ]]; then
     COMPREPLY=($(compgen -W "$words" -- "$cur"))
