@@ -38,6 +38,13 @@ nlohmann::json NodeRecommendation(const nlohmann::json& record_rows);
 /// an episode's first view and a seek in it.
 nlohmann::json BenchServe(const AssetSource& assets, const std::string& backend, double budget_s,
                           int width, int height);
+/// Pixel datasets (issue 45) side by side, each a child of this binary: `rollout --minari` with
+/// one --obs-camera at `size` x `size` rgb, the same record of that camera alone (--overlay none,
+/// webm, no sheets), and rollout without images: steps/s, CPU per step and peak RSS of each, and
+/// the images-into-a-dataset rate against record's frames/s.
+nlohmann::json BenchDataset(const AssetSource& assets, const std::string& backends, int episodes,
+                            int size);
+
 /// One record run of about `target_frames` frames at 640x480 on the first of `backends`, its
 /// resident set sampled every `interval_s`: whether memory stays flat over a long run.
 nlohmann::json BenchSoak(const AssetSource& assets, const std::string& backends, int target_frames,

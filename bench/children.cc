@@ -56,6 +56,8 @@ ChildRun RunChild(const std::vector<std::string>& argv) {
   run.wall_s = Since(start);
   run.exit_code = status.ShellCode();
   run.peak_rss_mib = usage.ru_maxrss / 1024.0;
+  run.cpu_s = static_cast<double>(usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) +
+              static_cast<double>(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec) / 1e6;
   return run;
 }
 

@@ -27,6 +27,7 @@ struct ChildRun {
   int exit_code = -1;       ///< the shell's convention: 128 + signal when killed
   double wall_s = 0;        ///< seconds from start to exit
   double peak_rss_mib = 0;  ///< the child's peak resident set
+  double cpu_s = 0;         ///< its user + system CPU seconds (and its waited-for children's)
 };
 
 /// Spawn options with the child's stdout and stderr going to /dev/null.

@@ -29,6 +29,8 @@ struct BenchOptions {
   int node_height = 480;
   int serve_width = 640;
   int serve_height = 480;
+  int dataset_episodes = 20;
+  int dataset_size = 128;
 };
 
 int RunBench(const BenchOptions& o) {
@@ -55,6 +57,9 @@ int RunBench(const BenchOptions& o) {
     } else {
       std::printf("recommended: nothing (%s)\n", rec["none"].get<std::string>().c_str());
     }
+  }
+  if (o.what == "dataset") {
+    j["dataset"] = bench::BenchDataset(source, o.backends, o.dataset_episodes, o.dataset_size);
   }
   if (o.what == "soak") j["soak"] = bench::BenchSoak(source, o.backends, o.soak_frames, 1.0);
   if (o.what == "serve") {
@@ -88,10 +93,19 @@ Command AddBench(CLI::App& app) {
          "or soak: one long record run (--soak-frames, minutes) with its memory sampled "
          "every second; or serve: serve's frame budget on its own server (render + encode per "
          "frame, frames/s of 1, 2 and 4 pages dragging, a live key step, a seek; on the first "
-         "of --backends, at --serve-width x --serve-height). node, soak and serve are not part "
-         "of all")
+         "of --backends, at --serve-width x --serve-height); or dataset: images into a pixel "
+         "dataset (rollout --obs-camera) beside record of the same camera and size and "
+         "rollout without images (--dataset-episodes, --dataset-size). node, soak, serve and "
+         "dataset are not part of all")
       ->capture_default_str()
-      ->check(CLI::IsMember({"sim", "render", "encode", "record", "all", "node", "soak", "serve"}));
+      ->check(CLI::IsMember(
+          {"sim", "render", "encode", "record", "all", "node", "soak", "serve", "dataset"}));
+  sub->add_option("--dataset-episodes", o->dataset_episodes, "--what dataset: episodes of each run")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 100000));
+  sub->add_option("--dataset-size", o->dataset_size, "--what dataset: the image's width and height")
+      ->capture_default_str()
+      ->check(CLI::Range(8, 4096));
   sub->add_option("--serve-width", o->serve_width, "--what serve: the live view's width")
       ->capture_default_str()
       ->check(CLI::Range(16, 4096));
