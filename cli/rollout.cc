@@ -148,6 +148,8 @@ int RunRollout(const RolloutOptions& o) {
   job.jobs = ResolveJobs(o.jobs, count);
   job.mode = mode;
   job.stop_after_success = o.selection.stop_after_success;
+  // the trajectories are kept for --json-out, or stdout when nothing else is written
+  job.keep_trajectories = !o.json_out.empty() || (o.minari.empty() && o.robomimic.file.empty());
   DatasetOutputs outputs(o, RolloutOutputRun(job), std::move(pixels), &job);
   job.output = outputs.output();
   std::optional<SelectedEpisodes> successful;
@@ -155,6 +157,10 @@ int RunRollout(const RolloutOptions& o) {
   if (job.output && (keep || shard.sharded())) {
     job.output = &successful.emplace(*job.output, keep, shard.index, shard.count);
   }
+  // each episode's staging file goes once the datasets have it (or have dropped it)
+  std::optional<StagingConsumer> consumer;
+  if (job.output && job.pixels.enabled()) consumer.emplace(*job.output, job.pixels.staging);
+  if (consumer) job.output = &*consumer;
   // progress on stderr (the JSON may be on stdout): a bar on a terminal, else a line every
   // FETCHSCOPE_PROGRESS_INTERVAL (30 s) of a long run
   ProgressReporter progress = ProgressReporter::ForLongRuns("rollout", count, o.steps, "steps");

@@ -3,6 +3,7 @@
 #include <zlib.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <cstring>
 
@@ -13,6 +14,13 @@ namespace fetchscope {
 namespace {
 
 namespace fs = std::filesystem;
+
+// "no space left on device": strerror's reason as the middle of a line
+std::string Reason(int err) {
+  std::string r = std::strerror(err);
+  if (!r.empty()) r[0] = static_cast<char>(std::tolower(static_cast<unsigned char>(r[0])));
+  return r;
+}
 
 constexpr char kMagic[8] = {'F', 'S', 'P', 'I', 'X', '0', '0', '1'};
 
@@ -148,7 +156,7 @@ PixelStagingWriter::~PixelStagingWriter() {
 void PixelStagingWriter::Write(const void* data, size_t bytes) {
   if (!file_) throw RunError(path_.string() + ": written after Close");
   if (bytes && std::fwrite(data, 1, bytes, file_) != bytes) {
-    throw RunError(std::string(std::strerror(errno)) + " writing " + path_.string());
+    throw RunError(Reason(errno) + " writing " + path_.string());
   }
 }
 
@@ -194,8 +202,7 @@ void PixelStagingWriter::Close() {
   const bool closed = std::fclose(file_) == 0;
   file_ = nullptr;
   if (!flushed || !closed) {
-    throw RunError(std::string(std::strerror(flushed ? errno : err)) + " writing " +
-                   path_.string());
+    throw RunError(Reason(flushed ? errno : err) + " writing " + path_.string());
   }
 }
 

@@ -126,7 +126,9 @@ RobomimicWriter::RobomimicWriter(const RobomimicWriteOptions& options)
   temp_ = TempPathFor(options_.file.string());
   H5PropList fcpl(H5Pcreate(H5P_FILE_CREATE));
   if (fcpl) H5Pset_obj_track_times(fcpl.get(), false);
-  file_ = H5File(H5Fcreate(temp_.c_str(), H5F_ACC_EXCL, fcpl.get(), H5P_DEFAULT));
+  H5PropList fapl(H5Pcreate(H5P_FILE_ACCESS));
+  if (fapl) H5Pset_evict_on_close(fapl.get(), true);  // flat memory over a long run
+  file_ = H5File(H5Fcreate(temp_.c_str(), H5F_ACC_EXCL, fcpl.get(), fapl.get()));
   if (!file_) throw RunError("cannot create HDF5 file '" + temp_ + "'");
   data_ = Writer{temp_}.Group(file_.get(), "data");
 }

@@ -195,7 +195,7 @@ class ProcessScheduler {
       p.in_hand.erase(std::remove(p.in_hand.begin(), p.in_hand.end(), k), p.in_hand.end());
       const nlohmann::json& result = message.at("result");
       if (options_.on_done) options_.on_done(k, result);
-      result_.results[k] = result;
+      result_.results[k] = options_.keep ? options_.keep(result) : result;
     } else if (type == "error") {
       p.reported_error = true;
       Fail(p, message.at("message").get<std::string>(), message.value("usage", false));
@@ -294,7 +294,7 @@ class ThreadScheduler {
       std::vector<int>& hand = s_.in_hand_[worker_];
       hand.erase(std::remove(hand.begin(), hand.end(), episode), hand.end());
       if (s_.options_.on_done) s_.options_.on_done(episode, result);
-      s_.result_.results[episode] = std::move(result);
+      s_.result_.results[episode] = s_.options_.keep ? s_.options_.keep(result) : std::move(result);
     }
     bool StopRequested() const override { return StopSignal() != 0; }
 

@@ -72,6 +72,9 @@ struct ScheduleOptions {
   std::function<void(int n)> on_progress;
   /// Called in the parent, on one thread at a time, as each episode's result arrives.
   std::function<void(int episode, const nlohmann::json& result)> on_done;
+  /// What the result keeps of each episode's result once on_done has seen it (all of it when
+  /// empty): a long run whose episodes went to an output keeps a summary, not every trajectory.
+  std::function<nlohmann::json(const nlohmann::json& result)> keep;
 };
 
 /// A worker that failed: an exception in its runner, or a process that died.

@@ -90,6 +90,12 @@ PixelStaging::~PixelStaging() {
   if (!path_.empty()) fs::remove_all(path_, ec);
 }
 
+void StagingConsumer::Add(const EpisodeRecord& episode) {
+  inner_.Add(episode);
+  std::error_code ec;
+  fs::remove(StagingFileOf(staging_, episode.index), ec);
+}
+
 PixelRecorder::PixelRecorder(const PixelPlan& plan, GlContext* gl, mjModel* model) : plan_(plan) {
   if (plan_.setup.enabled()) renderer_.emplace(*gl, model, plan_.setup);
 }

@@ -13,6 +13,7 @@
 #include "dataset/pixel_obs.h"
 #include "render/gl_context.h"
 #include "render/obs_view.h"
+#include "run/episode_output.h"
 #include "src/episode.h"
 #include "src/fetch_env.h"
 
@@ -48,6 +49,23 @@ class PixelStaging {
 
  private:
   std::filesystem::path path_;
+};
+
+/// Hands episodes on to `inner` and then removes their staging files (the last output to read
+/// them), so that a long run holds on disk only the episodes not yet written.
+class StagingConsumer : public EpisodeOutput {
+ public:
+  StagingConsumer(EpisodeOutput& inner, std::filesystem::path staging)
+      : inner_(inner), staging_(std::move(staging)) {}
+  void Begin(const OutputRun& run) override { inner_.Begin(run); }
+  void Add(const EpisodeRecord& episode) override;
+  std::string Finish() override { return inner_.Finish(); }
+  void Abort() override { inner_.Abort(); }
+  void SetSelection(const nlohmann::json& selection) override { inner_.SetSelection(selection); }
+
+ private:
+  EpisodeOutput& inner_;
+  std::filesystem::path staging_;
 };
 
 /// One worker's pixel observations: its renderer (made on the worker's GL context) and the

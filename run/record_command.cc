@@ -122,10 +122,14 @@ int WriteRecordDatasets(const RecordJob& job) {
     what = what.empty() ? "record --robomimic" : "record --minari/--robomimic";
     outputs.push_back(&robomimic.emplace(*job.robomimic));
   }
+  // the datasets, the episodes they keep, then each episode's staging file removed
   EpisodeOutputs all(outputs);
   SelectedEpisodes selected(all, job.keep_successful, job.shard.index, job.shard.count);
-  EpisodeOutput& output =
+  EpisodeOutput& chosen =
       job.keep_successful || job.shard.sharded() ? static_cast<EpisodeOutput&>(selected) : all;
+  std::optional<StagingConsumer> consumer;
+  if (job.plan.pixels.enabled()) consumer.emplace(chosen, job.plan.pixels.staging);
+  EpisodeOutput& output = consumer ? static_cast<EpisodeOutput&>(*consumer) : chosen;
   try {
     WriteEpisodes(t, RecordOutputRun(job), output);
   } catch (const MinariInterrupted& e) {

@@ -98,6 +98,11 @@ RolloutResult RunRolloutJob(const RolloutJob& job) {
   }
   schedule.jobs = job.jobs;
   schedule.mode = job.mode;
+  if (!job.keep_trajectories) {
+    schedule.keep = [](const nlohmann::json& e) {
+      return nlohmann::json{{"is_success", e.at("is_success")}};
+    };
+  }
   const ScheduleResult result = RunEpisodes(
       schedule, [&](int worker) { return std::make_unique<RolloutRunner>(job, worker); });
   RolloutResult r;
@@ -122,7 +127,7 @@ RolloutResult RunRolloutJob(const RolloutJob& job) {
   }
   for (const auto& [k, episode] : result.results) {
     r.successes += episode.at("is_success").get<bool>();
-    r.episodes.push_back(episode);
+    if (job.keep_trajectories) r.episodes.push_back(episode);
   }
   return r;
 }

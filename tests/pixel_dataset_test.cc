@@ -4,6 +4,9 @@
 // 1 mm, segmentation naming the same objects, the stored intrinsics and poses projecting the
 // object onto its own pixels, state fields bitwise equal to a dataset without images.
 #include <gtest/gtest.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
@@ -466,6 +469,44 @@ TEST(DatasetShards, MergeGivesTheWholeRunsDataset) {
   EXPECT_NE(r.output.find("is a shard of another run"), std::string::npos) << r.output;
   EXPECT_EQ(fetchscope::testing::LineCount(r.output), 1) << r.output;
   EXPECT_FALSE(fs::exists(ds / "tt/bad-v0"));
+}
+
+// Peak RSS (KiB) of `fetchscope ARGS` run to its end (wait4's ru_maxrss); -1 when it failed.
+long PeakRssKiB(const std::string& args) {
+  const std::string command =
+      "exec " + fetchscope::testing::FetchscopeBinary() + " " + args + " >/dev/null 2>&1";
+  const pid_t pid = fork();
+  if (pid == 0) {
+    execl("/bin/sh", "sh", "-c", command.c_str(), static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  int status = 0;
+  rusage usage{};
+  if (wait4(pid, &status, 0, &usage) != pid || !WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+    return -1;
+  }
+  return usage.ru_maxrss;
+}
+
+// Memory stays flat over a long pixel run: 600 episodes take no more than 60 (the staging
+// files and the writer's buffers are per episode, not per run).
+TEST(PixelDataset, MemoryStaysFlatOverALongRun) {
+  unsetenv("DISPLAY");
+  TempDir tmp;
+  const std::string args =
+      "rollout --env-id FetchPush-v4 --policy random --steps 5 --obs-camera external_camera_0 "
+      "--obs-size 32x32 --obs-layers rgb,depth --robomimic " +
+      (tmp.path() / "r.hdf5").string() + " --overwrite --minari-root " +
+      (tmp.path() / "ds").string() + " --minari tt/long-v0 --episodes ";
+  const long short_run = PeakRssKiB(args + "60");
+  const long long_run = PeakRssKiB(args + "600");
+  ASSERT_GT(short_run, 0);
+  ASSERT_GT(long_run, 0);
+  RecordProperty("rss_60_episodes_kib", std::to_string(short_run));
+  RecordProperty("rss_600_episodes_kib", std::to_string(long_run));
+  std::printf("peak RSS: 60 episodes %ld KiB, 600 episodes %ld KiB\n", short_run, long_run);
+  // 540 more episodes x 6 steps x (32x32 rgb + depth) = 23 MB of images if any were kept
+  EXPECT_LT(long_run - short_run, 8 * 1024);
 }
 
 // Each bad value: one line naming it, a non-zero exit, no dataset and no staging folder.

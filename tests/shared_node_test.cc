@@ -86,6 +86,11 @@ TEST(FullDisk, EveryMinariWriteFailsWithOneLineAndLeavesNothing) {
       {"rollout --minari", "rollout --env-id FetchPush-v4 --episodes 20 --minari-root " + root +
                                " --minari fs/roll-v0"},
       {"export", "export " + run.string() + " --minari-root " + root + " --minari fs/exp-v0"},
+      // images: the workers' staging files and the dataset on the same full disk
+      {"rollout --minari --obs-camera",
+       "rollout --env-id FetchPush-v4 --episodes 20 --minari-root " + root +
+           " --minari fs/pix-v0 --obs-camera external_camera_0 --obs-size 64x64 "
+           "--obs-layers rgb,depth"},
       {"record --minari",
        "record --env-id FetchPush-v4 --episodes 20 --width 16 --height 16 "
        "--no-report --quiet --out " +
