@@ -247,6 +247,8 @@ void ReadSetupMembers(const json& j, Manifest* m) {
   m->assets = j.value("assets", json::object());
   m->model_file = j.value("model_file", std::string());
   m->camera = j.value("camera", std::string());
+  m->cameras = j.value("cameras", std::vector<std::string>());
+  m->obs = j.value("obs", json());
   m->overlay = j.value("overlay", std::string());
   m->msaa = j.value("msaa", 0);
   m->msaa_reason = j.value("msaa_reason", std::string());
@@ -340,6 +342,8 @@ json ManifestToJson(const Manifest& m) {
   out["assets"] = m.assets;
   out["model_file"] = m.model_file;
   out["camera"] = m.camera;
+  if (!m.cameras.empty()) out["cameras"] = m.cameras;
+  if (!m.obs.is_null()) out["obs"] = m.obs;
   out["overlay"] = m.overlay;
   out["msaa"] = m.msaa;
   out["msaa_reason"] = m.msaa_reason;

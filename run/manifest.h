@@ -155,6 +155,12 @@ struct Manifest {
   nlohmann::json assets = nlohmann::json::object();  ///< kind, origin, path, sha256
   std::string model_file;
   std::string camera;
+  /// the cameras of --camera, one --camera value each (CameraText): a list, since a free
+  /// camera's own commas make the comma string above ambiguous to split
+  std::vector<std::string> cameras;
+  /// --obs-camera: the dataset's images, {"size": [W, H], "layers", "overlay", "cameras":
+  /// [{"name", "camera"}]}; null without images
+  nlohmann::json obs;
   std::string overlay;
   int msaa = 0;  ///< the samples used
   std::string msaa_reason;

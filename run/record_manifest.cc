@@ -166,6 +166,18 @@ Manifest BuildRecordManifest(const RecordJob& job, const NodeProbe& node,
   m.assets = AssetsJson(plan.assets);
   m.model_file = job.model_path;
   m.camera = job.view_text.camera;
+  for (const CameraSpec& c : plan.view.render.cameras) m.cameras.push_back(CameraText(c));
+  if (plan.pixels.setup.enabled()) {
+    const ObsSetup& obs = plan.pixels.setup;
+    nlohmann::json cams = nlohmann::json::array();
+    for (const ObsCamera& c : obs.cameras) cams.push_back({{"name", c.name}, {"camera", c.text}});
+    nlohmann::json layers = nlohmann::json::array();
+    for (Layer l : obs.layers) layers.push_back(LayerName(l));
+    m.obs = {{"size", {obs.width, obs.height}},
+             {"layers", layers},
+             {"overlay", obs.overlay_text},
+             {"cameras", cams}};
+  }
   m.overlay = job.view_text.overlay;
   AddRecordBackend(started, &m);
   m.layers = SplitCommaList(LayersLabel(plan.layers));

@@ -158,6 +158,14 @@ TEST(PixelDataset, RecordAndRecordFromWriteTheSameBytesWhateverTheJobs) {
   }
   EXPECT_EQ(ReadFile(tmp.path() / "ds/tt/rec1-v0/data/main_data.hdf5"),
             ReadFile(tmp.path() / "ds/tt/rec2-v0/data/main_data.hdf5"));
+  // the manifest lists the cameras and the dataset's images as lists, never one comma string
+  const nlohmann::json m = nlohmann::json::parse(ReadFile(tmp.path() / "run1/manifest.json"));
+  EXPECT_EQ(m.at("cameras"), nlohmann::json::array({"default"})) << m.at("cameras").dump();
+  EXPECT_EQ(m.at("obs").at("cameras"),
+            nlohmann::json::parse(R"([{"name": "external_camera_0", "camera": "external_camera_0"},
+                {"name": "gripper_camera_rgb", "camera": "gripper_camera_rgb"}])"));
+  EXPECT_EQ(m.at("obs").at("layers"), nlohmann::json::parse(R"(["rgb", "depth"])"));
+  EXPECT_EQ(m.at("obs").at("size"), nlohmann::json::parse("[48, 48]"));
   // the run's replay writes the same images
   const auto r = RunFetchscope("record --from " + (tmp.path() / "run1").string() +
                                " --format webm --width 64 --height 64 --no-report -q "
