@@ -8,6 +8,7 @@
 #include "base/errors.h"
 #include "cli/command.h"
 #include "cli/common.h"
+#include "cli/obs_options.h"
 #include "dataset/dataset_merge.h"
 #include "dataset/minari_format.h"
 
@@ -30,10 +31,7 @@ int RunMergeDatasets(const MergeDatasetsOptions& o) {
         "merge-datasets: give --minari ID (the shards are Minari datasets) or "
         "--robomimic FILE.hdf5 (the shards are robomimic files), one of them");
   }
-  if (!(o.valid_fraction >= 0 && o.valid_fraction < 1)) {
-    throw UsageError("--valid-fraction " + std::to_string(o.valid_fraction) +
-                     ": use a share of the demos from 0 up to (not including) 1, e.g. 0.1");
-  }
+  CheckValidFraction(o.valid_fraction);
   if (!o.minari.empty() && o.valid_fraction > 0) {
     throw UsageError("--valid-fraction applies to the file of --robomimic");
   }

@@ -66,6 +66,13 @@ bool KeepSuccessful(const EpisodeSelectionOptions& o, bool has_dataset) {
   return o.keep == "successful";
 }
 
+void CheckValidFraction(double fraction) {
+  if (!(fraction >= 0 && fraction < 1)) {
+    throw UsageError("--valid-fraction " + std::to_string(fraction) +
+                     ": use a share of the demos from 0 up to (not including) 1, e.g. 0.1");
+  }
+}
+
 PixelPlan PlanPixels(const ObsSetup& setup, const mjModel* model, bool minari, bool robomimic) {
   PixelPlan plan;
   if (!setup.enabled() && !robomimic) return plan;
@@ -177,10 +184,7 @@ void CheckObsUse(const CLI::App* sub, const ObsOptions& o, bool has_dataset,
       }
     }
   }
-  if (!(robomimic.valid_fraction >= 0 && robomimic.valid_fraction < 1)) {
-    throw UsageError("--valid-fraction " + std::to_string(robomimic.valid_fraction) +
-                     ": use a share of the demos from 0 up to (not including) 1, e.g. 0.1");
-  }
+  CheckValidFraction(robomimic.valid_fraction);
   if (o.cameras.empty()) {
     for (const char* option : {"--obs-size", "--obs-layers", "--obs-overlay"}) {
       if (sub->count(option)) {

@@ -44,6 +44,9 @@ bool KeepSuccessful(const EpisodeSelectionOptions& options, bool has_dataset);
 /// Adds --robomimic, --no-next-obs and --valid-fraction to `sub`.
 void AddRobomimicOptions(CLI::App* sub, RobomimicOptions* options);
 
+/// Refuses a --valid-fraction outside [0, 1) in one line naming it.
+void CheckValidFraction(double fraction);
+
 /// What the workers stage for the datasets asked for: `setup`'s images (rgb as PNG files for a
 /// Minari dataset, as gzip chunks for a robomimic file) and, for robomimic, the MuJoCo state of
 /// every step. Disabled (nothing staged) without images and without robomimic.
