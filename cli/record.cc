@@ -178,17 +178,12 @@ void ResolveRecordWorld(const RecordOptions& o, RecordJob* job) {
     job->model_path = env.model_path();
     if (plan.from) VerifyRecording(env, *plan.from);  // an edited recording stops here
     // --obs-camera: the dataset's images, at the run's --msaa (as render draws them)
-    const ObsSetup obs = ResolveObs(o.obs, env.model(), plan.view.render.msaa_samples);
-    if (obs.enabled()) {
-      if (o.resume) {
-        throw UsageError(
-            "--obs-camera cannot --resume: the images of the episodes already "
-            "recorded are gone; record the run again with --overwrite");
-      }
-      plan.pixels.setup = obs;
-      plan.pixels.layout = MakePixelLayout(obs, env.model());
-      plan.pixels.layout.raw_rgb = false;  // Minari stores rgb as PNG files
-      plan.pixels.layout.png_rgb = true;
+    plan.pixels = PlanPixels(ResolveObs(o.obs, env.model(), plan.view.render.msaa_samples),
+                             env.model(), !o.minari.empty(), !o.robomimic.file.empty());
+    if (plan.pixels.enabled() && o.resume) {
+      throw UsageError(std::string(plan.pixels.setup.enabled() ? "--obs-camera" : "--robomimic") +
+                       " cannot --resume: the images and states of the episodes already "
+                       "recorded are gone; record the run again with --overwrite");
     }
   }
   ValidateVideoOptions(plan.video);

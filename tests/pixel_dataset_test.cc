@@ -153,11 +153,30 @@ TEST(PixelDataset, RecordAndRecordFromWriteTheSameBytesWhateverTheJobs) {
   for (int jobs : {1, 2}) {
     const std::string j = std::to_string(jobs);
     const auto r = RunFetchscope("record" + common + " --jobs " + j + " --minari tt/rec" + j +
-                                 "-v0 --out " + (tmp.path() / ("run" + j)).string());
+                                 "-v0 --robomimic " + (tmp.path() / ("rm" + j + ".hdf5")).string() +
+                                 " --out " + (tmp.path() / ("run" + j)).string());
     ASSERT_EQ(r.exit_code, 0) << r.output;
   }
   EXPECT_EQ(ReadFile(tmp.path() / "ds/tt/rec1-v0/data/main_data.hdf5"),
             ReadFile(tmp.path() / "ds/tt/rec2-v0/data/main_data.hdf5"));
+  EXPECT_EQ(ReadFile(tmp.path() / "rm1.hdf5"), ReadFile(tmp.path() / "rm2.hdf5"));
+  // record's robomimic file: the Minari dataset's images and each step's state
+  const std::string rm =
+      "import h5py, io, sys, numpy as np\n"
+      "from PIL import Image\n"
+      "r = h5py.File(sys.argv[1], 'r'); m = h5py.File(sys.argv[2], 'r')\n"
+      "assert sorted(r['data']) == ['demo_0', 'demo_1', 'demo_2'], list(r['data'])\n"
+      "for i in range(3):\n"
+      "  d, e = r['data/demo_%d' % i], m['episode_%d' % i]\n"
+      "  assert d['states'].shape == (10, 1 + 22 + 21 + 7), d['states'].shape\n"
+      "  for t in (0, 9):\n"
+      "    png = "
+      "np.array(Image.open(io.BytesIO(e['observations/images/external_camera_0'][t].tobytes())))\n"
+      "    assert np.array_equal(d['obs/external_camera_0_image'][t], png), (i, t)\n"
+      "print('ok')\n";
+  const auto rc = RunCommand(py + " -c \"" + rm + "\" " + (tmp.path() / "rm1.hdf5").string() + " " +
+                             (tmp.path() / "ds/tt/rec1-v0/data/main_data.hdf5").string() + " 2>&1");
+  EXPECT_EQ(rc.exit_code, 0) << rc.output;
   // the manifest lists the cameras and the dataset's images as lists, never one comma string
   const nlohmann::json m = nlohmann::json::parse(ReadFile(tmp.path() / "run1/manifest.json"));
   EXPECT_EQ(m.at("cameras"), nlohmann::json::array({"default"})) << m.at("cameras").dump();
