@@ -98,25 +98,112 @@ void StagingConsumer::Add(const EpisodeRecord& episode) {
 
 PixelRecorder::PixelRecorder(const PixelPlan& plan, GlContext* gl, mjModel* model) : plan_(plan) {
   if (plan_.setup.enabled()) renderer_.emplace(*gl, model, plan_.setup);
+  thread_ = std::thread([this] { Loop(); });
 }
 
-PixelRecorder::~PixelRecorder() = default;
+PixelRecorder::~PixelRecorder() {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    quit_ = true;
+  }
+  changed_.notify_all();
+  thread_.join();
+}
+
+// Steps queued ahead of the writing thread at most: a few frames' images, not an episode's.
+constexpr size_t kMaxQueued = 8;
+
+void PixelRecorder::Push(Job job) {
+  std::unique_lock<std::mutex> lock(mutex_);
+  changed_.wait(lock, [&] { return queue_.size() < kMaxQueued || error_; });
+  if (error_) return;  // End (or the next Step) reports it
+  queue_.push_back(std::move(job));
+  changed_.notify_all();
+}
+
+void PixelRecorder::RethrowError() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (!error_) return;
+  std::exception_ptr e = error_;
+  error_ = nullptr;
+  std::rethrow_exception(e);
+}
+
+void PixelRecorder::Loop() {
+  std::unique_lock<std::mutex> lock(mutex_);
+  while (true) {
+    changed_.wait(lock, [&] { return quit_ || !queue_.empty(); });
+    if (queue_.empty()) return;  // quit, nothing left
+    Job job = std::move(queue_.front());
+    queue_.pop_front();
+    busy_ = true;
+    const bool skip = error_ != nullptr;  // after a failed write: drop the episode's rest
+    lock.unlock();
+    std::exception_ptr failed;
+    if (!skip || job.kind == Job::kOpen) {
+      try {
+        Write(job);
+      } catch (...) {
+        failed = std::current_exception();
+        writer_.reset();
+      }
+    }
+    lock.lock();
+    busy_ = false;
+    if (failed) error_ = failed;
+    changed_.notify_all();
+  }
+}
 
 void PixelRecorder::Begin(int index) {
-  writer_.reset();
-  writer_ = std::make_unique<PixelStagingWriter>(StagingFileOf(plan_.staging, index),
-                                                 plan_.layout.deflate_level);
+  RethrowError();
+  Job job;
+  job.kind = Job::kOpen;
+  job.index = index;
+  Push(std::move(job));
 }
 
 void PixelRecorder::Step(const FetchEnv& env, const StepRecord& record) {
-  if (!writer_) throw RunError("PixelRecorder: Step before Begin");
-  const int t = record.t;
-  if (plan_.layout.states) writer_->AddState(t, FlatMujocoState(env.model(), env.data()));
-  if (!renderer_) return;
-  renderer_->Render(env.data(), MakeFrameInfo(env, record));
+  RethrowError();
+  Job job;
+  job.t = record.t;
+  if (plan_.layout.states) job.state = FlatMujocoState(env.model(), env.data());
+  if (renderer_) {
+    renderer_->Render(env.data(), MakeFrameInfo(env, record));
+    for (size_t c = 0; c < renderer_->cameras(); ++c) job.images.push_back(renderer_->images(c));
+  }
+  Push(std::move(job));
+}
+
+void PixelRecorder::End() {
+  Job job;
+  job.kind = Job::kClose;
+  Push(std::move(job));
+  {
+    std::unique_lock<std::mutex> lock(mutex_);
+    changed_.wait(lock, [&] { return (queue_.empty() && !busy_) || error_; });
+  }
+  RethrowError();
+}
+
+void PixelRecorder::Write(const Job& job) {
+  if (job.kind == Job::kOpen) {
+    writer_.reset();
+    writer_ = std::make_unique<PixelStagingWriter>(StagingFileOf(plan_.staging, job.index),
+                                                   plan_.layout.deflate_level);
+    return;
+  }
+  if (!writer_) throw RunError("PixelRecorder: an episode's images before its Begin");
+  if (job.kind == Job::kClose) {
+    writer_->Close();
+    writer_.reset();
+    return;
+  }
+  const int t = job.t;
+  if (plan_.layout.states) writer_->AddState(t, job.state);
   const PixelLayout& layout = plan_.layout;
-  for (size_t c = 0; c < renderer_->cameras(); ++c) {
-    const ObsImages& im = renderer_->images(c);
+  for (size_t c = 0; c < job.images.size(); ++c) {
+    const ObsImages& im = job.images[c];
     const int camera = static_cast<int>(c);
     if (layout.has(ImageLayer::kRgb)) {
       if (layout.raw_rgb)
@@ -139,11 +226,6 @@ void PixelRecorder::Step(const FetchEnv& env, const StepRecord& record) {
     std::copy(g.pose.begin(), g.pose.end(), numbers.begin() + 5);
     writer_->AddGeometry(camera, t, numbers);
   }
-}
-
-void PixelRecorder::End() {
-  if (writer_) writer_->Close();
-  writer_.reset();
 }
 
 }  // namespace fetchscope

@@ -4,10 +4,15 @@
 // in episode order. The staging folder lives beside what is written and goes with the run.
 #pragma once
 
+#include <condition_variable>
+#include <deque>
+#include <exception>
 #include <filesystem>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "dataset/pixel_obs.h"
@@ -69,7 +74,9 @@ class StagingConsumer : public EpisodeOutput {
 };
 
 /// One worker's pixel observations: its renderer (made on the worker's GL context) and the
-/// staging file of the episode in hand.
+/// staging file of the episode in hand. The render thread draws each step; a thread of the
+/// recorder's own compresses and writes the images in order (PNG, gzip, the staging file), so
+/// that drawing and compressing overlap as record's drawing and encoding do.
 class PixelRecorder {
  public:
   /// `gl` (current on this thread; null when no camera is observed) and `model` outlive the
@@ -82,13 +89,34 @@ class PixelRecorder {
   void Begin(int index);
   /// Renders and stages the images of `env`'s current state, step `record.t`.
   void Step(const FetchEnv& env, const StepRecord& record);
-  /// Closes the episode's staging file. Throws RunError where it could not be written.
+  /// Waits until the episode's staging file is written and closed. Throws RunError where it
+  /// could not be written (also from Step, once a write failed).
   void End();
 
  private:
+  // One unit of the writing thread's work, in order.
+  struct Job {
+    enum Kind { kOpen, kStep, kClose } kind = kStep;
+    int index = 0;                  // kOpen: the episode
+    int t = 0;                      // kStep: the step
+    std::vector<ObsImages> images;  // kStep: each camera's images
+    std::vector<double> state;      // kStep: the MuJoCo state (layout.states)
+  };
+  void Push(Job job);
+  void Write(const Job& job);  // on the writing thread
+  void Loop();
+  void RethrowError();
+
   const PixelPlan& plan_;
   std::optional<ObsRenderer> renderer_;
-  std::unique_ptr<PixelStagingWriter> writer_;
+  std::unique_ptr<PixelStagingWriter> writer_;  // the writing thread's
+  std::mutex mutex_;
+  std::condition_variable changed_;
+  std::deque<Job> queue_;
+  bool busy_ = false;  // the writing thread holds a job
+  bool quit_ = false;
+  std::exception_ptr error_;
+  std::thread thread_;  // last: started once the rest is made
 };
 
 }  // namespace fetchscope
