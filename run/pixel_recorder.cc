@@ -72,10 +72,10 @@ std::vector<double> FlatMujocoState(const mjModel* model, const mjData* data) {
   return s;
 }
 
-PixelStaging::PixelStaging(const fs::path& parent) {
+PixelStaging::PixelStaging(const fs::path& parent)
+    : parents_((parent / ".fetchscope-pixels").string()) {
   static std::atomic<int> counter{0};
   std::error_code ec;
-  fs::create_directories(parent, ec);
   path_ =
       parent / (".fetchscope-pixels-" + std::to_string(getpid()) + "-" + std::to_string(counter++));
   if (!fs::create_directory(path_, ec) || ec) {

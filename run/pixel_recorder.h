@@ -15,6 +15,7 @@
 #include <thread>
 #include <vector>
 
+#include "base/atomic_file.h"
 #include "dataset/pixel_obs.h"
 #include "render/gl_context.h"
 #include "render/obs_view.h"
@@ -42,7 +43,8 @@ std::vector<double> FlatMujocoState(const mjModel* model, const mjData* data);
 size_t FlatMujocoStateSize(const mjModel* model);
 
 /// A staging folder, `.fetchscope-pixels-<pid>-<n>` in `parent` (created if needed), removed
-/// with everything in it when this goes.
+/// with everything in it when this goes, and `parent` too where this made it and nothing else
+/// was put there (an interrupted run leaves no empty datasets folder).
 class PixelStaging {
  public:
   /// Throws RunError naming the folder when it cannot be made.
@@ -53,6 +55,7 @@ class PixelStaging {
   const std::filesystem::path& path() const { return path_; }
 
  private:
+  ParentFolders parents_;  // the folders made for `parent`, removed again while empty
   std::filesystem::path path_;
 };
 

@@ -4,6 +4,7 @@
 // 1 mm, segmentation naming the same objects, the stored intrinsics and poses projecting the
 // object onto its own pixels, state fields bitwise equal to a dataset without images.
 #include <gtest/gtest.h>
+#include <signal.h>
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -534,6 +535,35 @@ TEST(PixelDataset, MemoryStaysFlatOverALongRun) {
   std::printf("peak RSS: 60 episodes %ld KiB, 600 episodes %ld KiB\n", short_run, long_run);
   // 540 more episodes x 6 steps x (32x32 rgb + depth) = 23 MB of images if any were kept
   EXPECT_LT(long_run - short_run, 8 * 1024);
+}
+
+// SIGINT during a pixel run: exit 130, nothing written, no staging folder and no datasets folder
+// that the run made.
+TEST(PixelDataset, InterruptedRunLeavesNothing) {
+  unsetenv("DISPLAY");
+  TempDir tmp;
+  const fs::path root = tmp.path() / "ds";
+  const pid_t pid = fetchscope::testing::SpawnFetchscope(
+      "rollout --env-id FetchPush-v4 --episodes 400 --steps 50 --jobs 2 --minari tt/sig-v0 "
+      "--obs-camera external_camera_0 --obs-size 64x64 --minari-root " +
+          root.string(),
+      tmp.path() / "log");
+  // interrupted once the workers are writing images
+  bool staging = false;
+  for (int i = 0; i < 600 && !staging; ++i) {
+    std::error_code ec;
+    for (const auto& e : fs::directory_iterator(root, ec)) {
+      staging = staging || e.path().filename().string().rfind(".fetchscope-pixels", 0) == 0;
+    }
+    if (!staging) usleep(100 * 1000);
+  }
+  ASSERT_TRUE(staging) << ReadFile(tmp.path() / "log");
+  usleep(500 * 1000);
+  kill(pid, SIGINT);
+  EXPECT_EQ(fetchscope::testing::WaitExit(pid), 130) << ReadFile(tmp.path() / "log");
+  EXPECT_NE(ReadFile(tmp.path() / "log").find("interrupted (SIGINT); nothing written"),
+            std::string::npos);
+  EXPECT_FALSE(fs::exists(root)) << "the run left " << root;
 }
 
 // Each bad value: one line naming it, a non-zero exit, no dataset and no staging folder.
