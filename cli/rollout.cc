@@ -57,8 +57,9 @@ struct RolloutOptions {
 // staging folder of the images and states the workers stage for them.
 class DatasetOutputs {
  public:
-  DatasetOutputs(const RolloutOptions& o, const OutputRun& run, PixelPlan pixels, RolloutJob* job)
-      : o_(o) {
+  DatasetOutputs(const RolloutOptions& o, const OutputRun& run, PixelPlan pixels,
+                 const Shard& shard, RolloutJob* job)
+      : o_(o), keep_(KeepSuccessful(o.selection, !o.minari.empty() || !o.robomimic.file.empty())) {
     MinariRequest minari{
         o.minari, MinariRoot(o.minari_root), o.overwrite, o.author.name, o.author.email, nullptr,
         {}};
@@ -88,11 +89,23 @@ class DatasetOutputs {
     if (!o.robomimic.file.empty()) all.push_back(&robomimic_.emplace(robomimic));
     if (all.size() == 1) output_ = all.front();
     if (all.size() == 2) output_ = &both_.emplace(all);
+    // the episodes kept (--keep successful) and the shard recorded, then each episode's
+    // staging file removed once the datasets have it (or have dropped it)
+    if (output_ && (keep_ || shard.sharded())) {
+      output_ = &selected_.emplace(*output_, keep_, shard.index, shard.count);
+    }
+    if (output_ && job->pixels.enabled()) {
+      output_ = &consumer_.emplace(*output_, job->pixels.staging);
+    }
   }
   EpisodeOutput* output() { return output_; }
   // "wrote ..." lines for what was written
   std::string Wrote() const {
     std::string s;
+    if (keep_ && selected_) {
+      s += "kept " + std::to_string(selected_->kept().size()) + " successful episode(s) of " +
+           std::to_string(selected_->tried()) + " tried\n";
+    }
     if (minari_) s += "wrote Minari dataset " + o_.minari + " at " + minari_->written() + "\n";
     if (robomimic_) s += "wrote robomimic file " + o_.robomimic.file + "\n";
     return s;
@@ -104,6 +117,9 @@ class DatasetOutputs {
   std::optional<MinariOutput> minari_;
   std::optional<RobomimicOutput> robomimic_;
   std::optional<EpisodeOutputs> both_;
+  const bool keep_;  // --keep successful
+  std::optional<SelectedEpisodes> selected_;
+  std::optional<StagingConsumer> consumer_;
   EpisodeOutput* output_ = nullptr;
 };
 
@@ -150,17 +166,8 @@ int RunRollout(const RolloutOptions& o) {
   job.stop_after_success = o.selection.stop_after_success;
   // the trajectories are kept for --json-out, or stdout when nothing else is written
   job.keep_trajectories = !o.json_out.empty() || (o.minari.empty() && o.robomimic.file.empty());
-  DatasetOutputs outputs(o, RolloutOutputRun(job), std::move(pixels), &job);
+  DatasetOutputs outputs(o, RolloutOutputRun(job), std::move(pixels), shard, &job);
   job.output = outputs.output();
-  std::optional<SelectedEpisodes> successful;
-  const bool keep = KeepSuccessful(o.selection, job.output != nullptr);
-  if (job.output && (keep || shard.sharded())) {
-    job.output = &successful.emplace(*job.output, keep, shard.index, shard.count);
-  }
-  // each episode's staging file goes once the datasets have it (or have dropped it)
-  std::optional<StagingConsumer> consumer;
-  if (job.output && job.pixels.enabled()) consumer.emplace(*job.output, job.pixels.staging);
-  if (consumer) job.output = &*consumer;
   // progress on stderr (the JSON may be on stdout): a bar on a terminal, else a line every
   // FETCHSCOPE_PROGRESS_INTERVAL (30 s) of a long run
   ProgressReporter progress = ProgressReporter::ForLongRuns("rollout", count, o.steps, "steps");
@@ -182,10 +189,6 @@ int RunRollout(const RolloutOptions& o) {
     WriteJson(path,
               TrajectoryJson(spec, assets, seed, o.policy.policy, std::move(result.episodes)));
     wrote += "wrote " + path + "\n";
-  }
-  if (successful && keep) {
-    wrote += "kept " + std::to_string(successful->kept().size()) + " successful episode(s) of " +
-             std::to_string(successful->tried()) + " tried\n";
   }
   wrote += outputs.Wrote();
   std::printf("%s: %d episode(s) of %d steps, policy %s, seed %s: success %d/%d (%s)\n%s",
