@@ -162,10 +162,20 @@ void PixelStagingWriter::Write(const void* data, size_t bytes) {
 
 void PixelStagingWriter::AddImage(int camera, ImageLayer layer, int t, const void* raw,
                                   size_t bytes) {
+  // depth and segmentation: 4-byte values, byte-shuffled first as HDF5's shuffle filter does
+  // (byte j of value i goes to j * n + i), which the dataset declares before deflate
+  const Bytef* input = static_cast<const Bytef*>(raw);
+  if (layer != ImageLayer::kRgb) {
+    const size_t n = bytes / 4;
+    shuffled_.resize(bytes);
+    for (size_t i = 0; i < n; ++i) {
+      for (size_t j = 0; j < 4; ++j) shuffled_[j * n + i] = input[i * 4 + j];
+    }
+    input = shuffled_.data();
+  }
   uLongf size = compressBound(static_cast<uLong>(bytes));
   compressed_.resize(size);
-  if (compress2(compressed_.data(), &size, static_cast<const Bytef*>(raw),
-                static_cast<uLong>(bytes), level_) != Z_OK) {
+  if (compress2(compressed_.data(), &size, input, static_cast<uLong>(bytes), level_) != Z_OK) {
     throw RunError(path_.string() + ": zlib could not compress an image");
   }
   const RecordHead head{StagedRecord::kImage, static_cast<uint8_t>(layer),
@@ -355,8 +365,10 @@ H5Dataset CreateImageDataset(hid_t parent, const char* name, const PixelLayout& 
   const H5Dataspace space(
       H5Screate_simple(static_cast<int>(dims.size()), dims.data(), maxdims.data()));
   H5PropList dcpl(H5Pcreate(H5P_DATASET_CREATE));
+  // 4-byte values: HDF5's shuffle filter before deflate (the staging writer shuffled them)
   if (!space || !dcpl || H5Pset_obj_track_times(dcpl.get(), false) < 0 ||
       H5Pset_chunk(dcpl.get(), static_cast<int>(chunk.size()), chunk.data()) < 0 ||
+      (layer != ImageLayer::kRgb && H5Pset_shuffle(dcpl.get()) < 0) ||
       H5Pset_deflate(dcpl.get(), static_cast<unsigned>(layout.deflate_level)) < 0) {
     throw RunError(file + ": libhdf5 could not make image dataset " + name);
   }
