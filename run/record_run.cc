@@ -91,6 +91,45 @@ nlohmann::json RecordRunner::Start() {
   return ManifestWorkerToJson(info);  // the worker channel's JSON
 }
 
+namespace {
+
+// An episode's CPU by stage: sim, and the renderer's own stages between `before` and `after`,
+// the rest of the render thread's time (`render_cpu`) as render_other.
+CpuStages EpisodeCpu(const CpuStages& before, const CpuStages& after, double sim_cpu,
+                     double render_cpu) {
+  CpuStages cpu;
+  cpu.sim = sim_cpu;
+  cpu.scene = after.scene - before.scene;
+  cpu.gl = after.gl - before.gl;
+  cpu.hud = after.hud - before.hud;
+  cpu.copy = after.copy - before.copy;
+  cpu.render_other = std::max(0.0, render_cpu - (cpu.scene + cpu.gl + cpu.hud + cpu.copy));
+  return cpu;
+}
+
+}  // namespace
+
+// The --layers of the frame just submitted, drawn after its rgb readback was queued and read at
+// once: segmentation into the frame (its objects into `legend`), depth as grey in the scale of
+// the episode's first frame.
+void RecordRunner::RenderLayers(const mjData* data, const FrameInfo& info, Frame* f,
+                                EpisodeLegend* legend, std::vector<DepthScale>* depth_scales) {
+  for (size_t i = 0; i < plan_.layers.size(); ++i) {
+    const Layer layer = plan_.layers[i];
+    if (layer == Layer::kSegmentation) {
+      renderer_->RenderLayer(data, info, layer, &f->layers[i]);
+      legend->Add(renderer_->segmentation_legend());
+    } else {
+      renderer_->RenderLayer(data, info, layer, &depth_);
+      if (depth_scales->empty()) {
+        *depth_scales =
+            ScalesFromFrame(depth_, renderer_->width(), renderer_->height(), renderer_->tiles());
+      }
+      DepthToGrey(depth_, renderer_->width(), *depth_scales, f->layers[i].data());
+    }
+  }
+}
+
 void RecordRunner::Run(int k, WorkerChannel& channel) {
   // at most plan.encoders episodes encode at once: wait for the oldest beyond that
   while (!encoders_.empty() &&
@@ -140,21 +179,7 @@ void RecordRunner::Run(int k, WorkerChannel& channel) {
     renderer_->Submit(env.data(), info, f->rgb.data(),
                       NeedsGifCopy(sink_, record.t) ? f->gif_rgb.data() : nullptr,
                       gif_scale_.value_or(ShownScale{}));
-    // the layers are drawn after the rgb frame's readback has been queued, and read at once
-    for (size_t i = 0; i < plan_.layers.size(); ++i) {
-      const Layer layer = plan_.layers[i];
-      if (layer == Layer::kSegmentation) {
-        renderer_->RenderLayer(env.data(), info, layer, &f->layers[i]);
-        legend.Add(renderer_->segmentation_legend());
-      } else {
-        renderer_->RenderLayer(env.data(), info, layer, &depth_);
-        if (depth_scales.empty()) {
-          depth_scales =
-              ScalesFromFrame(depth_, renderer_->width(), renderer_->height(), renderer_->tiles());
-        }
-        DepthToGrey(depth_, renderer_->width(), depth_scales, f->layers[i].data());
-      }
-    }
+    RenderLayers(env.data(), info, f, &legend, &depth_scales);
     while (renderer_->pending() >= renderer_->pipeline_depth()) collect_oldest();
     sim_start = Clock::now();
     render_s += std::chrono::duration<double>(sim_start - render_start).count();
@@ -178,15 +203,8 @@ void RecordRunner::Run(int k, WorkerChannel& channel) {
   }
   encoder->SetHindsight(HindsightCounts(episode));
   encoder->SetLayerInfo(legend.Json(k), std::move(depth_scales));
-  const CpuStages& after = renderer_->cpu();
-  CpuStages cpu;
-  cpu.sim = sim_cpu;
-  cpu.scene = after.scene - renderer_before.scene;
-  cpu.gl = after.gl - renderer_before.gl;
-  cpu.hud = after.hud - renderer_before.hud;
-  cpu.copy = after.copy - renderer_before.copy;
-  cpu.render_other = std::max(0.0, render_cpu - (cpu.scene + cpu.gl + cpu.hud + cpu.copy));
-  encoder->Close(std::move(episode), sim_s, render_s, cpu);
+  encoder->Close(std::move(episode), sim_s, render_s,
+                 EpisodeCpu(renderer_before, renderer_->cpu(), sim_cpu, render_cpu));
   encoders_.push_back(std::move(encoder));
 }
 

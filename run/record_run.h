@@ -21,6 +21,7 @@
 #include "encode/video_writer.h"
 #include "render/gl_context.h"
 #include "render/gpu_select.h"
+#include "render/layers.h"
 #include "render/renderer.h"
 #include "render/view.h"
 #include "run/episode_scheduler.h"
@@ -95,6 +96,8 @@ class RecordRunner : public EpisodeRunner {
   HindsightEpisode SampleEpisodeHindsight(int k, const std::vector<StepRecord>& steps);
   EpisodeHindsight HindsightCounts(const EpisodeRecord& episode);
   void AddRelabelled(int t, FrameInfo* info) const;
+  void RenderLayers(const mjData* data, const FrameInfo& info, Frame* f, EpisodeLegend* legend,
+                    std::vector<DepthScale>* depth_scales);
 
   const RecordPlan& plan_;
   const int worker_;

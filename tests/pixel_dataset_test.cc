@@ -558,7 +558,10 @@ TEST(PixelDataset, InterruptedRunLeavesNothing) {
     if (!staging) usleep(100 * 1000);
   }
   ASSERT_TRUE(staging) << ReadFile(tmp.path() / "log");
-  usleep(500 * 1000);
+  // the staging folder comes before the scheduler installs its handlers: wait for them, so that
+  // SIGINT is the command's to handle even on a loaded machine
+  ASSERT_TRUE(fetchscope::testing::WaitForSignalHandler(pid, SIGINT))
+      << ReadFile(tmp.path() / "log");
   kill(pid, SIGINT);
   EXPECT_EQ(fetchscope::testing::WaitExit(pid), 130) << ReadFile(tmp.path() / "log");
   EXPECT_NE(ReadFile(tmp.path() / "log").find("interrupted (SIGINT); nothing written"),
