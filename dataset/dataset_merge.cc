@@ -134,6 +134,30 @@ int64_t Int64Attribute(hid_t object, const char* name, const std::string& label)
   return v;
 }
 
+// Copies every shard's episodes in `order` (MergedOrder's: checked before any writer is made;
+// groups PREFIX<j>, their length in attribute `length`) into
+// `writer` in the run's order, gives it the merged selection and commits it.
+template <class Writer>
+DatasetMergeResult CopyInRunOrder(const std::vector<ShardFile>& shards,
+                                  const std::vector<std::tuple<int, size_t, size_t>>& order,
+                                  const std::string& prefix, const char* length, Writer* writer) {
+  for (const auto& [k, s, j] : order) {
+    const std::string group = prefix + std::to_string(j);
+    const H5Group g(H5Gopen2(shards[s].file.get(), group.c_str(), H5P_DEFAULT));
+    if (!g) Refuse(shards[s], "has no " + group + " (its selection lists more episodes)");
+    writer->AddCopy(shards[s].file.get(), group,
+                    Int64Attribute(g.get(), length, shards[s].label + " " + group),
+                    shards[s].label);
+  }
+  const json selection = MergedSelection(shards, order);
+  if (!selection.is_null()) writer->SetSelection(selection);
+  DatasetMergeResult r;
+  r.path = writer->Commit().string();
+  r.shards = static_cast<int>(shards.size());
+  r.episodes = static_cast<int>(order.size());
+  return r;
+}
+
 }  // namespace
 
 DatasetMergeResult MergeMinariShards(const DatasetMergeRequest& request) {
@@ -179,21 +203,7 @@ DatasetMergeResult MergeMinariShards(const DatasetMergeRequest& request) {
     o.pixels = &layout;
   }
   MinariWriter writer(o);
-  for (const auto& [k, s, j] : order) {
-    const std::string group = "episode_" + std::to_string(j);
-    const H5Group g(H5Gopen2(shards[s].file.get(), group.c_str(), H5P_DEFAULT));
-    if (!g) Refuse(shards[s], "has no " + group + " (its selection lists more episodes)");
-    writer.AddCopy(shards[s].file.get(), group,
-                   Int64Attribute(g.get(), "total_steps", shards[s].label + " " + group),
-                   shards[s].label);
-  }
-  const json selection = MergedSelection(shards, order);
-  if (!selection.is_null()) writer.SetSelection(selection);
-  DatasetMergeResult r;
-  r.path = writer.Commit().string();
-  r.shards = static_cast<int>(shards.size());
-  r.episodes = static_cast<int>(order.size());
-  return r;
+  return CopyInRunOrder(shards, order, "episode_", "total_steps", &writer);
 }
 
 DatasetMergeResult MergeRobomimicShards(const DatasetMergeRequest& request) {
@@ -233,21 +243,7 @@ DatasetMergeResult MergeRobomimicShards(const DatasetMergeRequest& request) {
   o.valid_fraction = request.valid_fraction;
   o.env_args = shards.front().metadata.at("env_args").get<std::string>();
   RobomimicWriter writer(o);
-  for (const auto& [k, s, j] : order) {
-    const std::string demo = "data/demo_" + std::to_string(j);
-    const H5Group g(H5Gopen2(shards[s].file.get(), demo.c_str(), H5P_DEFAULT));
-    if (!g) Refuse(shards[s], "has no " + demo + " (its selection lists more demos)");
-    writer.AddCopy(shards[s].file.get(), demo,
-                   Int64Attribute(g.get(), "num_samples", shards[s].label + " " + demo),
-                   shards[s].label);
-  }
-  const json selection = MergedSelection(shards, order);
-  if (!selection.is_null()) writer.SetSelection(selection);
-  DatasetMergeResult r;
-  r.path = writer.Commit().string();
-  r.shards = static_cast<int>(shards.size());
-  r.episodes = static_cast<int>(order.size());
-  return r;
+  return CopyInRunOrder(shards, order, "data/demo_", "num_samples", &writer);
 }
 
 }  // namespace fetchscope
