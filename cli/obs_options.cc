@@ -78,8 +78,9 @@ PixelPlan PlanPixels(const ObsSetup& setup, const mjModel* model, bool minari, b
   if (!setup.enabled() && !robomimic) return plan;
   plan.setup = setup;
   plan.layout = MakePixelLayout(setup, model);
-  plan.layout.png_rgb = minari;     // Minari 0.5.3 decodes an image space's steps with PIL
-  plan.layout.raw_rgb = robomimic;  // robomimic reads uint8 arrays
+  plan.to_dataset = minari || robomimic;  // else the images go to an exec: policy alone
+  plan.layout.png_rgb = minari;           // Minari 0.5.3 decodes an image space's steps with PIL
+  plan.layout.raw_rgb = robomimic;        // robomimic reads uint8 arrays
   plan.layout.states = robomimic;
   plan.layout.state_size = FlatMujocoStateSize(model);
   return plan;
@@ -174,11 +175,12 @@ ObsSetup ResolveObs(const ObsOptions& o, const mjModel* model, int msaa_samples)
   return setup;
 }
 
-void CheckObsUse(const CLI::App* sub, const ObsOptions& o, bool has_dataset,
+void CheckObsUse(const CLI::App* sub, const ObsOptions& o, bool has_dataset, bool exec_policy,
                  const RobomimicOptions& robomimic) {
   if (robomimic.file.empty()) {
     for (const char* option : {"--no-next-obs", "--valid-fraction"}) {
-      if (sub->count(option)) {
+      const CLI::Option* given = sub->get_option_no_throw(option);  // serve has no robomimic
+      if (given && given->count()) {
         throw UsageError(std::string(option) +
                          " applies to the file of --robomimic; give --robomimic FILE.hdf5");
       }
@@ -194,10 +196,13 @@ void CheckObsUse(const CLI::App* sub, const ObsOptions& o, bool has_dataset,
     }
     return;
   }
-  if (!has_dataset) {
+  if (!has_dataset && !exec_policy && !sub->get_option_no_throw("--minari")) {
+    throw UsageError("--obs-camera sends images to an exec: policy here: give --policy exec:CMD");
+  }
+  if (!has_dataset && !exec_policy) {
     throw UsageError(
-        "--obs-camera stores images in a dataset: give --minari ID (or --robomimic "
-        "FILE.hdf5) to write one");
+        "--obs-camera stores images in a dataset or sends them to an exec: policy: give "
+        "--minari ID (or --robomimic FILE.hdf5) to write one, or --policy exec:CMD");
   }
 }
 

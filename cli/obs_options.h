@@ -70,9 +70,10 @@ void ParseObsSize(const std::string& text, int* width, int* height);
 ObsSetup ResolveObs(const ObsOptions& options, const mjModel* model, int msaa_samples);
 
 /// Refuses --obs-size/--obs-layers/--obs-overlay given without --obs-camera (`sub` tells what
-/// was given), --obs-camera without a dataset to write (`has_dataset`), --no-next-obs and
-/// --valid-fraction without --robomimic, and a --valid-fraction outside [0, 1).
-void CheckObsUse(const CLI::App* sub, const ObsOptions& options, bool has_dataset,
+/// was given), --obs-camera with neither a dataset to write (`has_dataset`) nor an exec: policy
+/// to send the images to (`exec_policy`), --no-next-obs and --valid-fraction without
+/// --robomimic, and a --valid-fraction outside [0, 1).
+void CheckObsUse(const CLI::App* sub, const ObsOptions& options, bool has_dataset, bool exec_policy,
                  const RobomimicOptions& robomimic);
 
 }  // namespace fetchscope::cli

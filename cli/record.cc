@@ -113,8 +113,9 @@ int RunRecordFrom(RecordOptions o, const CLI::App& sub, const std::string& comma
                   &o.env.assets);
   // the recording's actions replay as recorded: --replay-dtype is refused as for any policy but
   // replay:FILE (its message names the zero actions played)
-  if (!o.policy.replay_dtype.empty())
-    ParsePolicyOptions({"zero", o.policy.exec_timeout, o.policy.replay_dtype});
+  if (!o.policy.replay_dtype.empty() || !o.policy.exec_fields.empty())
+    ParsePolicyOptions(
+        {"zero", o.policy.exec_timeout, o.policy.replay_dtype, o.policy.exec_fields});
   return RunRecord(o, PolicySpec::Zero(o.policy.policy), command_line, &source);
 }
 
@@ -180,7 +181,7 @@ void ResolveRecordWorld(const RecordOptions& o, RecordJob* job) {
     // --obs-camera: the dataset's images, at the run's --msaa (as render draws them)
     plan.pixels = PlanPixels(ResolveObs(o.obs, env.model(), plan.view.render.msaa_samples),
                              env.model(), !o.minari.empty(), !o.robomimic.file.empty());
-    if (plan.pixels.enabled() && o.resume) {
+    if (plan.pixels.stages() && o.resume) {
       throw UsageError(std::string(plan.pixels.setup.enabled() ? "--obs-camera" : "--robomimic") +
                        " cannot --resume: the images and states of the episodes already "
                        "recorded are gone; record the run again with --overwrite");
@@ -211,7 +212,7 @@ RecordJob ResolveRecord(RecordOptions* options, const PolicySpec& policy,
   plan.seed = run.env.seed;
   plan.seed_text = o.env.seed;
   plan.assets = run.env.assets;
-  plan.policy = policy;
+  plan.policy = WithExecFields(policy, o.policy, *run.env.spec);
   plan.policy_context = run.policy_context;
   plan.steps = o.steps;
   o.episodes = run.policy_context.episodes;  // a replayed trajectory: one past its last
@@ -385,7 +386,7 @@ Command AddRecord(CLI::App& app) {
   return {sub, [o, sub] {
             o->episodes_given = sub->count("--episodes") > 0;
             CheckObsUse(sub, o->obs, !o->minari.empty() || !o->robomimic.file.empty(),
-                        o->robomimic);
+                        o->from.empty() && o->policy.policy.rfind("exec:", 0) == 0, o->robomimic);
             if (!o->from.empty()) return RunRecordFrom(*o, *sub, CommandLine());
             return RunRecordPolicy(*o, CommandLine());
           }};

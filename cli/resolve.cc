@@ -4,6 +4,7 @@
 
 #include "base/stop_signal.h"
 #include "src/episode_source.h"
+#include "src/exec_wire.h"
 
 namespace fetchscope::cli {
 
@@ -13,11 +14,26 @@ void AddPolicyOptions(CLI::App* sub, PolicyOptions* options) {
                   "Seconds an exec: policy may take per answer")
       ->capture_default_str()
       ->check(CLI::Range(0.001, 86400.0));
+  sub->add_option("--exec-fields", options->exec_fields, kExecFieldsHelp);
   sub->add_option("--replay-dtype", options->replay_dtype, kReplayDtypeHelp);
 }
 
 PolicySpec ParsePolicyOptions(const PolicyOptions& options) {
-  return ParsePolicySpec(options.policy, {options.exec_timeout, options.replay_dtype, ""});
+  PolicySpec spec =
+      ParsePolicySpec(options.policy, {options.exec_timeout, options.replay_dtype, ""});
+  if (!options.exec_fields.empty() && !spec.is_exec()) {
+    throw UsageError("--exec-fields '" + options.exec_fields +
+                     "' chooses what an exec: policy's lines carry; --policy " + spec.text +
+                     " reads no lines (give --policy exec:CMD)");
+  }
+  return spec;
+}
+
+PolicySpec WithExecFields(PolicySpec policy, const PolicyOptions& options, const EnvSpec& spec) {
+  if (auto* exec = std::get_if<policy_spec::Exec>(&policy.value)) {
+    exec->fields = ParseExecFields(options.exec_fields, spec.has_object);
+  }
+  return policy;
 }
 
 void ApplyReplayedEnv(const PolicySpec& policy, EnvOptions* env) {

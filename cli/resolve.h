@@ -20,13 +20,20 @@ struct PolicyOptions {
   std::string policy = "random";  ///< --policy
   double exec_timeout = 10.0;     ///< --exec-timeout, seconds per answer of an exec: policy
   std::string replay_dtype;       ///< --replay-dtype: "", float32, float64
+  std::string exec_fields;        ///< --exec-fields: "" (all), or a comma-separated list
 };
 
-/// Adds --policy, --exec-timeout and --replay-dtype to `sub`.
+/// Adds --policy, --exec-timeout, --exec-fields and --replay-dtype to `sub`.
 void AddPolicyOptions(CLI::App* sub, PolicyOptions* options);
 
 /// `options` parsed once into the typed spec (ParsePolicySpec; a replay file is read here).
+/// --exec-fields for a policy other than exec: is refused (UsageError); its names are checked
+/// against the env by WithExecFields.
 PolicySpec ParsePolicyOptions(const PolicyOptions& options);
+
+/// `policy` with --exec-fields parsed for `spec`'s observation (ParseExecFields: an unknown
+/// name, or an object slice on Reach, is a UsageError naming it). Other policies as they are.
+PolicySpec WithExecFields(PolicySpec policy, const PolicyOptions& options, const EnvSpec& spec);
 
 /// For `--policy replay:FILE.json` holding fetchscope's trajectory JSON: the env and seed the file
 /// was recorded with replace --env-id and --seed where the command line does not name them, so

@@ -66,14 +66,14 @@ class DatasetOutputs {
     RobomimicRequest robomimic{o.robomimic.file,           o.overwrite, !o.robomimic.no_next_obs,
                                o.robomimic.valid_fraction, nullptr,     {}};
     job->pixels = std::move(pixels);
-    if (job->pixels.enabled()) {
-      if (job->pixels.setup.enabled()) {
-        ViewOptions view;
-        view.backend = o.backend;
-        const ViewSetup gl = ResolveGlView(view);
-        job->backend = gl.backend;
-        job->gpu = ResolveGpuChoice(gl);
-      }
+    if (job->pixels.setup.enabled()) {  // images, for the datasets or an exec: policy
+      ViewOptions view;
+      view.backend = o.backend;
+      const ViewSetup gl = ResolveGlView(view);
+      job->backend = gl.backend;
+      job->gpu = ResolveGpuChoice(gl);
+    }
+    if (job->pixels.stages()) {
       // the destinations first: nothing is made for a run that cannot write them
       if (!o.minari.empty()) CheckMinariOutput(minari, run);
       if (!o.robomimic.file.empty()) CheckRobomimicOutput(robomimic);
@@ -94,7 +94,7 @@ class DatasetOutputs {
     if (output_ && (keep_ || shard.sharded())) {
       output_ = &selected_.emplace(*output_, keep_, shard.index, shard.count);
     }
-    if (output_ && job->pixels.enabled()) {
+    if (output_ && job->pixels.stages()) {
       output_ = &consumer_.emplace(*output_, job->pixels.staging);
     }
   }
@@ -155,7 +155,7 @@ int RunRollout(const RolloutOptions& o) {
   job.assets = assets;
   job.seed = seed;
   job.seed_text = o.env.seed;
-  job.policy = request.policy;
+  job.policy = WithExecFields(request.policy, o.policy, spec);
   job.policy_context = &run.policy_context;
   job.steps = o.steps;
   job.contact_signals = ParseContactSignals(o.signals);
@@ -245,7 +245,7 @@ Command AddRollout(CLI::App& app) {
   return {sub, [o, sub] {
             o->episodes_given = sub->count("--episodes") > 0;
             CheckObsUse(sub, o->obs, !o->minari.empty() || !o->robomimic.file.empty(),
-                        o->robomimic);
+                        o->policy.policy.rfind("exec:", 0) == 0, o->robomimic);
             return RunRollout(*o);
           }};
 }

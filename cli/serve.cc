@@ -14,6 +14,7 @@
 #include "base/stop_signal.h"
 #include "cli/command.h"
 #include "cli/common.h"
+#include "cli/obs_options.h"
 #include "cli/resolve.h"
 #include "cli/view_options.h"
 #include "dataset/minari_format.h"
@@ -30,6 +31,7 @@ struct ServeOptions {
   std::vector<std::string> sources;
   EnvOptions env;
   PolicyOptions policy;
+  ObsOptions obs;  // --obs-camera...: the images an exec: policy's lines carry
   ViewOptions view;
   std::string minari_root;
   std::string host = "127.0.0.1";
@@ -88,13 +90,19 @@ int RunServe(const ServeOptions& o, const CLI::App& sub) {
   }
   serve::EngineOptions engine_options;
   {
-    // the view options checked against the first source's model (its cameras)
+    // the view options checked against the first source's model (its cameras), as are the
+    // exec: policy's cameras
     FetchEnv first(*sources.front().spec, sources.front().assets);
     engine_options.view = ResolveView(o.view, first.model());
+    engine_options.policy_images =
+        ResolveObs(o.obs, first.model(), engine_options.view.render.msaa_samples);
   }
   engine_options.camera_text = o.view.camera;
   engine_options.overlay_text = o.view.overlay;
   engine_options.policy = policy;
+  for (const serve::Source& s : sources) {  // each env's observation has the fields asked for
+    engine_options.policy = WithExecFields(engine_options.policy, o.policy, *s.spec);
+  }
   engine_options.save_dir = o.save_dir;
   engine_options.assets_flag = sub.count("--assets") > 0 ? o.env.assets : "";
   engine_options.max_sessions = o.max_sessions;
@@ -153,6 +161,7 @@ Command AddServe(CLI::App& app) {
                   "--minari-root, a dataset folder, or its main_data.hdf5). None: a live env");
   AddEnvOptions(sub, &o->env);
   AddPolicyOptions(sub, &o->policy);
+  AddObsOptions(sub, &o->obs);
   o->view.width = 640;  // the page's first view; it can change it
   AddViewOptions(sub, &o->view);
   sub->add_option("--minari-root", o->minari_root,
@@ -183,7 +192,10 @@ Command AddServe(CLI::App& app) {
                   "Seconds after which an unused session (and its exec: policy child) is freed")
       ->capture_default_str()
       ->check(CLI::Range(1.0, 86400.0));
-  return {sub, [o, sub] { return RunServe(*o, *sub); }};
+  return {sub, [o, sub] {
+            CheckObsUse(sub, o->obs, false, o->policy.policy.rfind("exec:", 0) == 0, {});
+            return RunServe(*o, *sub);
+          }};
 }
 
 }  // namespace fetchscope::cli

@@ -96,9 +96,20 @@ void StagingConsumer::Add(const EpisodeRecord& episode) {
   fs::remove(StagingFileOf(staging_, episode.index), ec);
 }
 
+PolicyContext WithImages(const PolicyContext& base, const std::optional<PixelRecorder>* pixels) {
+  PolicyContext context = base;
+  context.images = [pixels](int) -> const WireStep* {
+    return *pixels ? (*pixels)->wire() : nullptr;
+  };
+  return context;
+}
+
 PixelRecorder::PixelRecorder(const PixelPlan& plan, GlContext* gl, mjModel* model) : plan_(plan) {
-  if (plan_.setup.enabled()) renderer_.emplace(*gl, model, plan_.setup);
-  thread_ = std::thread([this] { Loop(); });
+  if (plan_.setup.enabled()) {
+    renderer_.emplace(*gl, model, plan_.setup);
+    if (plan_.setup.has(Layer::kSegmentation)) wire_.legend = plan_.layout.segmentation_legend;
+  }
+  if (plan_.stages()) thread_ = std::thread([this] { Loop(); });
 }
 
 PixelRecorder::~PixelRecorder() {
@@ -107,7 +118,7 @@ PixelRecorder::~PixelRecorder() {
     quit_ = true;
   }
   changed_.notify_all();
-  thread_.join();
+  if (thread_.joinable()) thread_.join();
 }
 
 // Steps queued ahead of the writing thread at most: a few frames' images, not an episode's.
@@ -156,6 +167,7 @@ void PixelRecorder::Loop() {
 }
 
 void PixelRecorder::Begin(int index) {
+  if (!plan_.stages()) return;
   RethrowError();
   Job job;
   job.kind = Job::kOpen;
@@ -170,12 +182,50 @@ void PixelRecorder::Step(const FetchEnv& env, const StepRecord& record) {
   if (plan_.layout.states) job.state = FlatMujocoState(env.model(), env.data());
   if (renderer_) {
     renderer_->Render(env.data(), MakeFrameInfo(env, record));
+    UpdateWire(record.t);
+    if (!plan_.stages()) return;
     for (size_t c = 0; c < renderer_->cameras(); ++c) job.images.push_back(renderer_->images(c));
   }
-  Push(std::move(job));
+  if (plan_.stages()) Push(std::move(job));
+}
+
+void PixelRecorder::UpdateWire(int t) {
+  const ObsSetup& setup = plan_.setup;
+  const std::vector<int> plane = {setup.height, setup.width};
+  wire_.t = t;
+  wire_.cameras.clear();
+  wire_.images.clear();
+  for (size_t c = 0; c < renderer_->cameras(); ++c) {
+    const ObsImages& im = renderer_->images(c);
+    const std::string& name = setup.cameras[c].name;
+    const ObsCameraGeometry& g = im.geometry;
+    wire_.cameras.push_back({name, g.fovy, g.fx, g.fy, g.cx, g.cy, g.pose});
+    for (Layer layer : setup.layers) {
+      WireImage w;
+      w.name = name;
+      w.shape = plane;
+      if (layer == Layer::kRgb) {
+        w.shape.push_back(3);
+        w.data = im.rgb.data();
+        w.bytes = im.rgb.size();
+      } else if (layer == Layer::kDepth) {
+        w.layer = "depth";
+        w.dtype = "float32";
+        w.data = im.depth.data();
+        w.bytes = im.depth.size() * sizeof(float);
+      } else {
+        w.layer = "segmentation";
+        w.dtype = "int32";
+        w.data = im.segmentation.data();
+        w.bytes = im.segmentation.size() * sizeof(int32_t);
+      }
+      wire_.images.push_back(std::move(w));
+    }
+  }
 }
 
 void PixelRecorder::End() {
+  if (!plan_.stages()) return;
   Job job;
   job.kind = Job::kClose;
   Push(std::move(job));

@@ -21,7 +21,9 @@
 #include "render/obs_view.h"
 #include "run/episode_output.h"
 #include "src/episode.h"
+#include "src/exec_wire.h"
 #include "src/fetch_env.h"
+#include "src/policy_spec.h"
 
 namespace fetchscope {
 
@@ -30,7 +32,10 @@ struct PixelPlan {
   ObsSetup setup;                 ///< cameras, size, layers, overlay (none: no images)
   PixelLayout layout;             ///< what the outputs store (geometry filled as they go)
   std::filesystem::path staging;  ///< the staging folder (PixelStaging)
+  /// staged for a dataset (--minari, --robomimic); else the images only go to an exec: policy
+  bool to_dataset = false;
   bool enabled() const { return setup.enabled() || layout.states; }
+  bool stages() const { return to_dataset && enabled(); }  ///< a staging folder is needed
 };
 
 /// The layout `setup` gives on `model`: size, layers, the cameras (names, --camera text,
@@ -77,7 +82,8 @@ class StagingConsumer : public EpisodeOutput {
 };
 
 /// One worker's pixel observations: its renderer (made on the worker's GL context) and the
-/// staging file of the episode in hand. The render thread draws each step; a thread of the
+/// staging file of the episode in hand (none when the plan does not stage: the images then only
+/// go to an exec: policy). The render thread draws each step; a thread of the
 /// recorder's own compresses and writes the images in order (PNG, gzip, the staging file), so
 /// that drawing and compressing overlap as record's drawing and encoding do.
 class PixelRecorder {
@@ -95,6 +101,8 @@ class PixelRecorder {
   /// Waits until the episode's staging file is written and closed. Throws RunError where it
   /// could not be written (also from Step, once a write failed).
   void End();
+  /// The images of the last Step as an exec: policy receives them; null without cameras.
+  const WireStep* wire() const { return renderer_ ? &wire_ : nullptr; }
 
  private:
   // One unit of the writing thread's work, in order.
@@ -110,8 +118,11 @@ class PixelRecorder {
   void Loop();
   void RethrowError();
 
+  void UpdateWire(int t);  // wire_ from the renderer's images of step t
+
   const PixelPlan& plan_;
   std::optional<ObsRenderer> renderer_;
+  WireStep wire_;                               // points into renderer_'s images
   std::unique_ptr<PixelStagingWriter> writer_;  // the writing thread's
   std::mutex mutex_;
   std::condition_variable changed_;
@@ -121,5 +132,9 @@ class PixelRecorder {
   std::exception_ptr error_;
   std::thread thread_;  // last: started once the rest is made
 };
+
+/// `base` with the images of `*pixels` for an exec: policy (PixelRecorder::wire), read when the
+/// policy asks: the recorder may be made after the policy.
+PolicyContext WithImages(const PolicyContext& base, const std::optional<PixelRecorder>* pixels);
 
 }  // namespace fetchscope

@@ -111,7 +111,7 @@ int WriteRecordDatasets(const RecordJob& job) {
     what = "record --minari";
     outputs.push_back(&minari.emplace(*job.minari));
     // a dataset of state alone can be written again from the run folder
-    if (!job.plan.pixels.enabled()) {
+    if (!job.plan.pixels.stages()) {
       advice = "; the run is kept in " + out + ": `fetchscope export " + out + " --minari " +
                job.minari->dataset_id +
                (job.minari_root_given.empty() ? "" : " --minari-root " + job.minari_root_given) +
@@ -128,7 +128,7 @@ int WriteRecordDatasets(const RecordJob& job) {
   EpisodeOutput& chosen =
       job.keep_successful || job.shard.sharded() ? static_cast<EpisodeOutput&>(selected) : all;
   std::optional<StagingConsumer> consumer;
-  if (job.plan.pixels.enabled()) consumer.emplace(chosen, job.plan.pixels.staging);
+  if (job.plan.pixels.stages()) consumer.emplace(chosen, job.plan.pixels.staging);
   EpisodeOutput& output = consumer ? static_cast<EpisodeOutput&>(*consumer) : chosen;
   try {
     WriteEpisodes(t, RecordOutputRun(job), output);
@@ -190,7 +190,7 @@ int RecordRun(RecordJob job) {
   if (folder.already_complete()) return FinishCompleteRun(job, folder);
   // --obs-camera: the workers' images wait beside the run folder until the dataset is written
   std::optional<PixelStaging> staging;
-  if (job.plan.pixels.enabled()) {
+  if (job.plan.pixels.stages()) {
     staging.emplace(fs::absolute(job.plan.out).parent_path());
     job.plan.pixels.staging = staging->path();
     if (job.minari && job.plan.pixels.setup.enabled()) {

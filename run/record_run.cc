@@ -52,11 +52,11 @@ RecordRunner::RecordRunner(const RecordPlan& plan, int worker)
       worker_(worker),
       sink_(MakeEpisodeSinkOptions(plan)),
       gif_scale_(GifTextScale(sink_)),
-      sequence_(
-          std::make_unique<FetchEnv>(*plan.spec, plan.assets),
-          // --from replays recorded actions: the policy that made them is not run
-          MakePolicy(plan.from ? PolicySpec::Zero() : plan.policy, *plan.spec, plan.policy_context),
-          plan.seed, plan.steps) {
+      sequence_(std::make_unique<FetchEnv>(*plan.spec, plan.assets),
+                // --from replays recorded actions: the policy that made them is not run
+                MakePolicy(plan.from ? PolicySpec::Zero() : plan.policy, *plan.spec,
+                           WithImages(plan.policy_context, &pixels_)),
+                plan.seed, plan.steps) {
   if (plan.contact_signals) sequence_.env().EnableContactSignals();
   sequence_.SetStopAfterSuccess(plan.stop_after_success);
 }

@@ -23,8 +23,8 @@ class RolloutRunner : public EpisodeRunner {
       : job_(job),
         worker_(worker),
         sequence_(std::make_unique<FetchEnv>(*job.spec, job.assets),
-                  MakePolicy(job.policy, *job.spec, *job.policy_context), job.policy_context->seed,
-                  job.steps) {
+                  MakePolicy(job.policy, *job.spec, WithImages(*job.policy_context, &pixels_)),
+                  job.policy_context->seed, job.steps) {
     if (job.contact_signals) sequence_.env().EnableContactSignals();
     sequence_.SetStopAfterSuccess(job.stop_after_success);
   }

@@ -21,13 +21,20 @@
 #include <thread>
 #include <vector>
 
+#include "render/obs_view.h"
 #include "render/view.h"
 #include "serve/api.h"
 #include "serve/request.h"
 #include "serve/sources.h"
 #include "src/policy_spec.h"
 
+namespace fetchscope {
+class FetchEnv;
+}
+
 namespace fetchscope::serve {
+
+struct LiveEpisode;
 
 /// How the engine runs: the command line's view, policy and limits.
 struct EngineOptions {
@@ -35,6 +42,8 @@ struct EngineOptions {
   std::string camera_text = "default";   ///< --camera as given: the page's first camera
   std::string overlay_text = "default";  ///< --overlay as given: the page's first overlays
   PolicySpec policy;                     ///< what "step the policy" plays (--policy)
+  /// --obs-camera with an exec: policy: the images each of its lines carries (none: no images)
+  ObsSetup policy_images;
   std::filesystem::path save_dir = "serve-sessions";  ///< where a saved session goes
   std::string assets_flag;      ///< the --assets a saved session's record command needs ("" none)
   int max_sessions = 8;         ///< pages with a session at once
@@ -100,6 +109,10 @@ class Engine : public Api {
   void Warm(State& state);
   // Frees the sessions idle for longer than idle_timeout_s (on the engine thread).
   void ExpireIdle(State& state) const;
+  // The command line's policy's action at the live episode's last step (env restored there),
+  // made when first asked; with --obs-camera its images are drawn first. RequestError(502)
+  // when the policy fails.
+  Action PolicyAction(State& state, LiveEpisode& live, FetchEnv& env);
 
   std::vector<Source> sources_;
   EngineOptions options_;

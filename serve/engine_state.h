@@ -14,6 +14,7 @@
 #include "encode/jpeg.h"
 #include "render/gl_context.h"
 #include "render/renderer.h"
+#include "run/pixel_recorder.h"
 #include "serve/engine.h"
 #include "src/fetch_env.h"
 #include "src/hindsight.h"
@@ -76,6 +77,12 @@ struct StepState {
   const std::vector<HindsightGoal>* relabelled = nullptr;
 };
 
+/// The images an exec: policy sees on one env (--obs-camera): the plan and its renderer.
+struct PolicyImages {
+  PixelPlan plan;
+  std::optional<PixelRecorder> recorder;
+};
+
 /// Everything the engine thread owns. Member order is lifetime order: the GL context outlives the
 /// renderers; sessions (and their exec: children) go first.
 struct Engine::State {
@@ -88,6 +95,7 @@ struct Engine::State {
   std::vector<FetchEnv*> env_of_source;
   std::vector<bool> starts_resolved;  // per source: a dataset's ResolveStarts has run
   std::vector<RendererSlot> renderers;
+  std::map<const FetchEnv*, std::unique_ptr<PolicyImages>> policy_images;  // made when first asked
   std::map<std::pair<int, int>, std::shared_ptr<LoadedEpisode>> episodes;  // (source, index)
   std::map<std::pair<int, int>, uint64_t> episode_used;
   JpegEncoder jpeg;
@@ -109,6 +117,9 @@ struct Engine::State {
   /// and the frame info of that step: what RenderFrame and Pick draw.
   Renderer& Prepare(const ViewRequest& view, const StepState& state, FrameInfo* info,
                     std::string* camera_text);
+  /// The images of --obs-camera drawn on `env` as it stands at `row` (the live episode's last
+  /// step): what an exec: policy receives with its line.
+  PixelRecorder& DrawPolicyImages(FetchEnv& env, const TrajectoryStep& row);
   /// The live episode's data for the page.
   nlohmann::json LiveData(const LiveEpisode& live) const;
 };

@@ -138,23 +138,7 @@ nlohmann::json Engine::StepLive(const std::string& session, const StepRequest& r
     if (r.action) {
       action.value = *r.action;
     } else {
-      try {
-        if (!live.policy) {
-          PolicyContext context;
-          context.seed = live.reset_seed.value_or(sources_[live.source].seed);
-          context.steps_per_episode = std::max(env.spec().max_episode_steps, t + 1);
-          context.episodes = live.index + 1;
-          context.stop_requested = [] { return StopSignal() != 0; };
-          live.policy = MakePolicy(options_.policy, env.spec(), context);
-          live.policy->BeginEpisode(live.index, live.steps.back().obs);
-          live.policy_from = t - 1;
-        }
-        action = live.policy->Act(live.steps.back().obs, t - 1);
-      } catch (const std::exception& e) {
-        live.policy.reset();  // a child that failed is started afresh next time
-        throw RequestError(
-            502, std::string("the policy ") + options_.policy.text + " failed: " + e.what());
-      }
+      action = PolicyAction(s, live, env);
     }
     if (live.float32) {
       for (double& v : action.value) v = static_cast<float>(v);
@@ -165,6 +149,43 @@ nlohmann::json Engine::StepLive(const std::string& session, const StepRequest& r
     live.checkpoints.push_back(env.Checkpoint());
     return s.LiveData(live);
   });
+}
+
+PixelRecorder& Engine::State::DrawPolicyImages(FetchEnv& env, const TrajectoryStep& row) {
+  std::unique_ptr<PolicyImages>& images = policy_images[&env];
+  gl->MakeCurrent();
+  if (!images) {
+    images = std::make_unique<PolicyImages>();
+    images->plan.setup = options.policy_images;
+    images->plan.layout = MakePixelLayout(options.policy_images, env.model());
+    images->recorder.emplace(images->plan, gl.get(), env.model());
+  }
+  images->recorder->Step(env, row);
+  return *images->recorder;
+}
+
+Action Engine::PolicyAction(State& s, LiveEpisode& live, FetchEnv& env) {
+  const int t = static_cast<int>(live.steps.size()) - 1;  // the step it acts at
+  try {
+    PixelRecorder* images = nullptr;
+    if (options_.policy_images.enabled()) images = &s.DrawPolicyImages(env, live.steps.back());
+    if (!live.policy) {
+      PolicyContext context;
+      context.seed = live.reset_seed.value_or(sources_[live.source].seed);
+      context.steps_per_episode = std::max(env.spec().max_episode_steps, t + 2);
+      context.episodes = live.index + 1;
+      context.stop_requested = [] { return StopSignal() != 0; };
+      if (images) context.images = [images](int) { return images->wire(); };
+      live.policy = MakePolicy(options_.policy, env.spec(), context);
+      live.policy->BeginEpisode(live.index, live.steps.back().obs);
+      live.policy_from = t;
+    }
+    return live.policy->Act(live.steps.back().obs, t);
+  } catch (const std::exception& e) {
+    live.policy.reset();  // a child that failed is started afresh next time
+    throw RequestError(502,
+                       std::string("the policy ") + options_.policy.text + " failed: " + e.what());
+  }
 }
 
 nlohmann::json Engine::BackLive(const std::string& session) {

@@ -1,5 +1,9 @@
 #include "src/exec_policy.h"
 
+#include <fcntl.h>
+#include <sys/ioctl.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <cerrno>
 #include <chrono>
@@ -14,6 +18,7 @@
 #include "base/errors.h"
 #include "base/json_util.h"
 #include "base/process.h"
+#include "src/exec_wire.h"
 #include "src/policy.h"
 
 namespace fetchscope {
@@ -56,10 +61,13 @@ class ExecPolicy : public Policy {
   // with the thread that made it (PR_SET_PDEATHSIG: the creating thread, which owns this policy
   // and lives as long as it), so no child outlives its worker. The command is the user's shell
   // text, so it runs under /bin/sh.
-  ExecPolicy(std::string command, double timeout_s, std::function<bool()> stop_requested)
-      : command_(std::move(command)),
-        timeout_s_(timeout_s),
-        stop_requested_(std::move(stop_requested)) {
+  ExecPolicy(const policy_spec::Exec& exec, std::function<bool()> stop_requested,
+             std::function<const WireStep*(int)> images)
+      : command_(exec.command),
+        timeout_s_(exec.timeout_s),
+        fields_(exec.fields),
+        stop_requested_(std::move(stop_requested)),
+        images_(std::move(images)) {
     SpawnOptions options;
     options.in = Stdio::kPipe;  // Spawn ignores SIGPIPE: a child that exits early is an EPIPE
     options.out = Stdio::kPipe;
@@ -70,18 +78,35 @@ class ExecPolicy : public Policy {
     } catch (const RunError& e) {
       throw RunError(std::string("exec policy: ") + e.what());
     }
+    if (images_) {
+      // images are written in pieces as the child reads them, never blocking past the timeout
+      // or a stop; a larger pipe (1 MiB, the unprivileged limit) takes a step's images in
+      // fewer turns between the two processes
+      const int fd = child_.channel().out_fd();
+      fcntl(fd, F_SETFL, fcntl(fd, F_GETFL) | O_NONBLOCK);
+      fcntl(fd, F_SETPIPE_SZ, 1 << 20);
+    }
   }
 
   ~ExecPolicy() override { End(); }
 
+  void BeginEpisode(int, const Observation&) override { legend_sent_ = false; }
+
   Action Act(const Observation& obs, int t) override {
-    nlohmann::json msg;
-    msg["t"] = t;
-    msg["observation"] = JsonVector(obs.observation.data(), obs.observation.size());
-    msg["achieved_goal"] = JsonVector(obs.achieved_goal.data(), 3);
-    msg["desired_goal"] = JsonVector(obs.desired_goal.data(), 3);
-    if (!child_.channel().WriteLine(msg.dump())) throw RunError(Died(t, /*writing=*/true));
+    const WireStep* step = images_ ? images_(t) : nullptr;
+    if (step && step->t != t) {
+      throw RunError("exec policy: the images are of step " + std::to_string(step->t) +
+                     ", not of step " + std::to_string(t) + " (a bug in fetchscope)");
+    }
+    const std::string line = ExecMessage(obs, t, fields_, step, !legend_sent_).dump();
+    if (images_) {
+      legend_sent_ = true;
+      SendWithImages(line + "\n", step, t);
+    } else if (!child_.channel().WriteLine(line)) {
+      throw RunError(Died(t, /*writing=*/true));
+    }
     const std::string answer = ReadLine(t);
+    if (step) CheckAllRead(*step, t);
     try {
       Action a;
       a.value = ParseActionLine(answer);
@@ -187,9 +212,90 @@ class ExecPolicy : public Policy {
     }
   }
 
+  // The bytes of step t's images in all.
+  static size_t ImageBytes(const WireStep* step) {
+    size_t total = 0;
+    if (step) {
+      for (const WireImage& im : step->images) total += im.bytes;
+    }
+    return total;
+  }
+
+  std::string EarlyAnswer(const WireStep* step, int t, size_t unread) const {
+    return "exec policy '" + command_ + "' answered step " + std::to_string(t) +
+           " before reading its images (" + std::to_string(unread) + " of their " +
+           std::to_string(ImageBytes(step)) +
+           " bytes unread): read the line, then each image's `bytes` "
+           "(Python: sys.stdin.buffer.read(n)), then answer";
+  }
+
+  // Writes the line and then each image of `step`, as the child reads them: an answer (or the
+  // child's end) before the last byte is written is an error, as is a child that reads nothing
+  // for --exec-timeout; a stop ends the child and the episode.
+  void SendWithImages(const std::string& line, const WireStep* step, int t) {
+    std::vector<std::pair<const char*, size_t>> pieces = {{line.data(), line.size()}};
+    if (step) {
+      for (const WireImage& im : step->images)
+        pieces.emplace_back(static_cast<const char*>(im.data), im.bytes);
+    }
+    size_t left = ImageBytes(step) + line.size();
+    LineChannel& channel = child_.channel();
+    const auto deadline =
+        std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s_);
+    for (auto [p, n] : pieces) {
+      while (n > 0) {
+        const ssize_t w = write(channel.out_fd(), p, n);
+        if (w > 0) {
+          p += w;
+          n -= static_cast<size_t>(w);
+          left -= static_cast<size_t>(w);
+          continue;
+        }
+        if (w < 0 && errno == EINTR) continue;
+        if (w < 0 && errno != EAGAIN) throw RunError(Died(t, /*writing=*/true));
+        const auto wait = std::chrono::duration_cast<std::chrono::milliseconds>(
+                              deadline - std::chrono::steady_clock::now())
+                              .count();
+        if (wait <= 0) {
+          throw RunError("exec policy '" + command_ + "' left " + std::to_string(left) +
+                         " bytes of step " + std::to_string(t) + "'s input unread for " +
+                         JsonDouble(timeout_s_).dump() +
+                         " s: it must read the line and each image's `bytes` every step "
+                         "(raise --exec-timeout for a slow reader)");
+        }
+        std::vector<pollfd> fds = {{channel.in_fd(), POLLIN, 0}, {channel.out_fd(), POLLOUT, 0}};
+        const WaitEnd end =
+            WaitForInput(&fds, static_cast<int>(std::min<long long>(wait, 1000)), true);
+        if (end == WaitEnd::kStop || (stop_requested_ && stop_requested_())) {
+          End();
+          throw PolicyInterrupted("exec policy '" + command_ + "' was ended while it read step " +
+                                  std::to_string(t) + ": the run was being stopped");
+        }
+        if (end != WaitEnd::kReady) continue;
+        if (fds[0].revents != 0) {
+          if (!channel.ReadSome()) throw RunError(Died(t));
+          throw RunError(EarlyAnswer(step, t, left));
+        }
+        if (fds[1].revents & (POLLERR | POLLHUP)) throw RunError(Died(t, /*writing=*/true));
+      }
+    }
+  }
+
+  // After step t's answer: the child must have read every byte it was sent (a pipe's FIONREAD
+  // counts what is still unread, whichever end asks).
+  void CheckAllRead(const WireStep& step, int t) {
+    int unread = 0;
+    if (ioctl(child_.channel().out_fd(), FIONREAD, &unread) == 0 && unread > 0) {
+      throw RunError(EarlyAnswer(&step, t, static_cast<size_t>(unread)));
+    }
+  }
+
   std::string command_;
   double timeout_s_;
+  std::vector<std::string> fields_;
   std::function<bool()> stop_requested_;
+  std::function<const WireStep*(int)> images_;
+  bool legend_sent_ = false;  // the segmentation legend went with this episode's first line
   ChildProcess child_;
 };
 
@@ -250,9 +356,10 @@ std::array<double, 4> ParseActionLine(const std::string& line) {
   return a;
 }
 
-std::unique_ptr<Policy> MakeExecPolicy(const std::string& command, double timeout_s,
-                                       std::function<bool()> stop_requested) {
-  return std::make_unique<ExecPolicy>(command, timeout_s, std::move(stop_requested));
+std::unique_ptr<Policy> MakeExecPolicy(const policy_spec::Exec& exec,
+                                       std::function<bool()> stop_requested,
+                                       std::function<const WireStep*(int)> images) {
+  return std::make_unique<ExecPolicy>(exec, std::move(stop_requested), std::move(images));
 }
 
 }  // namespace fetchscope

@@ -245,7 +245,7 @@ PolicySpec ParsePolicySpec(const std::string& text, const PolicyOptions& options
     if (argument.empty()) {
       throw UsageError("--policy exec: needs a command, e.g. exec:'python3 my_policy.py'");
     }
-    return {policy_spec::Exec{argument, options.exec_timeout_s}, text};
+    return {policy_spec::Exec{argument, options.exec_timeout_s, {}}, text};
   }
   throw UsageError(
       "unknown policy '" + text + "'" +
@@ -267,7 +267,7 @@ std::unique_ptr<Policy> MakePolicy(const PolicySpec& spec, const EnvSpec& env,
             return MakeReplay(spec.text, replay, context);
           },
           [&](const policy_spec::Exec& exec) -> Made {
-            return MakeExecPolicy(exec.command, exec.timeout_s, context.stop_requested);
+            return MakeExecPolicy(exec, context.stop_requested, context.images);
           },
       },
       spec.value);

@@ -16,6 +16,7 @@
 namespace fetchscope {
 
 struct Trajectory;
+struct WireStep;
 
 /// The cases of a PolicySpec, one per policy.
 namespace policy_spec {
@@ -35,6 +36,9 @@ struct Replay {
 struct Exec {
   std::string command;    ///< run under /bin/sh
   double timeout_s = 10;  ///< --exec-timeout: seconds to wait for each answer
+  /// --exec-fields, checked against the env (ParseExecFields, src/exec_wire.h): the state
+  /// fields each line carries, in order; empty: all of them, as before the option existed
+  std::vector<std::string> fields;
 };
 }  // namespace policy_spec
 
@@ -93,6 +97,9 @@ struct PolicyContext {
   std::function<bool()> stop_requested;
   /// The episodes the run plays (replay checks the file has them); empty: 0 .. episodes-1.
   std::vector<int> episode_indices;
+  /// --obs-camera with an exec: policy: the images of the state the policy is asked about at
+  /// step t (src/exec_wire.h), drawn by the worker just before; empty or null: no images.
+  std::function<const WireStep*(int t)> images;
 };
 
 /// --replay-dtype's help.
