@@ -45,6 +45,14 @@ nlohmann::json BenchServe(const AssetSource& assets, const std::string& backend,
 nlohmann::json BenchDataset(const AssetSource& assets, const std::string& backends, int episodes,
                             int size);
 
+/// Images to an exec: policy (issue 46), each a child of this binary on FetchReach-v4 with
+/// external_camera_0 rgb at `size` (WxH): rollout --policy zero without images and into a Minari
+/// dataset, and a Python child (`python`) reading only lines, then the images as bytes, then as
+/// numpy arrays: steps/s and CPU per step of each, the ratio of the last to the dataset, and the
+/// CPU per step of each part (the Python loop, the images to Python, numpy).
+nlohmann::json BenchExecImages(const AssetSource& assets, const std::string& backends, int episodes,
+                               const std::string& size, const std::string& python);
+
 /// One record run of about `target_frames` frames at 640x480 on the first of `backends`, its
 /// resident set sampled every `interval_s`: whether memory stays flat over a long run.
 nlohmann::json BenchSoak(const AssetSource& assets, const std::string& backends, int target_frames,

@@ -31,6 +31,9 @@ struct BenchOptions {
   int serve_height = 480;
   int dataset_episodes = 20;
   int dataset_size = 128;
+  int exec_episodes = 10;
+  std::string exec_size = "96x80";
+  std::string exec_python = "python3";
 };
 
 int RunBench(const BenchOptions& o) {
@@ -60,6 +63,10 @@ int RunBench(const BenchOptions& o) {
   }
   if (o.what == "dataset") {
     j["dataset"] = bench::BenchDataset(source, o.backends, o.dataset_episodes, o.dataset_size);
+  }
+  if (o.what == "exec-images") {
+    j["exec_images"] =
+        bench::BenchExecImages(source, o.backends, o.exec_episodes, o.exec_size, o.exec_python);
   }
   if (o.what == "soak") j["soak"] = bench::BenchSoak(source, o.backends, o.soak_frames, 1.0);
   if (o.what == "serve") {
@@ -95,11 +102,21 @@ Command AddBench(CLI::App& app) {
          "frame, frames/s of 1, 2 and 4 pages dragging, a live key step, a seek; on the first "
          "of --backends, at --serve-width x --serve-height); or dataset: images into a pixel "
          "dataset (rollout --obs-camera) beside record of the same camera and size and "
-         "rollout without images (--dataset-episodes, --dataset-size). node, soak, serve and "
-         "dataset are not part of all")
+         "rollout without images (--dataset-episodes, --dataset-size); or exec-images: images "
+         "to a Python exec: policy beside the same images into a dataset, and where a step's "
+         "CPU goes (--exec-episodes, --exec-size, --exec-python). node, soak, serve, dataset "
+         "and exec-images are not part of all")
       ->capture_default_str()
-      ->check(CLI::IsMember(
-          {"sim", "render", "encode", "record", "all", "node", "soak", "serve", "dataset"}));
+      ->check(CLI::IsMember({"sim", "render", "encode", "record", "all", "node", "soak", "serve",
+                             "dataset", "exec-images"}));
+  sub->add_option("--exec-episodes", o->exec_episodes, "--what exec-images: episodes of each run")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 100000));
+  sub->add_option("--exec-size", o->exec_size, "--what exec-images: the image's WxH")
+      ->capture_default_str();
+  sub->add_option("--exec-python", o->exec_python,
+                  "--what exec-images: the Python (with numpy) that runs the policy child")
+      ->capture_default_str();
   sub->add_option("--dataset-episodes", o->dataset_episodes, "--what dataset: episodes of each run")
       ->capture_default_str()
       ->check(CLI::Range(1, 100000));

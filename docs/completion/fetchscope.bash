@@ -68,7 +68,7 @@ _fetchscope() {
       local root=${MINARI_DATASETS_PATH:-$HOME/.minari/datasets} ids=''
       [[ -d $root ]] && ids=$(cd "$root" && find . -path '*/data/metadata.json' 2>/dev/null | sed 's|^\./||; s|/data/metadata.json$||')
       COMPREPLY=($(compgen -W "$ids" -- "$cur") $(compgen -f -- "$cur")); return ;;
-    --backends|--crf|--dataset-episodes|--dataset-size|--episodes|--exec-timeout|--fps|--gif-fps|--gif-width|--height|--host|--hud-opacity|--idle-timeout|--jobs|--json-out|--keep|--magnitudes|--max-queued|--max-sessions|--minari|--minari-author|--minari-author-email|--n-episodes|--n-steps|--obs-camera|--obs-layers|--obs-overlay|--obs-size|--only|--output|--pixel-tolerance|--port|--robomimic|--seconds|--seed|--serve-height|--serve-width|--shard|--shard-count|--sheet-every|--signals|--soak-frames|--steps|--stop-after-success|--token-file|--tolerance|--valid-fraction|--width|-j|-o)
+    --backends|--crf|--dataset-episodes|--dataset-size|--episodes|--exec-episodes|--exec-fields|--exec-python|--exec-size|--exec-timeout|--fps|--gif-fps|--gif-width|--height|--host|--hud-opacity|--idle-timeout|--jobs|--json-out|--keep|--magnitudes|--max-queued|--max-sessions|--minari|--minari-author|--minari-author-email|--n-episodes|--n-steps|--obs-camera|--obs-layers|--obs-overlay|--obs-size|--only|--output|--pixel-tolerance|--port|--robomimic|--seconds|--seed|--serve-height|--serve-width|--shard|--shard-count|--sheet-every|--signals|--soak-frames|--steps|--stop-after-success|--token-file|--tolerance|--valid-fraction|--width|-j|-o)
       COMPREPLY=($(compgen -f -- "$cur")); return ;;
   esac
   local words=''
@@ -79,13 +79,13 @@ _fetchscope() {
     'reward-check') words='--help -h --env-id --assets --seed --n-steps --json-out --overwrite' ;;
     'random-episodes') words='--help -h --env-id --assets --seed --n-episodes --json-out --overwrite --jobs -j --worker-mode' ;;
     'anatomy') words='--help -h --env-id --assets --seed --out --width --height --backend --msaa --no-card --overwrite' ;;
-    'rollout') words='--help -h --env-id --assets --seed --episodes --steps --policy --exec-timeout --replay-dtype --signals --json-out --minari --minari-root --overwrite --minari-author --minari-author-email --obs-camera --obs-size --obs-layers --obs-overlay --robomimic --no-next-obs --valid-fraction --keep --stop-after-success --shard --shard-count --backend --jobs -j --worker-mode' ;;
+    'rollout') words='--help -h --env-id --assets --seed --episodes --steps --policy --exec-timeout --exec-fields --replay-dtype --signals --json-out --minari --minari-root --overwrite --minari-author --minari-author-email --obs-camera --obs-size --obs-layers --obs-overlay --robomimic --no-next-obs --valid-fraction --keep --stop-after-success --shard --shard-count --backend --jobs -j --worker-mode' ;;
     'export') words='--help -h --minari --minari-root --overwrite --include-incomplete --minari-author --minari-author-email' ;;
     'datasets') words='--help -h --minari-root --json' ;;
     'render') words='--help -h --env-id --assets --seed --camera --overlay --width --height --hud-position --hud-opacity --backend --msaa --readback --gpu --steps --policy --layers --output -o --verbose -v' ;;
     'list-cameras') words='--help -h --env-id --assets' ;;
-    'record') words='--help -h --env-id --assets --seed --camera --overlay --width --height --hud-position --hud-opacity --backend --msaa --readback --gpu --episodes --steps --policy --exec-timeout --replay-dtype --fps --codec --crf --preset --format --gif-fps --gif-width --signals --layers --sheet-every --no-sheets --out --quiet -q --minari --minari-root --minari-author --minari-author-email --overwrite --resume --jobs -j --worker-mode --shard --shard-count --no-report --from --tolerance --obs-camera --obs-size --obs-layers --obs-overlay --robomimic --no-next-obs --valid-fraction --keep --stop-after-success' ;;
-    'bench') words='--help -h --what --dataset-episodes --dataset-size --serve-width --serve-height --soak-frames --width --height --assets --seconds --backends --no-peers --json-out' ;;
+    'record') words='--help -h --env-id --assets --seed --camera --overlay --width --height --hud-position --hud-opacity --backend --msaa --readback --gpu --episodes --steps --policy --exec-timeout --exec-fields --replay-dtype --fps --codec --crf --preset --format --gif-fps --gif-width --signals --layers --sheet-every --no-sheets --out --quiet -q --minari --minari-root --minari-author --minari-author-email --overwrite --resume --jobs -j --worker-mode --shard --shard-count --no-report --from --tolerance --obs-camera --obs-size --obs-layers --obs-overlay --robomimic --no-next-obs --valid-fraction --keep --stop-after-success' ;;
+    'bench') words='--help -h --what --exec-episodes --exec-size --exec-python --dataset-episodes --dataset-size --serve-width --serve-height --soak-frames --width --height --assets --seconds --backends --no-peers --json-out' ;;
     'probe-actions') words='--help -h --env-id --assets --seed --camera --overlay --width --height --hud-position --hud-opacity --backend --msaa --readback --gpu --steps --magnitudes --out --json-out' ;;
     'merge-manifests') words='--help -h --out --quiet -q --no-report' ;;
     'merge-datasets') words='--help -h --minari --minari-root --robomimic --valid-fraction --overwrite --quiet -q' ;;
@@ -95,7 +95,7 @@ _fetchscope() {
     'list-gpus') words='--help -h --gpu --json' ;;
     'report') words='--help -h --quiet -q' ;;
     'compare') words='--help -h --out --tolerance --pixel-tolerance --states-only --quiet -q' ;;
-    'serve') words='--help -h --env-id --assets --seed --policy --exec-timeout --replay-dtype --camera --overlay --width --height --hud-position --hud-opacity --backend --msaa --readback --gpu --minari-root --host --port --token-file --save-dir --max-sessions --max-queued --idle-timeout' ;;
+    'serve') words='--help -h --env-id --assets --seed --policy --exec-timeout --exec-fields --replay-dtype --obs-camera --obs-size --obs-layers --obs-overlay --camera --overlay --width --height --hud-position --hud-opacity --backend --msaa --readback --gpu --minari-root --host --port --token-file --save-dir --max-sessions --max-queued --idle-timeout' ;;
     'help') words='--help -h --markdown --man --bash-completion --examples-dir list-envs describe reward-check random-episodes anatomy rollout export datasets render list-cameras record bench probe-actions merge-manifests merge-datasets golden list-gpus report compare serve help' ;;
   esac
   local paths=''
