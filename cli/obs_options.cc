@@ -11,16 +11,17 @@ namespace fetchscope::cli {
 
 void AddObsOptions(CLI::App* sub, ObsOptions* o) {
   sub->add_option("--obs-camera", o->cameras,
-                  "Store this camera's images per step in the dataset: [NAME=]CAMERA, one "
-                  "--camera value (NAME defaults to a model camera's name; needed for default, "
-                  "free: and track cameras); repeat for more cameras (docs/guide/datasets.md, "
-                  "\"Pixel datasets\")")
+                  "Store this camera's images per step in the dataset, and send them to an "
+                  "exec: policy after each line: [NAME=]CAMERA, one --camera value (NAME "
+                  "defaults to a model camera's name; needed for default, free: and track "
+                  "cameras); repeat for more cameras (docs/guide/datasets.md, \"Pixel "
+                  "datasets\"; docs/guide/your-policy.md, \"Images for a vision policy\")")
       ->type_name("[NAME=]CAMERA")
       ->expected(1)
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
-  sub->add_option("--obs-size", o->size, "Pixels of each stored image, WxH")->capture_default_str();
+  sub->add_option("--obs-size", o->size, "Pixels of each image, WxH")->capture_default_str();
   sub->add_option("--obs-layers", o->layers,
-                  "Stored layers per camera: a comma list of rgb, depth (float32 metres), "
+                  "Layers per camera: a comma list of rgb, depth (float32 metres), "
                   "segmentation (int32 body ids)")
       ->capture_default_str();
   sub->add_option("--obs-overlay", o->overlay,
