@@ -13,6 +13,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <thread>
 
 #include "base/errors.h"
@@ -411,6 +412,18 @@ WaitEnd WaitForInput(std::vector<pollfd>* fds, int timeout_ms, bool watch_stop) 
     if (p.revents != 0) return WaitEnd::kReady;
   }
   return WaitEnd::kNone;
+}
+
+std::string SelfCommand() {
+  std::error_code ec;
+  const char* launcher = std::getenv("FETCHSCOPE_LAUNCHER");
+  const std::filesystem::path self = launcher && *launcher
+                                         ? std::filesystem::path(launcher)
+                                         : std::filesystem::read_symlink("/proc/self/exe", ec);
+  if (self.empty()) return "fetchscope";
+  const std::string found = FindProgram("fetchscope");
+  if (!found.empty() && std::filesystem::equivalent(found, self, ec)) return "fetchscope";
+  return std::filesystem::absolute(self, ec).string();
 }
 
 std::string FindProgram(const std::string& name) {

@@ -186,4 +186,9 @@ WaitEnd WaitForInput(std::vector<pollfd>* fds, int timeout_ms, bool watch_stop =
 /// when there is none.
 std::string FindProgram(const std::string& name);
 
+/// How a command fetchscope prints for the user to paste names fetchscope itself: "fetchscope"
+/// when that is what PATH finds, else the absolute path of what runs (the bundle's launcher,
+/// FETCHSCOPE_LAUNCHER, or this executable).
+std::string SelfCommand();
+
 }  // namespace fetchscope

@@ -91,6 +91,101 @@ long Drag(httplib::Client& c, const std::string& session, int width, int height,
   return frames;
 }
 
+// The served episode: 50 scripted steps of `spec`, written as a trajectory file in `dir`.
+std::string WriteServedEpisode(const EnvSpec& spec, const AssetSource& assets,
+                               const fs::path& dir) {
+  const std::string file = (dir / "episode.json").string();
+  FetchEnv env(spec, assets);
+  PolicyContext context;
+  auto policy = MakePolicy(PolicySpec::Scripted(), spec, context);
+  Trajectory t;
+  t.env_id = spec.id;
+  t.policy = "scripted";
+  t.assets = assets;
+  t.episodes = {RunEpisode(env, *policy, 0, 0, 50)};
+  WriteFileAtomically(file, TrajectoryText(t));
+  return file;
+}
+
+// Render + encode on the server, per format (the engine's own clock), an orbiting camera, for
+// `seconds` (at least 20 frames) each: out["frame_jpeg"], out["frame_png"] and their bytes.
+void FrameBudget(serve::Engine& engine, const std::string& session, int width, int height,
+                 double seconds, nlohmann::json* out) {
+  for (const char* format : {"jpeg", "png"}) {
+    std::vector<double> render, encode, total;
+    const auto until = Clock::now() + std::chrono::duration<double>(seconds);
+    for (int i = 0; Clock::now() < until || i < 20; ++i) {
+      serve::ViewRequest v;
+      v.at = {0, 0, 25};
+      v.camera = Orbit(i);
+      v.width = width;
+      v.height = height;
+      v.format =
+          std::string(format) == "png" ? serve::ImageFormat::kPng : serve::ImageFormat::kJpeg;
+      const serve::Frame f = engine.RenderFrame(session, v);
+      render.push_back(f.render_ms);
+      encode.push_back(f.encode_ms);
+      total.push_back(f.render_ms + f.encode_ms);
+      if (i == 0) (*out)[std::string(format) + "_bytes"] = f.bytes.size();
+    }
+    (*out)[std::string("frame_") + format] = {{"render_ms", Summary(render)},
+                                              {"encode_ms", Summary(encode)},
+                                              {"total_ms", Summary(total)}};
+  }
+}
+
+// `pages` pages dragging at once over HTTP for `budget_s`, each with its own session and one
+// request in flight: frames/s per page and in all, and the round trips.
+nlohmann::json DragPages(int port, const std::string& token, int pages, int width, int height,
+                         double budget_s) {
+  std::vector<std::unique_ptr<httplib::Client>> clients;
+  std::vector<std::string> sessions;
+  for (int p = 0; p < pages; ++p) {
+    clients.push_back(Client(port, token));
+    sessions.push_back(Session(*clients.back()));
+    clients.back()->Get("/api/episode?session=" + sessions.back() + "&source=0&episode=0");
+  }
+  std::vector<long> frames(pages, 0);
+  std::vector<std::vector<double>> trips(pages);
+  const auto start = Clock::now();
+  const Clock::time_point until =
+      start + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(budget_s));
+  std::vector<std::thread> threads;
+  for (int p = 0; p < pages; ++p) {
+    threads.emplace_back(
+        [&, p] { frames[p] = Drag(*clients[p], sessions[p], width, height, until, &trips[p]); });
+  }
+  for (std::thread& t : threads) t.join();
+  const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  nlohmann::json row = {{"pages", pages}, {"seconds", seconds}};
+  long all = 0;
+  std::vector<double> every;
+  for (int p = 0; p < pages; ++p) {
+    all += frames[p];
+    every.insert(every.end(), trips[p].begin(), trips[p].end());
+  }
+  row["frames_per_s_per_page"] = all / seconds / pages;
+  row["frames_per_s_total"] = all / seconds;
+  row["round_trip_ms"] = Summary(every);
+  return row;
+}
+
+// 40 live key steps on the live env (source 1), each the step and then its frame: their times.
+nlohmann::json KeySteps(httplib::Client& client, const std::string& session, int width,
+                        int height) {
+  client.Post("/api/live/start?session=" + session + "&env=1", "", "text/plain");
+  std::vector<double> steps;
+  for (int i = 0; i < 40; ++i) {
+    const auto t0 = Clock::now();
+    client.Post("/api/live/step?session=" + session + "&action=" + (i % 2 ? "1,0,0,0" : "-1,0,0,0"),
+                "", "text/plain");
+    client.Get("/api/frame?session=" + session + "&source=live&t=" + std::to_string(i + 1) +
+               "&format=jpeg&width=" + std::to_string(width) + "&height=" + std::to_string(height));
+    steps.push_back(Ms(Clock::now() - t0));
+  }
+  return Summary(steps);
+}
+
 }  // namespace
 
 nlohmann::json BenchServe(const AssetSource& assets, const std::string& backend, double budget_s,
@@ -100,18 +195,7 @@ nlohmann::json BenchServe(const AssetSource& assets, const std::string& backend,
   const fs::path dir =
       fs::temp_directory_path() / ("fetchscope_bench_serve_" + serve::NewToken().substr(0, 8));
   fs::create_directories(dir);
-  const std::string file = (dir / "episode.json").string();
-  {
-    FetchEnv env(spec, assets);
-    PolicyContext context;
-    auto policy = MakePolicy(PolicySpec::Scripted(), spec, context);
-    Trajectory t;
-    t.env_id = spec.id;
-    t.policy = "scripted";
-    t.assets = assets;
-    t.episodes = {RunEpisode(env, *policy, 0, 0, 50)};
-    WriteFileAtomically(file, TrajectoryText(t));
-  }
+  const std::string file = WriteServedEpisode(spec, assets, dir);
   std::vector<serve::Source> sources = {serve::OpenSource(file, dir),
                                         serve::LiveSource(spec, assets, 0)};
   serve::EngineOptions options;
@@ -147,77 +231,13 @@ nlohmann::json BenchServe(const AssetSource& assets, const std::string& backend,
   }
   out["seek_ms"] = Summary(seeks);
 
-  // render + encode on the server, per format (the engine's own clock), an orbiting camera
-  for (const char* format : {"jpeg", "png"}) {
-    std::vector<double> render, encode, total;
-    const auto until = Clock::now() + std::chrono::duration<double>(budget_s / 3);
-    for (int i = 0; Clock::now() < until || i < 20; ++i) {
-      serve::ViewRequest v;
-      v.at = {0, 0, 25};
-      v.camera = Orbit(i);
-      v.width = width;
-      v.height = height;
-      v.format =
-          std::string(format) == "png" ? serve::ImageFormat::kPng : serve::ImageFormat::kJpeg;
-      const serve::Frame f = engine.RenderFrame(session, v);
-      render.push_back(f.render_ms);
-      encode.push_back(f.encode_ms);
-      total.push_back(f.render_ms + f.encode_ms);
-      if (i == 0) out[std::string(format) + "_bytes"] = f.bytes.size();
-    }
-    out[std::string("frame_") + format] = {{"render_ms", Summary(render)},
-                                           {"encode_ms", Summary(encode)},
-                                           {"total_ms", Summary(total)}};
-  }
-
+  FrameBudget(engine, session, width, height, budget_s / 3, &out);
   // over HTTP: one page dragging (one request in flight), then several pages at once
   for (int pages : {1, 2, 4}) {
-    std::vector<std::unique_ptr<httplib::Client>> clients;
-    std::vector<std::string> sessions;
-    for (int p = 0; p < pages; ++p) {
-      clients.push_back(Client(port, server_options.token));
-      sessions.push_back(Session(*clients.back()));
-      clients.back()->Get("/api/episode?session=" + sessions.back() + "&source=0&episode=0");
-    }
-    std::vector<long> frames(pages, 0);
-    std::vector<std::vector<double>> trips(pages);
-    const auto start = Clock::now();
-    const Clock::time_point until = start + std::chrono::duration_cast<Clock::duration>(
-                                                std::chrono::duration<double>(budget_s / 3));
-    std::vector<std::thread> threads;
-    for (int p = 0; p < pages; ++p) {
-      threads.emplace_back(
-          [&, p] { frames[p] = Drag(*clients[p], sessions[p], width, height, until, &trips[p]); });
-    }
-    for (std::thread& t : threads) t.join();
-    const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
-    nlohmann::json row = {{"pages", pages}, {"seconds", seconds}};
-    long all = 0;
-    std::vector<double> every;
-    for (int p = 0; p < pages; ++p) {
-      all += frames[p];
-      every.insert(every.end(), trips[p].begin(), trips[p].end());
-    }
-    row["frames_per_s_per_page"] = all / seconds / pages;
-    row["frames_per_s_total"] = all / seconds;
-    row["round_trip_ms"] = Summary(every);
-    out["drag"].push_back(row);
+    out["drag"].push_back(
+        DragPages(port, server_options.token, pages, width, height, budget_s / 3));
   }
-
-  // a live key step: the step, then its frame
-  client->Post("/api/live/start?session=" + session + "&env=1", "", "text/plain");
-  std::vector<double> steps;
-  for (int i = 0; i < 40; ++i) {
-    t0 = Clock::now();
-    client->Post(
-        "/api/live/step?session=" + session + "&action=" + (i % 2 ? "1,0,0,0" : "-1,0,0,0"), "",
-        "text/plain");
-    client->Get("/api/frame?session=" + session + "&source=live&t=" + std::to_string(i + 1) +
-                "&format=jpeg&width=" + std::to_string(width) +
-                "&height=" + std::to_string(height));
-    steps.push_back(Ms(Clock::now() - t0));
-  }
-  out["key_step_ms"] = Summary(steps);
+  out["key_step_ms"] = KeySteps(*client, session, width, height);
   server.Stop();
   listener.join();
   std::error_code ec;

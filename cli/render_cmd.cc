@@ -90,6 +90,12 @@ int RunRender(const RenderCommandOptions& o) {
                  renderer.msaa_reason().c_str());
   }
   const FrameInfo info = MakeFrameInfo(fetch, episode.steps.back());
+  // --overlay trail: the achieved goals of the steps before this frame, as record draws them
+  std::vector<std::array<double, 3>> trail;
+  for (size_t t = 0; t + 1 < episode.steps.size(); ++t) {
+    trail.push_back(episode.steps[t].obs.achieved_goal);
+  }
+  renderer.SetTrail(trail);
   if (want_rgb) {
     std::vector<uint8_t> rgb(static_cast<size_t>(renderer.width()) * renderer.height() * 3);
     renderer.Render(fetch.data(), info, rgb.data());

@@ -22,6 +22,14 @@ class EchoApi : public fetchscope::serve::Api {
  public:
   json PageData() const override { return {{"page", true}}; }
   std::string NewSession() override { return "s1"; }
+  json CloseSession(const std::string& session) override {
+    Check(session);
+    return {{"closed", true}};
+  }
+  json LiveState(const std::string& session) override {
+    Check(session);
+    return {{"steps", 0}};
+  }
   fetchscope::serve::Frame RenderFrame(const std::string& session,
                                        const fetchscope::serve::ViewRequest& r) override {
     Check(session);

@@ -27,10 +27,14 @@ class Api {
   virtual ~Api() = default;
   virtual nlohmann::json PageData() const = 0;
   virtual std::string NewSession() = 0;
+  /// Frees a session and its live episode (and exec: child) at once: the page is closing.
+  virtual nlohmann::json CloseSession(const std::string& session) = 0;
   virtual Frame RenderFrame(const std::string& session, const ViewRequest& request) = 0;
   virtual nlohmann::json Pick(const std::string& session, const PickRequest& request) = 0;
   virtual nlohmann::json Episode(const std::string& session, const StepRef& episode) = 0;
   virtual nlohmann::json StartLive(const std::string& session, const StartRequest& request) = 0;
+  /// The live episode whole, as StartLive answers (a page that lost its copy asks again).
+  virtual nlohmann::json LiveState(const std::string& session) = 0;
   virtual nlohmann::json StepLive(const std::string& session, const StepRequest& request) = 0;
   virtual nlohmann::json BackLive(const std::string& session) = 0;
   virtual nlohmann::json SaveLive(const std::string& session, const ViewRequest& view) = 0;

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "base/errors.h"
+#include "base/json_util.h"
 #include "encode/png_io.h"
 #include "inspect/viewer.h"
 #include "render/camera.h"
@@ -199,6 +200,14 @@ std::string Engine::NewSession() {
   });
 }
 
+nlohmann::json Engine::CloseSession(const std::string& session) {
+  return Run<nlohmann::json>([&](State& s) {
+    s.Touch(session);  // 404 for a session that is not there
+    s.sessions.erase(session);
+    return nlohmann::json{{"closed", true}};
+  });
+}
+
 int Engine::ExpireIdleSessions() {
   return Run<int>([this](State& s) {
     ExpireIdle(s);
@@ -225,6 +234,27 @@ Session& Engine::State::Touch(const std::string& id) {
 }
 
 // ---- served episodes
+
+namespace {
+
+// Replays a dataset's episode `index` into `e` (its steps through `keep`, its reset seed, the
+// dataset's own achieved goals as the ghost): the replay's JSON, its reset rule and divergence.
+nlohmann::json ReplayDatasetEpisode(FetchEnv& env, const Source& src, int index,
+                                    const StepCallback& keep, LoadedEpisode* e) {
+  EpisodeReplayer replayer(env, 0);
+  replayer.ReplaySource(*src.rows, index, keep);
+  std::vector<Observation> replayed;
+  for (const TrajectoryStep& row : e->steps) replayed.push_back(row.obs);
+  const EpisodeStart& start = src.rows->starts.at(index);
+  e->reset_seed = start.seed;
+  for (const TrajectoryStep& row : src.rows->episodes.at(index).steps) {
+    e->ghost.push_back(row.obs.achieved_goal);
+  }
+  return {{"reset", start.Rule()},
+          {"divergence", DivergenceJson(CompareReplay(*src.rows, index, replayed))}};
+}
+
+}  // namespace
 
 LoadedEpisode& Engine::State::Load(int source, int index) {
   if (source < 0 || source >= static_cast<int>(sources.size())) {
@@ -256,17 +286,7 @@ LoadedEpisode& Engine::State::Load(int source, int index) {
         ResolveStarts(env, src.rows.get());
         starts_resolved[source] = true;
       }
-      EpisodeReplayer replayer(env, 0);
-      replayer.ReplaySource(*src.rows, index, keep);
-      std::vector<Observation> replayed;
-      for (const TrajectoryStep& row : e->steps) replayed.push_back(row.obs);
-      const EpisodeStart& start = src.rows->starts.at(index);
-      e->reset_seed = start.seed;
-      replay = {{"reset", start.Rule()},
-                {"divergence", DivergenceJson(CompareReplay(*src.rows, index, replayed))}};
-      for (const TrajectoryStep& row : src.rows->episodes.at(index).steps) {
-        e->ghost.push_back(row.obs.achieved_goal);
-      }
+      replay = ReplayDatasetEpisode(env, src, index, keep, e.get());
     } else {
       const TrajectoryEpisode recorded = EpisodeRows(src, index);
       EpisodeReplayer replayer(env, src.seed);
@@ -311,15 +331,56 @@ LoadedEpisode& Engine::State::Load(int source, int index) {
   return *e;
 }
 
+nlohmann::json RowJson(const TrajectoryStep& s) {
+  nlohmann::json row = {
+      {"t", s.t},
+      {"is_success", s.is_success},
+      {"observation", JsonVector(s.obs.observation.data(), s.obs.observation.size())},
+      {"achieved_goal", JsonVector(s.obs.achieved_goal.data(), 3)},
+      {"desired_goal", JsonVector(s.obs.desired_goal.data(), 3)},
+      {"action", s.action ? JsonVector(s.action->value.data(), 4) : nullptr},
+      {"reward", s.reward ? JsonDouble(*s.reward) : nullptr}};
+  if (s.contacts) {
+    row["contacts"] = {{"left_finger_force", JsonDouble(s.contacts->left_finger_force)},
+                       {"right_finger_force", JsonDouble(s.contacts->right_finger_force)},
+                       {"grasped", s.contacts->grasped()},
+                       {"object_on_table", s.contacts->object_on_table}};
+  }
+  return row;
+}
+
+namespace {
+
+// Each per-step list of `signals` (EpisodeSignals of two steps) replaced by its last value.
+nlohmann::json LastValues(const nlohmann::json& v) {
+  if (v.is_object()) {
+    nlohmann::json out = nlohmann::json::object();
+    for (const auto& [key, x] : v.items()) out[key] = key == "colors" ? x : LastValues(x);
+    return out;
+  }
+  if (!v.is_array() || v.empty()) return v;
+  if (v.front().is_array()) {
+    nlohmann::json out = nlohmann::json::array();
+    for (const nlohmann::json& list : v) out.push_back(LastValues(list));
+    return out;
+  }
+  return v.back();
+}
+
+}  // namespace
+
+nlohmann::json LastStepSignals(const EnvSpec& spec, const std::vector<TrajectoryStep>& steps) {
+  const size_t n = steps.size();
+  const std::vector<TrajectoryStep> last(steps.begin() + (n > 1 ? n - 2 : 0), steps.end());
+  nlohmann::json signals = LastValues(EpisodeSignals(spec, last));
+  signals.erase("frames");
+  return signals;
+}
+
 nlohmann::json RowsData(const EnvSpec& spec, const std::vector<TrajectoryStep>& steps,
                         const std::optional<uint64_t>& hindsight_seed) {
   nlohmann::json rows = nlohmann::json::array();
-  for (const TrajectoryStep& s : steps) {
-    rows.push_back({{"t", s.t},
-                    {"is_success", s.is_success},
-                    {"achieved_goal", s.obs.achieved_goal},
-                    {"desired_goal", s.obs.desired_goal}});
-  }
+  for (const TrajectoryStep& s : steps) rows.push_back(RowJson(s));
   return {{"env_id", spec.id},
           {"steps", static_cast<int>(steps.size()) - 1},
           {"rows", std::move(rows)},

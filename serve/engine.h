@@ -77,6 +77,10 @@ class Engine : public Api {
 
   /// A new session for a page (at most max_sessions; idle ones are freed first). Its id.
   std::string NewSession() override;
+  /// Frees `session` (its live episode and exec: child): {"closed": true}. 404 for none.
+  nlohmann::json CloseSession(const std::string& session) override;
+  /// The live episode whole: {"steps", "rows", "signals", ...} as StartLive answers.
+  nlohmann::json LiveState(const std::string& session) override;
   /// The frame of `request`'s view at its step (the session's live episode for source "live").
   Frame RenderFrame(const std::string& session, const ViewRequest& request) override;
   /// What is at a pixel of a view: {"body", "geom", "site", "color"} or {"body": null}.
@@ -86,8 +90,10 @@ class Engine : public Api {
   nlohmann::json Episode(const std::string& session, const StepRef& episode) override;
   /// The session's live episode: started from a live env's reset or a served step, stepped by an
   /// action or the policy, one step back, saved (a replay trajectory and the record command that
-  /// re-renders it). Each returns the live episode's data ({"steps", "signals", ...}); Save adds
-  /// {"files", "command"}.
+  /// re-renders it). Start (and Save) return the live episode's data ({"steps", "rows",
+  /// "signals", ...}; Save adds {"files", "command"}); a step returns the new step alone
+  /// ({"steps", "step": {"row", "signals"}, ...}, the same size at step 2,000 as at step 10),
+  /// a step back the new count ({"steps", ...}): the page keeps the rest.
   nlohmann::json StartLive(const std::string& session, const StartRequest& request) override;
   nlohmann::json StepLive(const std::string& session, const StepRequest& request) override;
   nlohmann::json BackLive(const std::string& session) override;

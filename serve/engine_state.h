@@ -120,12 +120,22 @@ struct Engine::State {
   /// The images of --obs-camera drawn on `env` as it stands at `row` (the live episode's last
   /// step): what an exec: policy receives with its line.
   PixelRecorder& DrawPolicyImages(FetchEnv& env, const TrajectoryStep& row);
-  /// The live episode's data for the page.
+  /// The live episode's data for the page, whole (rows and signals).
   nlohmann::json LiveData(const LiveEpisode& live) const;
+  /// What describes the live episode without its rows: source, episode, steps, dtype, ...
+  nlohmann::json LiveHead(const LiveEpisode& live) const;
 };
 
-/// The page's data of an episode's rows: {"steps", "signals", ...} (inspect/viewer.h).
+/// The page's data of an episode's rows: {"steps", "rows", "signals", ...} (inspect/viewer.h).
 nlohmann::json RowsData(const EnvSpec& spec, const std::vector<TrajectoryStep>& steps,
                         const std::optional<uint64_t>& hindsight_seed);
+
+/// One row as the page's step inspector shows it: t, the observation, both goals, the action,
+/// the reward, success and the contacts (where recorded), each as the trajectory JSON has it.
+nlohmann::json RowJson(const TrajectoryStep& row);
+
+/// The signals of the last of `steps` alone (EpisodeSignals of the last two, each list's last
+/// value): what a live step's answer carries.
+nlohmann::json LastStepSignals(const EnvSpec& spec, const std::vector<TrajectoryStep>& steps);
 
 }  // namespace fetchscope::serve

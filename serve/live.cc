@@ -49,7 +49,7 @@ std::string RecordCommand(const std::string& env_id, uint64_t seed, const std::s
                           size_t steps, bool assets_given, const AssetSource& assets,
                           const ViewRequest& view, const fs::path& out) {
   std::vector<std::string> argv = {
-      "fetchscope",         "record",   "--env-id", env_id,    "--seed",
+      SelfCommand(),        "record",   "--env-id", env_id,    "--seed",
       std::to_string(seed), "--policy", policy,     "--steps", std::to_string(steps),
       "--signals",          "contacts"};  // its trajectory has them
   if (assets_given || assets.kind != "bundled") {
@@ -64,18 +64,76 @@ std::string RecordCommand(const std::string& env_id, uint64_t seed, const std::s
   return command;
 }
 
+// The first session_NNN in `dir` with no .json, .csv or folder of that name.
+std::string FreeSessionName(const fs::path& dir) {
+  for (int n = 1; n < 100000; ++n) {
+    char text[32];
+    std::snprintf(text, sizeof(text), "session_%03d", n);
+    if (!fs::exists(dir / (std::string(text) + ".json")) &&
+        !fs::exists(dir / (std::string(text) + ".csv")) && !fs::exists(dir / text)) {
+      return text;
+    }
+  }
+  throw RequestError(500, "cannot save the session: " + dir.string() + " holds 99999 of them");
+}
+
+// A saved live episode's trajectory, as record writes the episode it re-renders: the same
+// writer, env, seed, policy text and assets, so that the two files are the same bytes.
+Trajectory SavedTrajectory(const EnvSpec& spec, const FetchEnv& env, const LiveEpisode& live,
+                           const fs::path& json_path) {
+  Trajectory trajectory;
+  trajectory.env_id = spec.id;
+  trajectory.seed = live.reset_seed.value_or(0);
+  trajectory.policy = "replay:" + json_path.string();
+  trajectory.assets = env.assets();
+  TrajectoryEpisode episode;
+  episode.index = live.index;
+  episode.steps = live.steps;
+  episode.episode_return = 0;
+  for (const TrajectoryStep& row : live.steps) {
+    if (row.reward) episode.episode_return += *row.reward;
+  }
+  trajectory.episodes = {episode};
+  return trajectory;
+}
+
+// The actions of steps 1.. as CSV rows that read back exactly.
+std::string ActionsCsv(const std::vector<TrajectoryStep>& steps) {
+  std::string csv;
+  for (size_t t = 1; t < steps.size(); ++t) {
+    const Action& a = *steps[t].action;
+    for (int i = 0; i < 4; ++i) csv += (i ? "," : "") + RoundTrip(a.value[i]);
+    csv += "\n";
+  }
+  return csv;
+}
+
 }  // namespace
 
-nlohmann::json Engine::State::LiveData(const LiveEpisode& live) const {
+nlohmann::json Engine::State::LiveHead(const LiveEpisode& live) const {
   const Source& src = sources[live.source];
-  nlohmann::json data = RowsData(*src.spec, live.steps, std::nullopt);
-  data["source"] = live.source;
-  data["episode"] = live.index;
-  data["prefix"] = live.prefix;
-  data["action_dtype"] = live.float32 ? "float32" : "float64";
-  data["can_save"] = live.reset_seed.has_value() && live.steps.size() > 1;
-  data["policy"] = options.policy.text;
+  return {{"env_id", src.spec->id},
+          {"steps", static_cast<int>(live.steps.size()) - 1},
+          {"source", live.source},
+          {"episode", live.index},
+          {"prefix", live.prefix},
+          {"action_dtype", live.float32 ? "float32" : "float64"},
+          {"can_save", live.reset_seed.has_value() && live.steps.size() > 1},
+          {"policy", options.policy.text}};
+}
+
+nlohmann::json Engine::State::LiveData(const LiveEpisode& live) const {
+  nlohmann::json data = RowsData(*sources[live.source].spec, live.steps, std::nullopt);
+  data.update(LiveHead(live));
   return data;
+}
+
+nlohmann::json Engine::LiveState(const std::string& session) {
+  return Run<nlohmann::json>([&](State& s) {
+    Session& ses = s.Touch(session);
+    if (!ses.live) throw RequestError(409, "this session has no live episode: start one first");
+    return s.LiveData(*ses.live);
+  });
 }
 
 nlohmann::json Engine::StartLive(const std::string& session, const StartRequest& r) {
@@ -147,7 +205,10 @@ nlohmann::json Engine::StepLive(const std::string& session, const StepRequest& r
     const StepResult result = env.Step(action);
     live.steps.push_back(RowAfterStep(env, result, action, t));
     live.checkpoints.push_back(env.Checkpoint());
-    return s.LiveData(live);
+    nlohmann::json out = s.LiveHead(live);
+    out["step"] = {{"row", RowJson(live.steps.back())},
+                   {"signals", LastStepSignals(env.spec(), live.steps)}};
+    return out;
   });
 }
 
@@ -198,7 +259,7 @@ nlohmann::json Engine::BackLive(const std::string& session) {
     live.checkpoints.pop_back();
     live.policy.reset();  // it acts from where the episode now stands, when asked again
     if (static_cast<int>(live.steps.size()) - 1 < live.prefix) live.prefix = live.steps.size() - 1;
-    return s.LiveData(live);
+    return s.LiveHead(live);
   });
 }
 
@@ -221,42 +282,13 @@ nlohmann::json Engine::SaveLive(const std::string& session, const ViewRequest& v
     std::error_code ec;
     fs::create_directories(options_.save_dir, ec);
     const fs::path dir = fs::absolute(options_.save_dir);
-    std::string name;
-    for (int n = 1; n < 100000; ++n) {
-      char text[32];
-      std::snprintf(text, sizeof(text), "session_%03d", n);
-      if (!fs::exists(dir / (std::string(text) + ".json")) &&
-          !fs::exists(dir / (std::string(text) + ".csv")) && !fs::exists(dir / text)) {
-        name = text;
-        break;
-      }
-    }
+    const std::string name = FreeSessionName(dir);
     const fs::path json_path = dir / (name + ".json");
     const fs::path csv_path = dir / (name + ".csv");
-    // the trajectory, as record writes the episode it re-renders: the same writer, env, seed,
-    // policy text and assets, so that the two files are the same bytes
-    Trajectory trajectory;
-    trajectory.env_id = src.spec->id;
-    trajectory.seed = live.reset_seed.value_or(0);
-    trajectory.policy = "replay:" + json_path.string();
-    trajectory.assets = env.assets();
-    TrajectoryEpisode episode;
-    episode.index = live.index;
-    episode.steps = live.steps;
-    episode.episode_return = 0;
-    for (const TrajectoryStep& row : live.steps) {
-      if (row.reward) episode.episode_return += *row.reward;
-    }
-    trajectory.episodes = {episode};
-    std::string csv;
-    for (size_t t = 1; t < live.steps.size(); ++t) {
-      const Action& a = *live.steps[t].action;
-      for (int i = 0; i < 4; ++i) csv += (i ? "," : "") + RoundTrip(a.value[i]);
-      csv += "\n";
-    }
+    const Trajectory trajectory = SavedTrajectory(*src.spec, env, live, json_path);
     try {
       WriteFileAtomically(json_path.string(), TrajectoryText(trajectory));
-      WriteFileAtomically(csv_path.string(), csv);
+      WriteFileAtomically(csv_path.string(), ActionsCsv(live.steps));
     } catch (const RunError& e) {
       throw RequestError(500, std::string("cannot save the session: ") + e.what());
     }
@@ -275,15 +307,9 @@ nlohmann::json Engine::SaveLive(const std::string& session, const ViewRequest& v
         RecordCommand(src.spec->id, *live.reset_seed, trajectory.policy, live.steps.size() - 1,
                       !options_.assets_flag.empty(), env.assets(), view, record_out);
     out["record_out"] = (dir / name).string();
-    out["episode_file"] = (dir / name /
-                           ("episode_" +
-                            [&] {
-                              char k[16];
-                              std::snprintf(k, sizeof(k), "%03d", live.index);
-                              return std::string(k);
-                            }() +
-                            ".json"))
-                              .string();
+    char episode_file[32];
+    std::snprintf(episode_file, sizeof(episode_file), "episode_%03d.json", live.index);
+    out["episode_file"] = (dir / name / episode_file).string();
     return out;
   });
 }

@@ -159,6 +159,8 @@ PickRequest ParsePickRequest(const Query& query) {
   return pick;
 }
 
+void CheckNoParameters(const Query& query) { Params(query, {}); }
+
 StepRequest ParseStepRequest(const Query& query) {
   const Params p(query, {"action"});
   StepRequest r;

@@ -88,6 +88,9 @@ std::string SessionParam(const Query& query);
 ViewRequest ParseViewRequest(const Query& query);
 PickRequest ParsePickRequest(const Query& query);
 StepRequest ParseStepRequest(const Query& query);
+
+/// Refuses every parameter but the session (and the token) in one line (400).
+void CheckNoParameters(const Query& query);
 StartRequest ParseStartRequest(const Query& query);
 /// An episode's data: its source and index.
 StepRef ParseEpisodeRequest(const Query& query);

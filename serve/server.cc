@@ -461,6 +461,17 @@ void Server::Routes() {
   Post("/api/session", ApiHandler([this](const httplib::Request&, httplib::Response& res) {
          SendJson(res, {{"session", api_.NewSession()}});
        }));
+  Post("/api/session/close",
+       ApiHandler([this](const httplib::Request& req, httplib::Response& res) {
+         const std::string session = SessionParam(req.params);
+         CheckNoParameters(req.params);
+         SendJson(res, api_.CloseSession(session));
+       }));
+  Get("/api/live", ApiHandler([this](const httplib::Request& req, httplib::Response& res) {
+        const std::string session = SessionParam(req.params);
+        CheckNoParameters(req.params);
+        SendJson(res, api_.LiveState(session));
+      }));
   Get("/api/episode", ApiHandler([this](const httplib::Request& req, httplib::Response& res) {
         const std::string session = SessionParam(req.params);
         SendJson(res, api_.Episode(session, ParseEpisodeRequest(req.params)));
@@ -489,7 +500,7 @@ void Server::Routes() {
        }));
   Post("/api/live/back", ApiHandler([this](const httplib::Request& req, httplib::Response& res) {
          const std::string session = SessionParam(req.params);
-         ParseStepRequest({});  // no parameters of its own
+         CheckNoParameters(req.params);
          SendJson(res, api_.BackLive(session));
        }));
   Post("/api/live/save", ApiHandler([this](const httplib::Request& req, httplib::Response& res) {

@@ -6,6 +6,7 @@
 #include "base/errors.h"
 #include "inspect/report.h"
 #include "run/run_files.h"
+#include "src/observation_layout.h"
 #include "src/trajectory.h"
 
 namespace fetchscope::serve {
@@ -181,6 +182,11 @@ nlohmann::json SourcesJson(const std::vector<Source>& sources) {
            {"return", e.episode_return ? nlohmann::json(*e.episode_return) : nullptr}});
     }
     static const char* kKinds[] = {"recording", "dataset", "live"};
+    // the observation's index names and units, as describe prints them (the step inspector's)
+    nlohmann::json labels = nlohmann::json::array();
+    for (const LayoutLabel& l : ObservationLabels(s.spec->has_object)) {
+      labels.push_back({{"name", l.name}, {"unit", l.unit}, {"meaning", l.meaning}});
+    }
     list.push_back({{"source", i},
                     {"kind", kKinds[static_cast<int>(s.kind)]},
                     {"title", s.title},
@@ -189,6 +195,9 @@ nlohmann::json SourcesJson(const std::vector<Source>& sources) {
                     {"policy", s.policy},
                     {"has_object", s.spec->has_object},
                     {"threshold", s.spec->distance_threshold},
+                    {"max_episode_steps", s.spec->max_episode_steps},
+                    {"block_gripper", s.spec->block_gripper},
+                    {"observation_labels", labels},
                     {"episodes", std::move(episodes)}});
   }
   return list;

@@ -29,6 +29,7 @@
 #include "encode/png_io.h"
 #include "encode/video_format.h"
 #include "encode/video_reader.h"
+#include "tests/browser_util.h"
 #include "tests/test_util.h"
 
 namespace fetchscope {
@@ -36,9 +37,12 @@ namespace {
 
 namespace fs = std::filesystem;
 using nlohmann::json;
+using testing::BrowserTest;
+using testing::Chromium;
 using testing::ReadFile;
 using testing::RunCommand;
 using testing::RunFetchscope;
+using testing::ScreenshotPath;
 using testing::SourceDir;
 using testing::TempDir;
 
@@ -52,29 +56,6 @@ constexpr char kAccent[] = "#2c6db2";
 
 // A report page's episode viewer plays one of the run's videos (web/src/viewer.js).
 constexpr size_t kViewerVideo = 1;
-
-std::string Chromium() {
-  const char* env = std::getenv("FETCHSCOPE_CHROMIUM");
-  return env && *env ? env : "/usr/bin/chromium";
-}
-
-// Why the browser tests cannot run here, or empty when they can.
-std::string MissingTool() {
-  if (RunCommand("command -v node").exit_code != 0) return "node is not installed";
-  if (!fs::exists(Chromium())) return "chromium is not installed (" + Chromium() + ")";
-  if (!fs::exists(SourceDir() / "web" / "node_modules" / "playwright-core" / "package.json")) {
-    return "playwright-core is not installed in web/node_modules (tools/install-deps.sh)";
-  }
-  return "";
-}
-
-// build/test-screenshots/<name of the running test>.png: the path tests/CMakeLists.txt attaches.
-fs::path ScreenshotPath() {
-  const fs::path dir = fs::path(FETCHSCOPE_BIN).parent_path() / "test-screenshots";
-  fs::create_directories(dir);
-  return dir /
-         (std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) + ".png");
-}
 
 json ReadJsonFile(const fs::path& path) { return json::parse(ReadFile(path)); }
 
@@ -259,15 +240,6 @@ std::string Record(const fs::path& out, const std::string& policy = "scripted",
          " --steps 20 --width 96 --height 96 --episodes 5 --quiet --out " + out.string() + " " +
          extra;
 }
-
-class BrowserTest : public ::testing::Test {
- protected:
-  void SetUp() override {
-    fs::remove(ScreenshotPath());  // a skipped or failed test attaches no stale screenshot
-    const std::string missing = MissingTool();
-    if (!missing.empty()) GTEST_SKIP() << missing;
-  }
-};
 
 TEST_F(BrowserTest, ReportLoadsPlaysPlotsAndSorts) {
   TempDir tmp;
@@ -761,111 +733,6 @@ TEST_F(BrowserTest, ViewerPlotsTheReplayAgainstTheDataset) {
   // the episode table, divergence and reset columns included, fits the 1,280 px window
   ASSERT_TRUE(result["table"].is_object()) << result.dump();
   EXPECT_LE(result["table"]["width"], result["table"]["box"]) << result["table"];
-}
-
-// fetchscope serve's page over a localhost URL, as through ssh -L (web/test/check_serve.mjs): a
-// drag orbits (the camera text, the --camera option and the frame change; JPEG while dragging, a
-// lossless PNG at rest), hover names the body under the pointer, each key press is one env step
-// that moves the gripper by what probe-actions measures for that action, the policy steps and
-// steps back, Save prints a record command that re-renders the session byte for byte, and a
-// second page gets its own session. No console error and no request leaves the server.
-TEST_F(BrowserTest, ServePageOrbitsDrivesSavesAndKeepsSessionsApart) {
-  TempDir tmp;
-  auto r = RunFetchscope(
-      "record --env-id FetchReach-v4 --policy scripted --episodes 1 --steps 10 "
-      "--width 64 --height 64 --quiet --out " +
-      (tmp.path() / "run").string());
-  ASSERT_EQ(r.exit_code, 0) << r.output;
-  testing::ServeProcess serve("'" + (tmp.path() / "run").string() +
-                                  "' --env-id FetchReach-v4 --seed 0 --width 480 --height 360 "
-                                  "--save-dir '" +
-                                  (tmp.path() / "saved").string() + "'",
-                              tmp.path());
-  ASSERT_TRUE(serve.started()) << serve.log();
-  const fs::path out = tmp.path() / "shots";
-  fs::create_directories(out);
-  const auto check =
-      RunCommand("node " + (SourceDir() / "web" / "test" / "check_serve.mjs").string() +
-                 " --url '" + serve.url + "' --out " + out.string() +
-                 " --keys w,w,w,w,w --live-source 1 --chromium " + Chromium());
-  const size_t line = check.output.rfind("\n{");
-  const json result =
-      json::parse(check.output.substr(line == std::string::npos ? 0 : line + 1), nullptr, false);
-  ASSERT_TRUE(result.is_object()) << check.output;
-  ASSERT_FALSE(result.contains("error")) << result["error"] << "\n" << serve.log();
-  EXPECT_TRUE(result["console_errors"].empty()) << result["console_errors"];
-  EXPECT_TRUE(result["failed_responses"].empty()) << result["failed_responses"];
-  EXPECT_TRUE(result["page_errors"].empty()) << result["page_errors"];
-  EXPECT_TRUE(result["foreign_requests"].empty()) << result["foreign_requests"];
-  EXPECT_EQ(result["url_after_token"].get<std::string>().find("token="), std::string::npos);
-  EXPECT_EQ(result["first"]["errors"], 0) << result["first"];
-
-  // the drag: a free camera the server parsed and showed as the page wrote it
-  const json& drag = result["drag"];
-  EXPECT_EQ(drag["camera_before"], "default");
-  const std::string camera = drag["camera_after"];
-  EXPECT_EQ(camera.rfind("free:lookat=1.3,0.75,0.55,distance=2.5,azimuth=", 0), 0u) << camera;
-  EXPECT_EQ(drag["shown_camera"], camera);
-  EXPECT_EQ(drag["camera_input"], camera);
-  EXPECT_EQ(drag["camera_option"], "--camera '" + camera + "'");
-  EXPECT_GE(drag["frames_during"].get<int>(), 1) << drag;
-  const json formats = drag["formats"];
-  EXPECT_NE(std::find(formats.begin(), formats.end(), "jpeg"), formats.end()) << drag;
-  EXPECT_NE(ReadFile(out / "frame_before.png"), ReadFile(out / "frame_after.png"));
-  std::cout << "drag: " << drag.dump() << std::endl;
-  // the dragged view, as render draws it from that camera
-  const fs::path rendered = tmp.path() / "dragged.png";
-  r = RunFetchscope("render --env-id FetchReach-v4 --policy 'replay:" +
-                    (tmp.path() / "run" / "episode_000.json").string() +
-                    "' --width 480 --height 360 --camera '" + camera + "' -o " + rendered.string());
-  ASSERT_EQ(r.exit_code, 0) << r.output;
-  EXPECT_FALSE(result["hover"]["body"].get<std::string>().empty()) << result["hover"];
-
-  // five +x key presses from the live env's reset: the gripper's mean step is probe-actions' +x
-  const json& rows = result["live_rows"];
-  ASSERT_EQ(rows.size(), 6u) << rows;
-  double dx = 0;
-  for (size_t t = 1; t < rows.size(); ++t)
-    dx += rows[t][0].get<double>() - rows[t - 1][0].get<double>();
-  dx /= 5;
-  r = RunFetchscope("probe-actions --env-id FetchReach-v4 --seed 0 --steps 5 --out " +
-                    (tmp.path() / "probe").string());
-  ASSERT_EQ(r.exit_code, 0) << r.output;
-  const json probe = ReadJsonFile(tmp.path() / "probe" / "probe_actions.json");
-  double along = -1;
-  for (const json& p : probe["probes"]) {
-    if (p["name"] == "+x") along = p["along_axis"];
-  }
-  std::cout << "+x key: " << dx << " m per step; probe-actions +x: " << along << " m per step"
-            << std::endl;
-  EXPECT_NEAR(dx, along,
-              1e-5);  // keys act in float32 (the random policy's dtype), the probe in float64
-  for (const json& a : result["live_actions"][0]) {
-    if (!a.is_null()) {
-      EXPECT_EQ(a, 1.0);
-    }
-  }
-  for (int ms : result["key_step_ms"]) std::cout << "key step to the new frame: " << ms << " ms\n";
-  EXPECT_EQ(result["after_policy_and_back"], 5);
-
-  // Save: the printed command re-renders the session byte for byte
-  const json& save = result["save"];
-  const std::string command = save["command"];
-  ASSERT_FALSE(command.empty()) << save;
-  EXPECT_EQ(save["shown"], command);
-  const std::string bin = fs::path(FETCHSCOPE_BIN).parent_path().string();
-  r = RunCommand("PATH='" + bin + "':\"$PATH\" " + command + " --quiet");
-  ASSERT_EQ(r.exit_code, 0) << command << "\n" << r.output;
-  EXPECT_EQ(ReadFile(save["episode_file"].get<std::string>()),
-            ReadFile(save["files"][0].get<std::string>()));
-
-  // the second page: a session of its own, without the first page's live episode
-  EXPECT_NE(result["page_b"]["session"], result["page_a"]["session"]);
-  EXPECT_FALSE(result["page_b"]["has_live"].get<bool>());
-  EXPECT_EQ(serve.Stop(SIGINT), 130) << serve.log();
-  fs::copy_file(out / "serve_page.png", ScreenshotPath(), fs::copy_options::overwrite_existing);
-  std::cout << "<CTestMeasurementFile type=\"image/png\" name=\"screenshot\">"
-            << ScreenshotPath().string() << "</CTestMeasurementFile>" << std::endl;
 }
 
 }  // namespace

@@ -5,6 +5,8 @@
 #include <set>
 #include <string>
 
+#include "encode/png_io.h"
+#include "encode/video_reader.h"
 #include "tests/test_util.h"
 
 namespace fetchscope {
@@ -67,6 +69,35 @@ TEST(RenderNames, RefusesAnOutputThatIsNotPng) {
   const CommandResult upper =
       RunFetchscope("render --width 64 --height 64 -o " + (tmp.path() / "Y.PNG").string());
   EXPECT_EQ(upper.exit_code, 0) << upper.output;
+}
+
+// --overlay trail: render draws the achieved goals of the steps before its frame, as record's
+// frame of that step shows them (a lossless APNG frame, compared pixel for pixel).
+TEST(RenderTrail, TheTrailIsRecordsFrameOfThatStep) {
+  TempDir tmp;
+  const std::string common =
+      " --env-id FetchReach-v4 --policy scripted --seed 4 --width 96 --height 72 --overlay "
+      "goal,achieved,trail";
+  CommandResult r = RunFetchscope(
+      "record --episodes 1 --steps 12 --format apng --no-sheets --quiet"
+      " --no-report --out " +
+      (tmp.path() / "run").string() + common);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  r = RunFetchscope("render --steps 12 -o " + (tmp.path() / "trail.png").string() + common);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  r = RunFetchscope("render --steps 12 -o " + (tmp.path() / "plain.png").string() +
+                    " --env-id FetchReach-v4 --policy scripted --seed 4 --width 96 --height 72 "
+                    "--overlay goal,achieved");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  int width = 0, height = 0;
+  const std::vector<std::vector<uint8_t>> frames =
+      ReadAllFrames((tmp.path() / "run/episode_000.apng").string(), &width, &height);
+  ASSERT_EQ(frames.size(), 13u);
+  const Image trail = ReadPng((tmp.path() / "trail.png").string());
+  ASSERT_EQ(trail.width, width);
+  EXPECT_TRUE(trail.pixels == frames[12]) << "render's trail is not record's frame of step 12";
+  EXPECT_FALSE(ReadPng((tmp.path() / "plain.png").string()).pixels == trail.pixels)
+      << "the trail drew nothing";
 }
 
 }  // namespace

@@ -340,6 +340,11 @@ TEST(ServeTest, ASavedSessionReRendersByteForByteWithThePrintedCommand) {
             std::string::npos)
       << command;
   EXPECT_NE(command.find("'replay:"), std::string::npos) << command;  // "saved dir": quoted
+  if (RunCommand("command -v fetchscope").exit_code != 0) {
+    // fetchscope is not on PATH here: the command names the binary by its path and runs as is
+    const std::string bin = fs::canonical(FETCHSCOPE_BIN).string();
+    EXPECT_EQ(command.rfind(bin + " record ", 0), 0u) << command;
+  }
   ASSERT_EQ(RunPrinted(command), 0) << command;
   const std::string session_json = saved["files"][0];
   EXPECT_EQ(ReadFile(saved["episode_file"].get<std::string>()), ReadFile(session_json));
@@ -385,6 +390,49 @@ TEST(ServeTest, TwoPagesHaveIndependentSessions) {
   const auto after = api.Get("/api/frame?session=" + a + view);
   ASSERT_TRUE(before && after);
   EXPECT_EQ(before->body, after->body);
+}
+
+// A live step's answer holds the new step alone (the page keeps the rest): the answer at step
+// 2,000 is the size of the answer at step 10, and the whole episode (GET /api/live) holds every
+// step, the last one as the last step's answer gave it. A closed session is freed at once.
+TEST(ServeTest, LiveStepsAnswerInConstantSizeAndClosedSessionsAreFreed) {
+  TempDir dir;
+  ServeProcess serve("--env-id FetchPickAndPlace-v4 --seed 5 --max-sessions 1", dir.path());
+  ASSERT_TRUE(serve.started()) << serve.log();
+  Api api(serve);
+  const std::string s = api.NewSession();
+  api.Json(api.Post("/api/live/start?session=" + s + "&env=0"));
+  size_t at10 = 0, at2000 = 0;
+  json last;
+  for (int t = 1; t <= 2000; ++t) {
+    const auto r = api.Post("/api/live/step?session=" + s +
+                            (t % 2 ? "&action=0.3,0,0,-1" : "&action=-0.3,0,0,-1"));
+    ASSERT_TRUE(r && r->status == 200) << t;
+    if (t == 10) at10 = r->body.size();
+    if (t == 2000) {
+      at2000 = r->body.size();
+      last = json::parse(r->body);
+    }
+  }
+  std::cout << "live step answer: " << at10 << " bytes at step 10, " << at2000
+            << " at step 2,000\n";
+  EXPECT_LT(static_cast<double>(at2000), 1.1 * static_cast<double>(at10));
+  EXPECT_EQ(last["steps"], 2000);
+  EXPECT_EQ(last["step"]["row"]["t"], 2000);
+  const json whole = api.Json(api.Get("/api/live?session=" + s));
+  ASSERT_EQ(whole["rows"].size(), 2001u);
+  EXPECT_EQ(whole["rows"][2000], last["step"]["row"]);
+  EXPECT_EQ(whole["signals"]["distance"][2000], last["step"]["signals"]["distance"]);
+  EXPECT_EQ(whole["signals"]["action"][0][2000], last["step"]["signals"]["action"][0]);
+  // a step back answers the count alone
+  const json back = api.Json(api.Post("/api/live/back?session=" + s));
+  EXPECT_EQ(back["steps"], 1999);
+  EXPECT_FALSE(back.contains("rows"));
+  // closing frees the one session --max-sessions allows: a new page gets one at once
+  ExpectRefusal(api.Post("/api/session"), 429, "sessions are open", "a second page");
+  EXPECT_EQ(api.Json(api.Post("/api/session/close?session=" + s))["closed"], true);
+  EXPECT_FALSE(api.NewSession().empty());
+  ExpectRefusal(api.Get("/api/live?session=" + s), 404, "no session", "the closed session");
 }
 
 TEST(ServeTest, IdleSessionsAreFreed) {

@@ -156,6 +156,8 @@ if [ -z "${__EGL_VENDOR_LIBRARY_FILENAMES:-}" ] && [ -z "${__EGL_VENDOR_LIBRARY_
     done
   fi
 fi
+# the command that runs this bundle, for the commands fetchscope prints (serve's saved record)
+export FETCHSCOPE_LAUNCHER="$here/fetchscope"
 exec "$here/bin/fetchscope" "$@"
 LAUNCHER
 sed -i "s/@CXX_NEEDED@/${cxx_needed% }/" "$root/fetchscope"

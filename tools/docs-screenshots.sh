@@ -64,4 +64,19 @@ node web/test/shoot_element.mjs --page "$work/contacts/index.html#episode=0&t=16
   --selector "#vplot-contacts" --out "$out/contacts_plot.png" --chromium "$chromium" >"$work/plot.json"
 grep -q '"console_errors":\[\],"page_errors":\[\]' "$work/plot.json" ||
   { cat "$work/plot.json" >&2; echo "docs-screenshots: the contacts plot has errors" >&2; exit 1; }
-echo "docs-screenshots: $out/report.png $out/compare.png $out/viewer.png $out/pick_and_place.png $out/push_three_views.png $out/contacts.png $out/contacts_plot.png"
+# serve's step inspector: a scripted PickAndPlace recording at step 17 (web/test/check_serve_debug.mjs
+# photographs the side column: the episode list, the inspector and obs[5]'s plot)
+"$bin" record --env-id FetchPickAndPlace-v4 --policy scripted --seed 2 --episodes 1 --steps 50 \
+  --signals contacts --width 64 --height 64 --no-sheets --quiet --out "$work/served"
+"$bin" serve "$work/served" --env-id FetchPickAndPlace-v4 --seed 5 --policy scripted --port 0 \
+  --width 480 --height 360 --token-file "$work/token" --save-dir "$work/saved" >"$work/serve.log" 2>&1 &
+serve_pid=$!
+for _ in $(seq 150); do grep -q 'Ctrl-C stops it' "$work/serve.log" && break; sleep 0.2; done
+url=$(sed -n 's|^serve: open \(http://.*\)$|\1|p' "$work/serve.log")
+node web/test/check_serve_debug.mjs --url "$url" --out "$work" --steps 17 --chromium "$chromium" \
+  >"$work/debug.json" || true
+kill -INT "$serve_pid"; wait "$serve_pid" || true
+grep -q '"console_errors":\[\],"page_errors":\[\]' "$work/debug.json" && [[ -f "$work/inspector.png" ]] ||
+  { cat "$work/debug.json" >&2; echo "docs-screenshots: the serve page has errors" >&2; exit 1; }
+cp "$work/inspector.png" "$out/serve_inspector.png"
+echo "docs-screenshots: $out/report.png $out/compare.png $out/viewer.png $out/pick_and_place.png $out/push_three_views.png $out/contacts.png $out/contacts_plot.png $out/serve_inspector.png"

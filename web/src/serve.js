@@ -17,6 +17,10 @@
   const page = document.getElementById('page');
   const DEFAULT_FREE = {lookat: [1.3, 0.75, 0.55], distance: 2.5, azimuth: 132, elevation: -14};
   const OVERLAYS = ['goal', 'achieved', 'hud', 'action', 'trail', 'labels', 'hindsight', 'ghost', 'contacts'];
+  // what a model camera shows that may surprise (docs/guide/serve.md)
+  const CAMERA_NOTES = {
+    gripper_camera_rgb: 'the table close up: at the reset it looks straight down from 10 cm above the untextured table, which fills it; lower the gripper near the block to see the block',
+  };
   const KEYS = {w: [0, 1], s: [0, -1], a: [1, 1], d: [1, -1], r: [2, 1], f: [2, -1], o: [3, 1], c: [3, -1]};
 
   const state = {
@@ -29,6 +33,9 @@
     free: null,      // the camera as numbers while orbiting (a free or track camera)
     moving: false,   // the view is being dragged: JPEG frames
     playing: false, stepSize: 1, key: 0,
+    gripper: 0,      // the latched gripper command every move carries: +1 open, -1 closed, 0 none
+    savedSteps: 0,   // the live steps the last save holds (a reload with more asks first)
+    rows: null,      // the rows of the episode shown (the step inspector's)
   };
   const stats = {requested: 0, received: 0, dropped: 0, errors: 0, lastError: '', renderMs: [], encodeMs: [],
                  roundTripMs: [], times: [], lastCamera: '', lastFormat: '',
@@ -86,7 +93,15 @@
   // ---- the live view
 
   const image = el('img', {class: 'serve-frame', alt: 'live view', draggable: 'false'});
+  let lastTiming = '';
   image.addEventListener('load', () => {
+    const w = image.naturalWidth, h = image.naturalHeight;
+    const tiled = w !== state.width || h !== state.height;
+    if (status.className === 'serve-status') {
+      status.textContent = `${image.dataset.format.toUpperCase()} ${w}×${h}` +
+          (tiled ? ` (tiled views of ${state.width}×${state.height} each; only a single camera orbits)` : '') +
+          ` · ${lastTiming}`;
+    }
     stats.shown.push({at: performance.now(), step: Number(image.dataset.step), camera: image.dataset.camera,
                       format: image.dataset.format});
     if (stats.shown.length === 1) performance.mark('fetchscope-serve-first-frame');
@@ -105,6 +120,7 @@
   // Asks for the frame of the current view; while one is on its way, only remembers to ask again.
   function requestFrame() {
     if (state.source === null || state.session === null) return;
+    updateOverlayAvailability();
     const format = state.moving || state.playing ? 'jpeg' : 'png';
     const params = viewParams(format);
     // a live step's frame is new whenever the live episode changed (a step back, then another)
@@ -138,7 +154,9 @@
       stats.lastCamera = response.headers.get('X-Fetchscope-Camera') || '';
       stats.lastFormat = format;
       status.className = 'serve-status';
-      status.textContent = `${format.toUpperCase()} ${state.width}×${state.height} · render ${ms('render').toFixed(1)} ms · encode ${ms('encode').toFixed(1)} ms · ${(now - started).toFixed(0)} ms round trip`;
+      // the frame's real size is the image's: said once it is decoded (a tiled view is wider)
+      lastTiming = `render ${ms('render').toFixed(1)} ms · encode ${ms('encode').toFixed(1)} ms · ${(now - started).toFixed(0)} ms round trip`;
+      status.textContent = `${format.toUpperCase()} · ${lastTiming}`;
     }).catch((e) => showError(e.message)).finally(() => {
       inFlight = false;
       if (dirty) requestFrame();
@@ -160,7 +178,7 @@
   image.addEventListener('pointerdown', (e) => {
     const source = data.sources[state.source === 'live' ? state.live.source : state.source];
     const free = parseCamera(state.camera, source);
-    if (!free) return;
+    if (!free) { showError('only one camera orbits: this view tiles several (choose one, or a free camera, to drag it)'); return; }
     e.preventDefault();
     image.setPointerCapture(e.pointerId);
     drag = {x: e.clientX, y: e.clientY, free, pan: e.shiftKey || e.button === 2};
@@ -262,7 +280,8 @@
   function fillPresets(source) {
     presets.replaceChildren(el('option', {value: ''}, 'camera presets…'), el('option', {value: 'default'}, 'default'),
         el('option', {value: 'track'}, 'track (the gripper)'),
-        ...(source.cameras || []).map((c) => el('option', {value: c.name}, c.name)));
+        ...(source.cameras || []).map((c) => el('option', {value: c.name, title: CAMERA_NOTES[c.name] || ''},
+            CAMERA_NOTES[c.name] ? `${c.name} (${CAMERA_NOTES[c.name].split(':')[0]})` : c.name)));
   }
   const overlayBoxes = OVERLAYS.map((name) => {
     const box = el('input', {type: 'checkbox', value: name});
@@ -272,6 +291,25 @@
     });
     return box;
   });
+  // an overlay that cannot apply to what is shown is disabled, its reason in its tooltip
+  const viewCount = (text) => (String(text).match(/(^|,)\s*(default|track|free:|[A-Za-z_][A-Za-z0-9_]*(?=\s*(,|$)))/g) || []).length;
+  function overlayReasons() {
+    const kind = state.source === 'live' ? 'live' : state.source === null ? null : data.sources[state.source].kind;
+    return {
+      labels: viewCount(state.camera) < 2 ? 'labels name the cameras of a tiled view: this view has one camera' : '',
+      ghost: kind !== 'dataset' ? 'ghost shows a dataset\'s own achieved goal: this is not a dataset episode' : '',
+      hindsight: kind !== 'recording' ? 'hindsight shows the goals HER relabels a recorded episode with: this is not a recording' : '',
+    };
+  }
+  function updateOverlayAvailability() {
+    const reasons = overlayReasons();
+    OVERLAYS.forEach((name, i) => {
+      const why = reasons[name] || '';
+      overlayBoxes[i].disabled = !!why;
+      overlayBoxes[i].parentElement && (overlayBoxes[i].parentElement.title = why);
+      overlayBoxes[i].dataset.reason = why;
+    });
+  }
   function syncOverlayBoxes() {
     const on = state.overlay === 'default' ? ['goal', 'achieved', 'hud', 'labels', 'ghost']
              : state.overlay === 'all' ? OVERLAYS : state.overlay.split(',').map((s) => s.trim());
@@ -291,7 +329,10 @@
   const liveBox = el('div', {class: 'serve-live'});
   const liveInfo = el('p', {class: 'caption'});
   const saveOut = el('div', {class: 'serve-save'});
-  const stepSize = el('select', {'aria-label': 'step size'}, ...['1', '0.5', '0.25', '0.1'].map((v) => el('option', {value: v}, `|a| = ${v}`)));
+  const stepSize = el('select', {'aria-label': 'step size', title: 'the size of each move: |a[i]| of a key press (0.05 m per unit)'},
+      ...['1', '0.5', '0.25', '0.1', '0.05'].map((v) => el('option', {value: v}, `|a| = ${v}`)));
+  const gripperState = el('span', {class: 'serve-gripper', 'data-command': '0'}, 'gripper: not commanded');
+  const pastLimit = el('input', {type: 'checkbox', class: 'serve-past-limit'});
   stepSize.addEventListener('change', () => { state.stepSize = Number(stepSize.value); });
   const continueButton = el('button', {type: 'button', class: 'serve-continue', onclick: () => startLive({from: true})}, 'continue live from this step');
   const policyButton = el('button', {type: 'button', class: 'serve-policy', onclick: () => liveStep(null)}, `step the policy (${data.policy}) [p]`);
@@ -299,28 +340,74 @@
   const backButton = el('button', {type: 'button', class: 'serve-back', onclick: () => liveBack()}, 'step back [b]');
   const saveButton = el('button', {type: 'button', class: 'serve-save-button', onclick: () => save()}, 'save');
   const keyButtons = Object.entries(KEYS).map(([key, [axis, sign]]) => el('button', {type: 'button', 'data-key': key,
-      title: `a[${axis}] = ${sign > 0 ? '+' : '−'}step (key ${key})`, onclick: () => keyStep(key)},
-      `${['x', 'y', 'z', 'grip'][axis]}${sign > 0 ? '+' : '−'} [${key}]`));
+      title: axis < 3 ? `a[${axis}] = ${sign > 0 ? '+' : '−'}step (key ${key}; hold two keys for two axes at once)`
+                      : `${sign > 0 ? 'open' : 'close'} the gripper and keep it so: every move then carries a[3] = ${sign > 0 ? '+1' : '−1'} (key ${key})`,
+      onclick: () => keyStep(key)},
+      axis < 3 ? `${['x', 'y', 'z'][axis]}${sign > 0 ? '+' : '−'} [${key}]` : `${sign > 0 ? 'open' : 'close'} [${key}]`));
   liveBox.append(el('h3', {}, 'Live'), liveInfo,
       el('div', {class: 'serve-row'}, continueButton, stepSize, ...keyButtons),
-      el('div', {class: 'serve-row'}, policyButton, playPolicy, backButton, saveButton),
-      el('p', {class: 'caption'}, 'Keys (each one env step): w/s ±x, a/d ±y, r/f ±z, o open, c close the gripper (a[3] ± step); ' +
+      el('div', {class: 'serve-row'}, gripperState),
+      el('div', {class: 'serve-row'}, policyButton, playPolicy, el('label', {title: 'play stops at the env\'s TimeLimit (50 steps) unless this is ticked'}, pastLimit, 'go past the TimeLimit'),
+         backButton, saveButton),
+      el('p', {class: 'caption'}, 'Keys (each one env step): w/s ±x, a/d ±y, r/f ±z (hold two for two axes at once), o opens and c closes the gripper ' +
+        'and keeps it so (every move carries the command, so a grasp holds while you lift); ' +
         'p steps the policy, b steps back. Drag to orbit, shift- or right-drag to pan, wheel to zoom, double-click a body to track it.'),
       saveOut);
 
-  let busy = false, liveVersion = 0;
-  async function liveCall(path, params) {
-    if (busy) return null;
-    busy = true;
+  // one live call at a time: a key pressed while a step is on its way is dropped (the next press
+  // counts), while a save or a pause waits for it (whenLiveIdle) rather than being lost
+  let busy = null, liveVersion = 0;
+  async function liveCall(path, params, {wait = false, method = 'POST'} = {}) {
+    if (busy && !wait) return null;
+    while (busy) await busy.catch(() => {});
+    const call = api(path, params, method);
+    busy = call;
     try {
-      const {body} = await api(path, params, 'POST');
+      const {body} = await call;
       return body;
     } catch (e) {
       showError(e.message);
       return null;
     } finally {
-      busy = false;
+      if (busy === call) busy = null;
     }
+  }
+
+  // the answers: start gives the whole live episode; a step only the new step, a step back only
+  // the new count (constant size however long the episode): the page keeps the rest here
+  function growLists(target, step) {
+    for (const [key, value] of Object.entries(step)) {
+      if (key === 'colors' || !(key in target)) continue;
+      const list = target[key];
+      if (Array.isArray(list) && Array.isArray(list[0])) list.forEach((l, i) => l.push(value[i]));
+      else if (Array.isArray(list)) list.push(value);
+      else if (list && typeof list === 'object') growLists(list, value);
+    }
+  }
+  function cutLists(target, length) {
+    for (const [key, list] of Object.entries(target)) {
+      if (key === 'colors') continue;
+      if (Array.isArray(list) && Array.isArray(list[0])) list.forEach((l) => { l.length = Math.min(l.length, length); });
+      else if (Array.isArray(list)) list.length = Math.min(list.length, length);
+      else if (list && typeof list === 'object') cutLists(list, length);
+    }
+  }
+  async function mergeLive(answer) {
+    const live = state.live;
+    const {step, ...head} = answer;
+    if (!live || live.source !== head.source || live.episode !== head.episode ||
+        (step ? head.steps !== live.steps + 1 : head.steps > live.steps)) {
+      return liveCall('/api/live', {}, {wait: true, method: 'GET'});  // out of step: the whole
+    }
+    if (step) {
+      live.rows.push(step.row);
+      growLists(live.signals, step.signals);
+    } else {
+      live.rows.length = head.steps + 1;
+      cutLists(live.signals, head.steps + 1);
+    }
+    live.signals.frames = head.steps + 1;
+    return Object.assign(live, head);
   }
 
   function showLive(live) {
@@ -328,13 +415,15 @@
     state.live = live;
     state.source = 'live';
     state.t = live.steps;
+    state.rows = live.rows;
     requestFrame();  // the new step's frame first; the plots are rebuilt while it renders
     liveInfo.textContent = `live episode: ${data.sources[live.source].title}, episode ${live.episode}, ` +
         (live.prefix ? `continued from step ${live.prefix}, ` : '') + `${live.steps} steps, actions ${live.action_dtype}`;
     liveBox.dataset.steps = String(live.steps);
+    showInspector();
     // the plots once the new step's frame is on screen (unless another step came meanwhile)
     frameShown().then(() => {
-      if (state.live !== live) return;
+      if (state.live !== live || Number(liveBox.dataset.steps) !== live.steps) return;
       openInViewer({key: 'live', title: `live: ${data.sources[live.source].env_id} episode ${live.episode}`,
                     signals: live.signals, spec: data.sources[live.source]}, live.steps);
     });
@@ -344,39 +433,85 @@
     const params = from ? {source: state.source, episode: state.episode, t: state.t} : {env};
     if (from && (state.source === null || state.source === 'live')) return;
     const live = await liveCall('/api/live/start', params);
-    if (live) showLive(live);
+    if (live) {
+      state.savedSteps = 0;
+      showLive(live);
+    }
   }
-  async function liveStep(action) {
-    if (!state.live) { showError('no live episode: start one (a live env, or "continue live from this step")'); return; }
-    const live = await liveCall('/api/live/step', action ? {action: action.join(',')} : {});
+  async function liveStep(action, {wait = false} = {}) {
+    if (!state.live) { showError('no live episode: start one (a live env, or "continue live from this step")'); return null; }
+    const answer = await liveCall('/api/live/step', action ? {action: action.join(',')} : {}, {wait});
+    const live = answer && await mergeLive(answer);
     if (live) showLive(live);
     return live;
   }
+  // the move keys held down now: a chord (w and a together) moves along both axes in one step,
+  // and every move carries the latched gripper command
+  const keysDown = new Set();
+  function moveAction(pressed) {
+    const action = [0, 0, 0, state.gripper];
+    for (const key of new Set([...keysDown, ...pressed])) {
+      const [axis, sign] = KEYS[key];
+      if (axis < 3) action[axis] = sign * state.stepSize;
+    }
+    return action;
+  }
   function keyStep(key) {
     const [axis, sign] = KEYS[key];
-    const action = [0, 0, 0, 0];
-    action[axis] = sign * state.stepSize;
-    return liveStep(action);
+    if (axis === 3) {  // o, c: latch the gripper open or closed (a[3] = ±1 from now on)
+      setGripper(sign);
+      return liveStep(moveAction([]));
+    }
+    return liveStep(moveAction([key]));
+  }
+  function setGripper(command) {
+    state.gripper = command;
+    gripperState.textContent = command > 0 ? 'gripper: open (latched)' : command < 0 ? 'gripper: closed (latched)' : 'gripper: not commanded';
+    gripperState.dataset.command = String(command);
   }
   async function liveBack() {
-    const live = await liveCall('/api/live/back', {});
+    const answer = await liveCall('/api/live/back', {});
+    const live = answer && await mergeLive(answer);
     if (live) showLive(live);
   }
-  let policyTimer = null;
-  function togglePolicyPlay() {
-    if (policyTimer) { clearTimeout(policyTimer); policyTimer = null; playPolicy.textContent = 'play the policy'; return; }
-    playPolicy.textContent = 'pause the policy';
-    const tick = async () => {
-      const live = await liveStep(null);
-      if (live && policyTimer) policyTimer = setTimeout(tick, 40);
-      else togglePolicyPlay();
-    };
-    policyTimer = setTimeout(tick, 0);
+  // play: one policy step after another until paused, the policy fails, or the TimeLimit. A
+  // pause lets the step on its way land, then stops: "playing" ends only when no step can follow
+  let policyPlaying = false, policyLoop = null;
+  function setPolicyPlaying(on) {
+    policyPlaying = on;
+    playPolicy.textContent = on ? 'pause the policy' : 'play the policy';
+    playPolicy.dataset.playing = String(on);
+  }
+  async function playLoop() {
+    const limit = data.sources[state.live.source].max_episode_steps;
+    while (policyPlaying) {
+      if (state.live.steps >= limit && !pastLimit.checked) {
+        showError(`stopped at the TimeLimit (${limit} steps): tick "go past the TimeLimit" to play on`);
+        break;
+      }
+      const live = await liveStep(null, {wait: true});  // after a save on its way, not instead
+      if (!live) break;
+      await new Promise((done) => setTimeout(done, 40));
+    }
+  }
+  async function togglePolicyPlay() {
+    if (policyLoop) {  // pause: no step starts after the one on its way
+      policyPlaying = false;
+      playPolicy.textContent = 'pausing…';
+      return;
+    }
+    if (!state.live) { showError('no live episode: start one first'); return; }
+    setPolicyPlaying(true);
+    policyLoop = playLoop();
+    await policyLoop;
+    policyLoop = null;
+    setPolicyPlaying(false);
   }
   async function save() {
     const params = {camera: state.camera, overlay: state.overlay, width: state.width, height: state.height};
-    const out = await liveCall('/api/live/save', params);
+    const out = await liveCall('/api/live/save', params, {wait: true});  // after a step on its way
     if (!out) return;
+    state.savedSteps = out.steps;
     saveOut.replaceChildren(el('p', {}, 'saved ', ...out.files.map((f) => el('code', {}, f + ' '))),
         out.command ? el('pre', {class: 'serve-command'}, out.command)
                     : el('p', {class: 'caption'}, out.why_no_command),
@@ -384,6 +519,7 @@
     saveOut.dataset.command = out.command || '';
     saveOut.dataset.episodeFile = out.episode_file || '';
     saveOut.dataset.files = JSON.stringify(out.files);
+    saveOut.dataset.steps = String(out.steps);
   }
 
   // resolves once the frame on its way is on screen (at once when none is)
@@ -394,6 +530,66 @@
       image.addEventListener('load', finish);
       setTimeout(finish, 2000);  // a frame that failed: draw the plots anyway
     });
+  }
+
+  // ---- the step inspector: the step's observation by name, goals, action, reward, success and
+  // contacts, each value as the trajectory JSON holds it (data-value); a click plots it over the
+  // episode; the step copies as JSON
+
+  const inspector = el('div', {class: 'serve-inspector'});
+  const fieldPlot = el('div', {class: 'serve-field-plot'});
+  let plotted = null;  // {label, value(row)} of the field plotted
+  function fields(row, source) {
+    const labels = source.observation_labels || [];
+    const out = [['t', row.t, '', () => row.t], ['success', row.is_success, '', (r) => (r.is_success ? 1 : 0)],
+                 ['reward', row.reward, '', (r) => r.reward]];
+    (row.action || [null, null, null, null]).forEach((v, i) => out.push([`action[${i}]`, v, '', (r) => (r.action ? r.action[i] : null)]));
+    ['achieved_goal', 'desired_goal'].forEach((k) => row[k].forEach((v, i) => out.push([`${k}[${i}]`, v, 'm', (r) => r[k][i]])));
+    row.observation.forEach((v, i) => out.push([`obs[${i}] ${labels[i] ? labels[i].name : ''}`, v, labels[i] ? labels[i].unit : '', (r) => r.observation[i]]));
+    if (row.contacts) {
+      for (const k of ['left_finger_force', 'right_finger_force']) out.push([`contacts.${k}`, row.contacts[k], 'N', (r) => (r.contacts ? r.contacts[k] : null)]);
+      for (const k of ['grasped', 'object_on_table']) out.push([`contacts.${k}`, row.contacts[k], '', (r) => (r.contacts ? (r.contacts[k] ? 1 : 0) : null)]);
+    }
+    return out;
+  }
+  const shownValue = (v) => (v === null || v === undefined ? '—' : typeof v === 'boolean' ? (v ? 'yes' : 'no')
+                            : typeof v === 'number' && !Number.isInteger(v) ? v.toPrecision(6) : String(v));
+  function showInspector() {
+    const rows = state.rows;
+    const row = rows && rows[Math.min(state.t, rows.length - 1)];
+    if (!row) { inspector.replaceChildren(); return; }
+    const source = data.sources[state.source === 'live' ? state.live.source : state.source];
+    const table = el('table', {class: 'serve-fields'}, el('tr', {}, el('th', {}, 'field'), el('th', {}, 'value'), el('th', {}, 'unit')));
+    for (const [label, value, unit, getter] of fields(row, source)) {
+      table.append(el('tr', {'data-field': label, 'data-value': JSON.stringify(value), title: 'click: plot it over the episode',
+                             onclick: () => { plotted = {label, value: getter}; drawFieldPlot(); }},
+                      el('td', {}, label), el('td', {class: 'num'}, shownValue(value)), el('td', {}, unit)));
+    }
+    const copy = el('button', {type: 'button', class: 'serve-copy-step',
+        onclick: () => navigator.clipboard && navigator.clipboard.writeText(JSON.stringify(row))}, 'copy the step as JSON');
+    inspector.replaceChildren(el('h3', {}, `Step ${row.t}`), copy, fieldPlot, table);
+    inspector.dataset.t = String(row.t);
+    drawFieldPlot();
+  }
+  // the plotted field over the episode's steps, the current step marked
+  function drawFieldPlot() {
+    const rows = state.rows;
+    if (!plotted || !rows) { fieldPlot.replaceChildren(); return; }
+    const values = rows.map((r) => plotted.value(r));
+    const finite = values.filter((v) => typeof v === 'number' && Number.isFinite(v));
+    const W = 340, H = 120, lo = Math.min(...finite), hi = Math.max(...finite), span = hi - lo || 1;
+    const x = (i) => 4 + (W - 8) * i / Math.max(1, rows.length - 1), y = (v) => H - 14 - (H - 24) * (v - lo) / span;
+    const points = values.map((v, i) => (typeof v === 'number' && Number.isFinite(v) ? `${x(i)},${y(v)}` : null)).filter(Boolean).join(' ');
+    const svg = document.createElementNS('http://www.w3.org/2000/svg', 'svg');
+    svg.setAttribute('viewBox', `0 0 ${W} ${H}`);
+    svg.setAttribute('width', '100%');
+    svg.setAttribute('height', String(H));
+    svg.innerHTML = `<polyline fill="none" stroke="#2166ac" stroke-width="1.5" points="${points}"/>` +
+        `<line x1="${x(state.t)}" x2="${x(state.t)}" y1="0" y2="${H - 12}" stroke="#b2182b"/>` +
+        `<text x="4" y="${H - 2}" font-size="10">${FS.num(lo, 4)} … ${FS.num(hi, 4)} over steps 0–${rows.length - 1}</text>`;
+    fieldPlot.replaceChildren(el('p', {class: 'caption'}, `${plotted.label} over the episode`), svg);
+    fieldPlot.dataset.field = plotted.label;
+    fieldPlot.dataset.points = String(finite.length);
   }
 
   // ---- the viewer (viewer.js): one episode at a time, served or live
@@ -410,7 +606,7 @@
         gripper_command: item.signals && !!item.signals.gripper_command, layout: {},
         episodes: [{index: viewerKey, label: String(viewerKey), title: item.title, tracks: () => [{name: item.title, signals: shown.signals, noMedia: true}]}],
         visible: () => [viewerKey], noLink: true, keysAnywhere: true,
-        onStep: (episode, step) => { if (step !== state.t) { state.t = step; requestFrame(); } },
+        onStep: (episode, step) => { if (step !== state.t) { state.t = step; requestFrame(); showInspector(); } },
         play: () => togglePlay(), isPlaying: () => state.playing,
       });
       window.fetchscopeServe.viewer = viewer;
@@ -446,6 +642,8 @@
       requestFrame();
       const {body} = await api('/api/episode', {source, episode});
       state.episodeData = body;
+      state.rows = body.rows;
+      showInspector();
       if (t > body.steps) {
         state.t = body.steps;
         requestFrame();
@@ -502,7 +700,7 @@
             overlayRow,
             el('div', {class: 'serve-row'}, 'layer ', layerSelect, ' size ', sizeSelect),
             liveBox),
-         el('div', {class: 'serve-side'}, el('h3', {}, 'Served'), sourcesBox)),
+         el('div', {class: 'serve-side'}, el('h3', {}, 'Served'), sourcesBox, inspector)),
       viewerBox);
   cameraInput.value = state.camera;
   cameraOption.textContent = `--camera '${state.camera}'`;
@@ -515,11 +713,18 @@
   fillPresets(data.sources[0]);
   performance.mark('fetchscope-serve-built');
 
+  document.addEventListener('keyup', (e) => keysDown.delete(e.key));
+  window.addEventListener('blur', () => keysDown.clear());
   document.addEventListener('keydown', (e) => {
     if (e.altKey || e.ctrlKey || e.metaKey) return;
     const target = e.target;
     if (target && /^(INPUT|TEXTAREA|SELECT)$/.test(target.tagName)) return;
-    if (KEYS[e.key]) { e.preventDefault(); keyStep(e.key); return; }
+    if (KEYS[e.key]) {
+      e.preventDefault();
+      if (KEYS[e.key][0] < 3) keysDown.add(e.key);
+      keyStep(e.key);
+      return;
+    }
     if (e.key === 'p') { e.preventDefault(); liveStep(null); return; }
     if (e.key === 'b' || e.key === 'Backspace') { e.preventDefault(); liveBack(); return; }
     if (e.key === 'ArrowUp' || e.key === 'ArrowDown') {  // the previous or next episode of the source
@@ -527,6 +732,20 @@
       const list = data.sources[state.source].episodes.map((x) => x.index);
       const i = list.indexOf(state.episode) + (e.key === 'ArrowDown' ? 1 : -1);
       if (i >= 0 && i < list.length) openEpisode(state.source, list[i]);
+    }
+  });
+
+  // a closed page frees its session (and its exec: child) at once; a reload or close with live
+  // steps not saved asks first
+  window.addEventListener('pagehide', () => {
+    if (!state.session) return;
+    fetch(`/api/session/close?session=${state.session}`,
+          {method: 'POST', keepalive: true, credentials: 'same-origin', headers: POST_HEADERS}).catch(() => {});
+  });
+  window.addEventListener('beforeunload', (e) => {
+    if (state.live && state.live.steps > state.savedSteps) {
+      e.preventDefault();
+      e.returnValue = '';  // the browser asks: "Leave site? Changes you made may not be saved."
     }
   });
 

@@ -1,0 +1,239 @@
+// serve's page in real headless Chromium (Debian's chromium driven by playwright-core from
+// web/node_modules): web/test/check_serve.mjs (orbit, keys, save, sessions apart) and
+// web/test/check_serve_debug.mjs (the step inspector, a grasp from the keys, play, pause and Save,
+// sessions freed by closed pages, the reload warning). Skipped when node, chromium or
+// playwright-core is absent.
+#include <gtest/gtest.h>
+#include <signal.h>
+
+#include <filesystem>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "tests/browser_util.h"
+#include "tests/test_util.h"
+
+namespace fetchscope {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+using testing::BrowserTest;
+using testing::Chromium;
+using testing::ReadFile;
+using testing::RunCommand;
+using testing::RunFetchscope;
+using testing::ScreenshotPath;
+using testing::SourceDir;
+using testing::TempDir;
+
+json ReadJsonFile(const fs::path& path) { return json::parse(ReadFile(path)); }
+
+// The JSON object a check script printed last.
+json LastJson(const std::string& output) {
+  const size_t line = output.rfind("\n{");
+  return json::parse(output.substr(line == std::string::npos ? 0 : line + 1), nullptr, false);
+}
+
+// fetchscope serve's page over a localhost URL, as through ssh -L (web/test/check_serve.mjs): a
+// drag orbits (the camera text, the --camera option and the frame change; JPEG while dragging, a
+// lossless PNG at rest), hover names the body under the pointer, each key press is one env step
+// that moves the gripper by what probe-actions measures for that action, the policy steps and
+// steps back, Save prints a record command that re-renders the session byte for byte, and a
+// second page gets its own session. No console error and no request leaves the server.
+TEST_F(BrowserTest, ServePageOrbitsDrivesSavesAndKeepsSessionsApart) {
+  TempDir tmp;
+  auto r = RunFetchscope(
+      "record --env-id FetchReach-v4 --policy scripted --episodes 1 --steps 10 "
+      "--width 64 --height 64 --quiet --out " +
+      (tmp.path() / "run").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  testing::ServeProcess serve("'" + (tmp.path() / "run").string() +
+                                  "' --env-id FetchReach-v4 --seed 0 --width 480 --height 360 "
+                                  "--save-dir '" +
+                                  (tmp.path() / "saved").string() + "'",
+                              tmp.path());
+  ASSERT_TRUE(serve.started()) << serve.log();
+  const fs::path out = tmp.path() / "shots";
+  fs::create_directories(out);
+  const auto check =
+      RunCommand("node " + (SourceDir() / "web" / "test" / "check_serve.mjs").string() +
+                 " --url '" + serve.url + "' --out " + out.string() +
+                 " --keys w,w,w,w,w --live-source 1 --chromium " + Chromium());
+  const size_t line = check.output.rfind("\n{");
+  const json result =
+      json::parse(check.output.substr(line == std::string::npos ? 0 : line + 1), nullptr, false);
+  ASSERT_TRUE(result.is_object()) << check.output;
+  ASSERT_FALSE(result.contains("error")) << result["error"] << "\n" << serve.log();
+  EXPECT_TRUE(result["console_errors"].empty()) << result["console_errors"];
+  EXPECT_TRUE(result["failed_responses"].empty()) << result["failed_responses"];
+  EXPECT_TRUE(result["page_errors"].empty()) << result["page_errors"];
+  EXPECT_TRUE(result["foreign_requests"].empty()) << result["foreign_requests"];
+  EXPECT_EQ(result["url_after_token"].get<std::string>().find("token="), std::string::npos);
+  EXPECT_EQ(result["first"]["errors"], 0) << result["first"];
+
+  // the drag: a free camera the server parsed and showed as the page wrote it
+  const json& drag = result["drag"];
+  EXPECT_EQ(drag["camera_before"], "default");
+  const std::string camera = drag["camera_after"];
+  EXPECT_EQ(camera.rfind("free:lookat=1.3,0.75,0.55,distance=2.5,azimuth=", 0), 0u) << camera;
+  EXPECT_EQ(drag["shown_camera"], camera);
+  EXPECT_EQ(drag["camera_input"], camera);
+  EXPECT_EQ(drag["camera_option"], "--camera '" + camera + "'");
+  EXPECT_GE(drag["frames_during"].get<int>(), 1) << drag;
+  const json formats = drag["formats"];
+  EXPECT_NE(std::find(formats.begin(), formats.end(), "jpeg"), formats.end()) << drag;
+  EXPECT_NE(ReadFile(out / "frame_before.png"), ReadFile(out / "frame_after.png"));
+  std::cout << "drag: " << drag.dump() << std::endl;
+  // the dragged view, as render draws it from that camera
+  const fs::path rendered = tmp.path() / "dragged.png";
+  r = RunFetchscope("render --env-id FetchReach-v4 --policy 'replay:" +
+                    (tmp.path() / "run" / "episode_000.json").string() +
+                    "' --width 480 --height 360 --camera '" + camera + "' -o " + rendered.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_FALSE(result["hover"]["body"].get<std::string>().empty()) << result["hover"];
+
+  // five +x key presses from the live env's reset: the gripper's mean step is probe-actions' +x
+  const json& rows = result["live_rows"];
+  ASSERT_EQ(rows.size(), 6u) << rows;
+  double dx = 0;
+  for (size_t t = 1; t < rows.size(); ++t)
+    dx += rows[t][0].get<double>() - rows[t - 1][0].get<double>();
+  dx /= 5;
+  r = RunFetchscope("probe-actions --env-id FetchReach-v4 --seed 0 --steps 5 --out " +
+                    (tmp.path() / "probe").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const json probe = ReadJsonFile(tmp.path() / "probe" / "probe_actions.json");
+  double along = -1;
+  for (const json& p : probe["probes"]) {
+    if (p["name"] == "+x") along = p["along_axis"];
+  }
+  std::cout << "+x key: " << dx << " m per step; probe-actions +x: " << along << " m per step"
+            << std::endl;
+  EXPECT_NEAR(dx, along,
+              1e-5);  // keys act in float32 (the random policy's dtype), the probe in float64
+  for (const json& a : result["live_actions"][0]) {
+    if (!a.is_null()) {
+      EXPECT_EQ(a, 1.0);
+    }
+  }
+  for (int ms : result["key_step_ms"]) std::cout << "key step to the new frame: " << ms << " ms\n";
+  EXPECT_EQ(result["after_policy_and_back"], 5);
+
+  // Save: the printed command re-renders the session byte for byte
+  const json& save = result["save"];
+  const std::string command = save["command"];
+  ASSERT_FALSE(command.empty()) << save;
+  EXPECT_EQ(save["shown"], command);
+  const std::string bin = fs::path(FETCHSCOPE_BIN).parent_path().string();
+  r = RunCommand("PATH='" + bin + "':\"$PATH\" " + command + " --quiet");
+  ASSERT_EQ(r.exit_code, 0) << command << "\n" << r.output;
+  EXPECT_EQ(ReadFile(save["episode_file"].get<std::string>()),
+            ReadFile(save["files"][0].get<std::string>()));
+
+  // the second page: a session of its own, without the first page's live episode
+  EXPECT_NE(result["page_b"]["session"], result["page_a"]["session"]);
+  EXPECT_FALSE(result["page_b"]["has_live"].get<bool>());
+  EXPECT_EQ(serve.Stop(SIGINT), 130) << serve.log();
+  fs::copy_file(out / "serve_page.png", ScreenshotPath(), fs::copy_options::overwrite_existing);
+  std::cout << "<CTestMeasurementFile type=\"image/png\" name=\"screenshot\">"
+            << ScreenshotPath().string() << "</CTestMeasurementFile>" << std::endl;
+}
+
+// serve as a debugger (web/test/check_serve_debug.mjs): the step inspector shows each step's
+// values as the trajectory JSON holds them and plots a clicked field; overlays that cannot apply
+// are disabled with their reason; a grasp made from the keys (a latched gripper, two-axis chords)
+// holds through four lift presses; play stops at the TimeLimit, Save works while it plays and
+// pause always pauses; unsaved steps make a closing page ask; 13 pages opened and closed one
+// after another leave the 13th a live session (8 at most at once).
+TEST_F(BrowserTest, ServeInspectsStepsHoldsAGraspAndFreesClosedPages) {
+  TempDir tmp;
+  auto r = RunFetchscope(
+      "record --env-id FetchPickAndPlace-v4 --policy scripted --seed 2 --episodes 1 --steps 50 "
+      "--signals contacts --width 64 --height 64 --no-sheets --quiet --out " +
+      (tmp.path() / "run").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  testing::ServeProcess serve("'" + (tmp.path() / "run").string() +
+                                  "' --env-id FetchPickAndPlace-v4 --seed 5 --policy scripted "
+                                  "--width 320 --height 240 --save-dir '" +
+                                  (tmp.path() / "saved").string() + "'",
+                              tmp.path());
+  ASSERT_TRUE(serve.started()) << serve.log();
+  const fs::path out = tmp.path() / "shots";
+  fs::create_directories(out);
+  const auto check =
+      RunCommand("node " + (SourceDir() / "web" / "test" / "check_serve_debug.mjs").string() +
+                 " --url '" + serve.url + "' --out " + out.string() +
+                 " --steps 3,17,40 --live-source 1 --chromium " + Chromium());
+  const json result = LastJson(check.output);
+  ASSERT_TRUE(result.is_object()) << check.output;
+  ASSERT_FALSE(result.contains("error")) << result["error"] << "\n" << serve.log();
+  EXPECT_TRUE(result["console_errors"].empty()) << result["console_errors"];
+  EXPECT_TRUE(result["page_errors"].empty()) << result["page_errors"];
+  EXPECT_TRUE(result["failed_responses"].empty()) << result["failed_responses"];
+
+  // 1. the inspector's values are the trajectory's, field by field
+  const json episode = ReadJsonFile(tmp.path() / "run" / "episode_000.json")["episodes"][0];
+  for (int t : {3, 17, 40}) {
+    const json& shown = result["inspector"][std::to_string(t)];
+    const json& step = episode["steps"][t];
+    ASSERT_TRUE(shown.is_object()) << t;
+    EXPECT_EQ(shown["t"], t);
+    EXPECT_EQ(shown["success"], step["is_success"]) << t;
+    EXPECT_EQ(shown["reward"], step["reward"]) << t;
+    for (int i = 0; i < 4; ++i)
+      EXPECT_EQ(shown["action[" + std::to_string(i) + "]"], step["action"][i]);
+    for (int i = 0; i < 3; ++i) {
+      EXPECT_EQ(shown["achieved_goal[" + std::to_string(i) + "]"], step["achieved_goal"][i]);
+      EXPECT_EQ(shown["desired_goal[" + std::to_string(i) + "]"], step["desired_goal"][i]);
+    }
+    EXPECT_EQ(shown["obs[5] object_pos.z"], step["observation"][5]) << t;
+    EXPECT_EQ(shown["obs[9] gripper_state.right"], step["observation"][9]) << t;
+    int matched = 0;
+    for (const auto& [field, value] : shown.items()) {
+      if (field.rfind("obs[", 0) != 0) continue;
+      EXPECT_EQ(value, step["observation"][std::stoi(field.substr(4))]) << field;
+      ++matched;
+    }
+    EXPECT_EQ(matched, 25) << t;
+    EXPECT_EQ(shown["contacts.left_finger_force"], step["contacts"]["left_finger_force"]) << t;
+  }
+  EXPECT_EQ(result["field_plot"]["field"], "obs[5] object_pos.z");
+  EXPECT_EQ(result["field_plot"]["points"], "51");
+  EXPECT_TRUE(result["overlays"]["labels"]["disabled"].get<bool>()) << result["overlays"];
+  EXPECT_NE(result["overlays"]["labels"]["reason"].get<std::string>().find("one camera"),
+            std::string::npos);
+  EXPECT_TRUE(result["overlays"]["ghost"]["disabled"].get<bool>()) << result["overlays"];
+  EXPECT_FALSE(result["overlays"]["hindsight"]["disabled"].get<bool>()) << result["overlays"];
+
+  // 2. the grasp: closed on the block, it holds through four lifts (both fingers press it)
+  EXPECT_GE(result["chords"].get<int>(), 1) << "no step moved along two axes at once";
+  EXPECT_EQ(result["gripper_state"], "-1");
+  const double closed_z = result["closed"]["observation"][5];
+  for (const json& row : result["lifts"]) {
+    EXPECT_GT(row["contacts"]["left_finger_force"].get<double>(), 0) << row["contacts"];
+    EXPECT_GT(row["contacts"]["right_finger_force"].get<double>(), 0) << row["contacts"];
+  }
+  const double lifted_z = result["lifts"][3]["observation"][5];
+  std::cout << "block z closed " << closed_z << " m, after four lifts " << lifted_z << " m\n";
+  EXPECT_GT(lifted_z, closed_z + 0.02);
+  for (const json& a : result["lift_actions"]) EXPECT_EQ(a[3], -1.0) << a;
+
+  // 3. play stops at the TimeLimit; Save during play; every pause pauses
+  EXPECT_EQ(result["stopped_at"], 50);
+  EXPECT_FALSE(result["saved_during_play"]["command"].get<std::string>().empty())
+      << result["saved_during_play"];
+  ASSERT_EQ(result["pauses"].size(), 9u);
+  for (const json& p : result["pauses"]) EXPECT_EQ(p["later"], p["paused"]) << p;
+
+  // 4. closing with unsaved steps asks; 5. the 13th page still gets its live session
+  EXPECT_EQ(result["unsaved_close_dialogs"], json::array({"beforeunload"}));
+  EXPECT_EQ(result["last_page_live"], 0);
+  for (const json& errors : result["pages"]) EXPECT_EQ(errors, 0);
+  EXPECT_EQ(serve.Stop(SIGINT), 130) << serve.log();
+  fs::copy_file(out / "grasp.png", ScreenshotPath(), fs::copy_options::overwrite_existing);
+}
+
+}  // namespace
+}  // namespace fetchscope
