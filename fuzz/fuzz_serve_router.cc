@@ -47,6 +47,10 @@ class EchoApi : public fetchscope::serve::Api {
     Check(session);
     return {{"source", e.source}, {"episode", e.episode}};
   }
+  json Listing(const std::string& session, int source) override {
+    Check(session);
+    return {{"source", source}};
+  }
   json StartLive(const std::string& session, const fetchscope::serve::StartRequest&) override {
     Check(session);
     return {{"steps", 0}};

@@ -32,6 +32,9 @@ class Api {
   virtual Frame RenderFrame(const std::string& session, const ViewRequest& request) = 0;
   virtual nlohmann::json Pick(const std::string& session, const PickRequest& request) = 0;
   virtual nlohmann::json Episode(const std::string& session, const StepRef& episode) = 0;
+  /// The episode browser's columns of every episode of a source (serve/sources.h's
+  /// EpisodeColumns): {"source", "episodes": [{"index", ...}]}.
+  virtual nlohmann::json Listing(const std::string& session, int source) = 0;
   virtual nlohmann::json StartLive(const std::string& session, const StartRequest& request) = 0;
   /// The live episode whole, as StartLive answers (a page that lost its copy asks again).
   virtual nlohmann::json LiveState(const std::string& session) = 0;

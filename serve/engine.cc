@@ -10,6 +10,7 @@
 #include "render/camera.h"
 #include "render/frame_limits.h"
 #include "render/layers.h"
+#include "render/obs_view.h"
 #include "run/record_command.h"
 #include "serve/engine_state.h"
 #include "serve/token.h"
@@ -387,6 +388,32 @@ nlohmann::json RowsData(const EnvSpec& spec, const std::vector<TrajectoryStep>& 
           {"signals", EpisodeSignals(spec, steps, hindsight_seed)}};
 }
 
+nlohmann::json Engine::Listing(const std::string& session, int source) {
+  return Run<nlohmann::json>([&](State& s) {
+    s.Touch(session);
+    if (source < 0 || source >= static_cast<int>(sources_.size()) ||
+        sources_[source].kind == SourceKind::kLive) {
+      throw RequestError(404, "no served episodes in source " + std::to_string(source));
+    }
+    nlohmann::json& listing = s.listings[source];
+    if (!listing.is_null()) return listing;
+    const Source& src = sources_[source];
+    nlohmann::json episodes = nlohmann::json::array();
+    for (const ListedEpisode& e : src.episodes) {
+      nlohmann::json row;
+      try {
+        row = EpisodeColumns(*src.spec, EpisodeRows(src, e.index).steps);
+      } catch (const RunError& error) {  // a file gone since: that episode's columns stay empty
+        row = {{"error", error.what()}};
+      }
+      row["index"] = e.index;
+      episodes.push_back(std::move(row));
+    }
+    listing = {{"source", source}, {"episodes", std::move(episodes)}};
+    return listing;
+  });
+}
+
 nlohmann::json Engine::Episode(const std::string& session, const StepRef& at) {
   return Run<nlohmann::json>([&](State& s) {
     s.Touch(session);
@@ -534,6 +561,31 @@ Frame Engine::RenderFrame(const std::string& session, const ViewRequest& r) {
   });
 }
 
+namespace {
+
+// The world point the depth layer shows at pixel (x, y) of a one-camera frame: the pixel's ray
+// (render/obs_view.h's pinhole model of the view camera) out to its depth; null where nothing is.
+nlohmann::json WorldPointAt(Renderer& renderer, const mjData* data, const FrameInfo& info, int x,
+                            int y) {
+  std::vector<float> depth;
+  renderer.RenderDepthMetres(data, info, &depth);
+  const double z = depth.at(static_cast<size_t>(y) * renderer.width() + x);
+  if (!(z > 0)) return nullptr;
+  const mjvGLCamera camera = renderer.view_camera();
+  const ObsCameraGeometry g = CameraGeometry(camera, renderer.width(), renderer.height());
+  // in the camera frame: x right, y up, looking along -z; image rows grow downwards
+  const double cx = (x - g.cx) / g.fx * z, cy = -(y - g.cy) / g.fy * z;
+  const double f[3] = {camera.forward[0], camera.forward[1], camera.forward[2]};
+  const double up[3] = {camera.up[0], camera.up[1], camera.up[2]};
+  const double right[3] = {f[1] * up[2] - f[2] * up[1], f[2] * up[0] - f[0] * up[2],
+                           f[0] * up[1] - f[1] * up[0]};
+  std::array<double, 3> p{};
+  for (int k = 0; k < 3; ++k) p[k] = camera.pos[k] + cx * right[k] + cy * up[k] + z * f[k];
+  return JsonVector(p.data(), 3);
+}
+
+}  // namespace
+
 nlohmann::json Engine::Pick(const std::string& session, const PickRequest& r) {
   return Run<nlohmann::json>([&](State& s) {
     Session& ses = s.Touch(session);
@@ -541,18 +593,25 @@ nlohmann::json Engine::Pick(const std::string& session, const PickRequest& r) {
     FrameInfo info;
     std::string camera;
     Renderer& renderer = s.Prepare(r.view, state, &info, &camera);
-    const std::optional<PickedObject> picked = renderer.Pick(state.env->data(), info, r.x, r.y);
+    const mjData* data = state.env->data();
+    const std::optional<PickedObject> picked = renderer.Pick(data, info, r.x, r.y);
     if (!picked) return nlohmann::json{{"body", nullptr}, {"x", r.x}, {"y", r.y}};
     char color[8];
     std::snprintf(color, sizeof(color), "#%02x%02x%02x", picked->color[0], picked->color[1],
                   picked->color[2]);
-    return nlohmann::json{
+    nlohmann::json out = {
         {"body", picked->body},
         {"geom", picked->geom.empty() ? nlohmann::json() : nlohmann::json(picked->geom)},
         {"site", picked->site.empty() ? nlohmann::json() : nlohmann::json(picked->site)},
         {"color", color},
         {"x", r.x},
-        {"y", r.y}};
+        {"y", r.y},
+        {"point", nullptr}};
+    if (picked->body_id >= 0) {
+      out["body_pos"] = JsonVector(data->xpos + 3 * picked->body_id, 3);
+    }
+    if (renderer.tiles().size() == 1) out["point"] = WorldPointAt(renderer, data, info, r.x, r.y);
+    return out;
   });
 }
 

@@ -88,6 +88,9 @@ class Engine : public Api {
   /// A served episode's data for the viewer: steps, signals (inspect/viewer.h's EpisodeSignals),
   /// its replay (exact, or a dataset's divergence) and the dtype of its actions.
   nlohmann::json Episode(const std::string& session, const StepRef& episode) override;
+  /// Every episode's browser columns, worked out once per source (a run folder's files are read
+  /// then, after the page's first frame) and kept.
+  nlohmann::json Listing(const std::string& session, int source) override;
   /// The session's live episode: started from a live env's reset or a served step, stepped by an
   /// action or the policy, one step back, saved (a replay trajectory and the record command that
   /// re-renders it). Start (and Save) return the live episode's data ({"steps", "rows",

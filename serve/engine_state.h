@@ -98,6 +98,7 @@ struct Engine::State {
   std::map<const FetchEnv*, std::unique_ptr<PolicyImages>> policy_images;  // made when first asked
   std::map<std::pair<int, int>, std::shared_ptr<LoadedEpisode>> episodes;  // (source, index)
   std::map<std::pair<int, int>, uint64_t> episode_used;
+  std::map<int, nlohmann::json> listings;  // per source, once asked
   JpegEncoder jpeg;
   std::vector<uint8_t> rgb, layer;  // frame buffers, reused
   uint64_t tick = 0;

@@ -204,6 +204,11 @@ StartRequest ParseStartRequest(const Query& query) {
   return r;
 }
 
+int ParseSourceRequest(const Query& query) {
+  const Params p(query, {"source"});
+  return p.Int("source", 0, 9999, std::nullopt);
+}
+
 StepRef ParseEpisodeRequest(const Query& query) {
   const Params p(query, {"source", "episode"});
   StepRef at;

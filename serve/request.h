@@ -91,6 +91,9 @@ StepRequest ParseStepRequest(const Query& query);
 
 /// Refuses every parameter but the session (and the token) in one line (400).
 void CheckNoParameters(const Query& query);
+
+/// The `source` of a listing request (0..9999, required).
+int ParseSourceRequest(const Query& query);
 StartRequest ParseStartRequest(const Query& query);
 /// An episode's data: its source and index.
 StepRef ParseEpisodeRequest(const Query& query);

@@ -472,6 +472,10 @@ void Server::Routes() {
         CheckNoParameters(req.params);
         SendJson(res, api_.LiveState(session));
       }));
+  Get("/api/listing", ApiHandler([this](const httplib::Request& req, httplib::Response& res) {
+        const std::string session = SessionParam(req.params);
+        SendJson(res, api_.Listing(session, ParseSourceRequest(req.params)));
+      }));
   Get("/api/episode", ApiHandler([this](const httplib::Request& req, httplib::Response& res) {
         const std::string session = SessionParam(req.params);
         SendJson(res, api_.Episode(session, ParseEpisodeRequest(req.params)));

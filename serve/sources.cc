@@ -1,11 +1,14 @@
 #include "serve/sources.h"
 
+#include <algorithm>
+#include <cmath>
 #include <system_error>
 
 #include "base/confined_file.h"
 #include "base/errors.h"
 #include "inspect/report.h"
 #include "run/run_files.h"
+#include "src/fetch_env.h"
 #include "src/observation_layout.h"
 #include "src/trajectory.h"
 
@@ -159,6 +162,50 @@ TrajectoryEpisode EpisodeRows(const Source& source, int index) {
   TrajectoryEpisode e = std::move(t.episodes[0]);
   e.file = file->second;
   return e;
+}
+
+nlohmann::json EpisodeColumns(const EnvSpec& spec, const std::vector<TrajectoryStep>& steps) {
+  nlohmann::json c = {
+      {"final_distance", nullptr}, {"first_success", nullptr}, {"object_displacement", nullptr}};
+  if (steps.empty()) return c;
+  const Observation& last = steps.back().obs;
+  c["final_distance"] = GoalDistance(last.achieved_goal, last.desired_goal);
+  for (const TrajectoryStep& s : steps) {
+    if (s.t >= 1 && s.is_success) {
+      c["first_success"] = s.t;
+      break;
+    }
+  }
+  const std::optional<ObservationSlice> object =
+      FindObservationSlice(spec.has_object, "object_pos");
+  const std::vector<double>& first = steps.front().obs.observation;
+  if (object && first.size() >= static_cast<size_t>(object->end) &&
+      last.observation.size() >= static_cast<size_t>(object->end)) {
+    double d2 = 0;
+    for (int i = object->first; i < object->end; ++i) {
+      d2 += (last.observation[i] - first[i]) * (last.observation[i] - first[i]);
+    }
+    c["object_displacement"] = std::sqrt(d2);
+  }
+  if (std::any_of(steps.begin(), steps.end(), [](const TrajectoryStep& s) { return s.contacts; })) {
+    c["grasped_at"] = nullptr;
+    c["dropped_at"] = nullptr;
+    bool held = false;
+    for (const TrajectoryStep& s : steps) {
+      if (!s.contacts) continue;
+      if (s.contacts->grasped()) {
+        if (c["grasped_at"].is_null()) c["grasped_at"] = s.t;
+        held = true;
+      } else if (held && !s.contacts->object_on_table && c["dropped_at"].is_null()) {
+        // neither finger pair holds it nor does the table: it is falling
+        const bool touched =
+            s.contacts->left_finger_force > 0 || s.contacts->right_finger_force > 0;
+        if (!touched) c["dropped_at"] = s.t;
+        held = touched;
+      }
+    }
+  }
+  return c;
 }
 
 const ListedEpisode* FindEpisode(const Source& source, int index) {

@@ -70,6 +70,13 @@ TrajectoryEpisode EpisodeRows(const Source& source, int index);
 /// The listed episode `index` of `source`, or nullptr.
 const ListedEpisode* FindEpisode(const Source& source, int index);
 
+/// The episode browser's columns of one episode: final_distance (achieved to desired goal at the
+/// last step, m), first_success (the first step t >= 1 that succeeds; null if none),
+/// object_displacement (m, the object's last position from its first; null without an object),
+/// and where the steps carry contacts: grasped_at (the first step both fingers press the object)
+/// and dropped_at (the first step after a grasp that neither holds it nor has it on the table).
+nlohmann::json EpisodeColumns(const EnvSpec& spec, const std::vector<TrajectoryStep>& steps);
+
 /// The page's view of the sources: per source its kind, title, env, seed, policy and episodes
 /// ({"index", "steps", "complete", "success", "return"}), without rows.
 nlohmann::json SourcesJson(const std::vector<Source>& sources);

@@ -6,9 +6,13 @@
 #include <gtest/gtest.h>
 #include <signal.h>
 
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <iostream>
 #include <nlohmann/json.hpp>
+#include <set>
 #include <string>
 
 #include "tests/browser_util.h"
@@ -150,7 +154,7 @@ TEST_F(BrowserTest, ServePageOrbitsDrivesSavesAndKeepsSessionsApart) {
 TEST_F(BrowserTest, ServeInspectsStepsHoldsAGraspAndFreesClosedPages) {
   TempDir tmp;
   auto r = RunFetchscope(
-      "record --env-id FetchPickAndPlace-v4 --policy scripted --seed 2 --episodes 1 --steps 50 "
+      "record --env-id FetchPickAndPlace-v4 --policy scripted --seed 2 --episodes 6 --steps 50 "
       "--signals contacts --width 64 --height 64 --no-sheets --quiet --out " +
       (tmp.path() / "run").string());
   ASSERT_EQ(r.exit_code, 0) << r.output;
@@ -207,8 +211,82 @@ TEST_F(BrowserTest, ServeInspectsStepsHoldsAGraspAndFreesClosedPages) {
   EXPECT_TRUE(result["overlays"]["ghost"]["disabled"].get<bool>()) << result["overlays"];
   EXPECT_FALSE(result["overlays"]["hindsight"]["disabled"].get<bool>()) << result["overlays"];
 
+  // 1b. the browser's filters leave the episodes the trajectories say
+  std::set<int> failed, far, grasped;
+  for (int k = 0; k < 6; ++k) {
+    char name[32];
+    std::snprintf(name, sizeof(name), "episode_%03d.json", k);
+    const json steps = ReadJsonFile(tmp.path() / "run" / name)["episodes"][0]["steps"];
+    const json& last = steps.back();
+    if (!last["is_success"].get<bool>()) failed.insert(k);
+    double d2 = 0;
+    for (int i = 0; i < 3; ++i) {
+      const double d =
+          last["achieved_goal"][i].get<double>() - last["desired_goal"][i].get<double>();
+      d2 += d * d;
+    }
+    if (std::sqrt(d2) > 0.05) far.insert(k);
+    for (const json& step : steps) {
+      const json& c = step["contacts"];
+      if (c["left_finger_force"].get<double>() > 0 && c["right_finger_force"].get<double>() > 0) {
+        grasped.insert(k);
+        break;
+      }
+    }
+  }
+  const json& filters = result["filters"];
+  auto shown = [&](const char* filter) {
+    const json& f = filters[filter];
+    return std::set<int>(f["episodes"].begin(), f["episodes"].end());
+  };
+  EXPECT_EQ(shown("success = no"), failed) << filters;
+  EXPECT_EQ(shown("distance > 0.05"), far) << filters;
+  EXPECT_EQ(shown("grasped"), grasped) << filters;
+  EXPECT_FALSE(grasped.empty());
+  EXPECT_NE(filters["bogus > 1"]["note"].get<std::string>().find("unknown column 'bogus'"),
+            std::string::npos)
+      << filters;
+  const json headers = result["browser_headers"];
+  for (const char* column :
+       {"final dist. mm", "first success", "object moved mm", "grasped at", "dropped at"}) {
+    EXPECT_NE(std::find(headers.begin(), headers.end(), column), headers.end())
+        << column << headers;
+  }
+
+  // 1c. episode 1 beside episode 0, in step; the first difference is the first field that differs
+  // at the first step where any does, in the inspector's order (their resets differ)
+  const json e1 = ReadJsonFile(tmp.path() / "run" / "episode_001.json")["episodes"][0];
+  std::string first_field;
+  {
+    const json& a = episode["steps"][0];
+    const json& b = e1["steps"][0];
+    std::vector<std::pair<std::string, std::pair<json, json>>> ordered;
+    for (int i = 0; i < 3; ++i) {
+      ordered.push_back({"achieved_goal[" + std::to_string(i) + "]",
+                         {a["achieved_goal"][i], b["achieved_goal"][i]}});
+    }
+    for (int i = 0; i < 3; ++i) {
+      ordered.push_back({"desired_goal[" + std::to_string(i) + "]",
+                         {a["desired_goal"][i], b["desired_goal"][i]}});
+    }
+    for (const auto& [name, values] : ordered) {
+      if (values.first != values.second) {
+        first_field = name;
+        break;
+      }
+    }
+  }
+  ASSERT_EQ(result["side_by_side"].size(), 2u);
+  for (const json& s : result["side_by_side"]) {
+    EXPECT_EQ(s["main"], s["other"]) << s;
+    EXPECT_EQ(s["first_step"], "0") << s;
+    EXPECT_EQ(s["first_field"], first_field) << s;
+  }
+  std::cout << "side by side: " << result["side_by_side"][0]["text"] << "\n";
+
   // 2. the grasp: closed on the block, it holds through four lifts (both fingers press it)
   EXPECT_GE(result["chords"].get<int>(), 1) << "no step moved along two axes at once";
+  for (const json& n : result["press_steps"]) EXPECT_EQ(n, 1) << "a press, or a chord, took " << n;
   EXPECT_EQ(result["gripper_state"], "-1");
   const double closed_z = result["closed"]["observation"][5];
   for (const json& row : result["lifts"]) {

@@ -16,6 +16,7 @@
 #include <atomic>
 #include <cctype>
 #include <chrono>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -433,6 +434,42 @@ TEST(ServeTest, LiveStepsAnswerInConstantSizeAndClosedSessionsAreFreed) {
   EXPECT_EQ(api.Json(api.Post("/api/session/close?session=" + s))["closed"], true);
   EXPECT_FALSE(api.NewSession().empty());
   ExpectRefusal(api.Get("/api/live?session=" + s), 404, "no session", "the closed session");
+}
+
+// Hovering gives the world point under the pointer (the depth layer's ray) and the body's
+// position: at the centre of a camera tracking the block, the block's own position (exactly,
+// as the episode's observation holds it) and a point on its surface, within its half-size.
+TEST(ServeTest, APickGivesTheWorldPointUnderThePointerAndTheBodysPosition) {
+  TempDir dir;
+  const fs::path run = RecordRun(dir.path(), 1, 12);
+  ServeProcess serve("'" + run.string() + "'", dir.path());
+  ASSERT_TRUE(serve.started()) << serve.log();
+  Api api(serve);
+  const std::string s = api.NewSession();
+  const json steps = json::parse(ReadFile(run / "episode_000.json"))["episodes"][0]["steps"];
+  for (int t : {0, 12}) {
+    const json pick =
+        api.Json(api.Get("/api/pick?session=" + s + "&source=0&episode=0&t=" + std::to_string(t) +
+                         "&width=161&height=121&x=80&y=60&camera=" +
+                         Encode("track:body=object0,distance=0.5,azimuth=150,elevation=-30")));
+    ASSERT_EQ(pick["body"], "object0") << pick;
+    const std::vector<double> obs = steps[t]["observation"];
+    const std::vector<double> object(obs.begin() + 3, obs.begin() + 6);
+    EXPECT_EQ(pick["body_pos"].get<std::vector<double>>(), object) << pick;
+    ASSERT_TRUE(pick["point"].is_array()) << pick;
+    double d2 = 0;
+    for (int i = 0; i < 3; ++i) d2 += std::pow(pick["point"][i].get<double>() - object[i], 2);
+    std::cout << "t=" << t << ": the point under the pointer is " << 1000 * std::sqrt(d2)
+              << " mm from the block's centre\n";
+    EXPECT_LT(std::sqrt(d2), 0.0433) << pick;  // inside the 5 cm cube's circumscribed sphere
+    EXPECT_GT(std::sqrt(d2), 0.024) << pick;   // on its surface, not its centre
+  }
+  // a tiled view has no one camera to cast the ray from: no point
+  const json tiled = api.Json(api.Get("/api/pick?session=" + s +
+                                      "&source=0&episode=0&t=0&width=80&height=60&x=40&y=30"
+                                      "&camera=" +
+                                      Encode("track:body=object0,distance=0.5,external_camera_0")));
+  EXPECT_TRUE(tiled["point"].is_null()) << tiled;
 }
 
 TEST(ServeTest, IdleSessionsAreFreed) {

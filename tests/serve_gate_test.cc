@@ -100,6 +100,7 @@ class PageOnly : public Api {
   nlohmann::json Pick(const std::string&, const PickRequest&) override { throw Busy(); }
   nlohmann::json Episode(const std::string&, const StepRef&) override { throw Busy(); }
   nlohmann::json CloseSession(const std::string&) override { throw Busy(); }
+  nlohmann::json Listing(const std::string&, int) override { throw Busy(); }
   nlohmann::json LiveState(const std::string&) override { throw Busy(); }
   nlohmann::json StartLive(const std::string&, const StartRequest&) override { throw Busy(); }
   nlohmann::json StepLive(const std::string&, const StepRequest&) override { throw Busy(); }

@@ -121,6 +121,7 @@
   function requestFrame() {
     if (state.source === null || state.session === null) return;
     updateOverlayAvailability();
+    requestOtherFrame();
     const format = state.moving || state.playing ? 'jpeg' : 'png';
     const params = viewParams(format);
     // a live step's frame is new whenever the live episode changed (a step back, then another)
@@ -259,9 +260,13 @@
     pickBusy = true;
     const next = pickNext;
     pickNext = null;
+    const xyz = (v) => `(${v.map((c) => c.toFixed(3)).join(', ')}) m`;
     pickAt(next).then((p) => {
-      hover.textContent = !p ? '' : p.body ? `body ${p.body}` + (p.geom ? ` · geom ${p.geom}` : '') + (p.site ? ` · site ${p.site}` : '')
+      hover.textContent = !p ? '' : p.body ? `body ${p.body}` + (p.geom ? ` · geom ${p.geom}` : '') + (p.site ? ` · site ${p.site}` : '') +
+                                             (p.point ? ` · point ${xyz(p.point)}` : '') + (p.body_pos ? ` · body at ${xyz(p.body_pos)}` : '')
                                            : 'nothing (background)';
+      hover.dataset.point = p && p.point ? JSON.stringify(p.point) : '';
+      hover.dataset.at = p ? `${p.x},${p.y}` : '';  // the frame pixel the text is about
       hover.dataset.body = p && p.body ? p.body : '';
     }).finally(() => {
       pickBusy = false;
@@ -446,8 +451,22 @@
     return live;
   }
   // the move keys held down now: a chord (w and a together) moves along both axes in one step,
-  // and every move carries the latched gripper command
-  const keysDown = new Set();
+  // and every move carries the latched gripper command. A key's step waits CHORD_MS for the
+  // other keys of a chord, so that pressing two at once is one step, not one and then another
+  const keysDown = new Set(), keysPressed = new Set();
+  const CHORD_MS = 50;
+  let chordTimer = null;
+  function chordKey(key) {
+    keysDown.add(key);
+    keysPressed.add(key);
+    if (chordTimer) return;
+    chordTimer = setTimeout(() => {
+      chordTimer = null;
+      const pressed = [...keysPressed];
+      keysPressed.clear();
+      liveStep(moveAction(pressed));
+    }, CHORD_MS);
+  }
   function moveAction(pressed) {
     const action = [0, 0, 0, state.gripper];
     for (const key of new Set([...keysDown, ...pressed])) {
@@ -570,26 +589,112 @@
     inspector.replaceChildren(el('h3', {}, `Step ${row.t}`), copy, fieldPlot, table);
     inspector.dataset.t = String(row.t);
     drawFieldPlot();
+    showDifference();
   }
   // the plotted field over the episode's steps, the current step marked
-  function drawFieldPlot() {
-    const rows = state.rows;
-    if (!plotted || !rows) { fieldPlot.replaceChildren(); return; }
-    const values = rows.map((r) => plotted.value(r));
+  // a small line plot of `values` (one per step; null where none), step `t` marked
+  function stepPlot(values, t) {
     const finite = values.filter((v) => typeof v === 'number' && Number.isFinite(v));
     const W = 340, H = 120, lo = Math.min(...finite), hi = Math.max(...finite), span = hi - lo || 1;
-    const x = (i) => 4 + (W - 8) * i / Math.max(1, rows.length - 1), y = (v) => H - 14 - (H - 24) * (v - lo) / span;
+    const x = (i) => 4 + (W - 8) * i / Math.max(1, values.length - 1), y = (v) => H - 14 - (H - 24) * (v - lo) / span;
     const points = values.map((v, i) => (typeof v === 'number' && Number.isFinite(v) ? `${x(i)},${y(v)}` : null)).filter(Boolean).join(' ');
     const svg = document.createElementNS('http://www.w3.org/2000/svg', 'svg');
     svg.setAttribute('viewBox', `0 0 ${W} ${H}`);
     svg.setAttribute('width', '100%');
     svg.setAttribute('height', String(H));
     svg.innerHTML = `<polyline fill="none" stroke="#2166ac" stroke-width="1.5" points="${points}"/>` +
-        `<line x1="${x(state.t)}" x2="${x(state.t)}" y1="0" y2="${H - 12}" stroke="#b2182b"/>` +
-        `<text x="4" y="${H - 2}" font-size="10">${FS.num(lo, 4)} … ${FS.num(hi, 4)} over steps 0–${rows.length - 1}</text>`;
+        `<line x1="${x(t)}" x2="${x(t)}" y1="0" y2="${H - 12}" stroke="#b2182b"/>` +
+        `<text x="4" y="${H - 2}" font-size="10">${FS.num(lo, 4)} … ${FS.num(hi, 4)} over steps 0–${values.length - 1}</text>`;
+    return {svg, points: finite.length};
+  }
+  function drawFieldPlot() {
+    const rows = state.rows;
+    if (!plotted || !rows) { fieldPlot.replaceChildren(); return; }
+    const {svg, points} = stepPlot(rows.map((r) => plotted.value(r)), state.t);
     fieldPlot.replaceChildren(el('p', {class: 'caption'}, `${plotted.label} over the episode`), svg);
     fieldPlot.dataset.field = plotted.label;
-    fieldPlot.dataset.points = String(finite.length);
+    fieldPlot.dataset.points = String(points);
+  }
+
+  // ---- side by side: a second served episode, its own view at the same step (the camera,
+  // overlays and size of the first), compare's first state difference and the difference's plot
+
+  const other = {source: null, episode: null, rows: null, inFlight: false, again: false, url: null};
+  const otherImage = el('img', {class: 'serve-other-frame', alt: 'the second episode', draggable: 'false'});
+  const otherCaption = el('p', {class: 'caption serve-other-caption'});
+  const otherDiff = el('div', {class: 'serve-other-diff'});
+  const otherBox = el('div', {class: 'serve-other', hidden: true}, otherCaption, otherImage, otherDiff);
+  const otherSelect = el('select', {'aria-label': 'side by side with', class: 'serve-other-select'});
+  otherSelect.addEventListener('change', () => {
+    if (!otherSelect.value) { other.source = null; otherBox.hidden = true; return; }
+    const [source, episode] = otherSelect.value.split('/').map(Number);
+    openOther(source, episode);
+  });
+  function fillOtherSelect() {
+    const options = [el('option', {value: ''}, 'side by side with… (none)')];
+    data.sources.forEach((s, i) => (s.episodes || []).forEach((e) =>
+      options.push(el('option', {value: `${i}/${e.index}`}, `${s.kind} ${i}: episode ${e.index}`))));
+    otherSelect.replaceChildren(...options);
+  }
+  async function openOther(source, episode) {
+    try {
+      const {body} = await api('/api/episode', {source, episode});
+      Object.assign(other, {source, episode, rows: body.rows});
+      otherBox.hidden = false;
+      otherBox.dataset.episode = `${source}/${episode}`;
+      requestOtherFrame();
+      showDifference();
+    } catch (e) {
+      showError(e.message);
+    }
+  }
+  function requestOtherFrame() {
+    if (other.source === null) return;
+    if (other.inFlight) { other.again = true; return; }
+    other.inFlight = true;
+    other.again = false;
+    const t = Math.min(state.t, other.rows.length - 1);
+    const params = {...viewParams(state.moving || state.playing ? 'jpeg' : 'png'), source: other.source, episode: other.episode, t};
+    api('/api/frame', params).then(({body}) => {
+      if (other.url) URL.revokeObjectURL(other.url);
+      other.url = URL.createObjectURL(body);
+      otherImage.dataset.step = String(t);
+      otherImage.src = other.url;
+      otherCaption.textContent = `${data.sources[other.source].title} · episode ${other.episode} · step ${t}` +
+          (t < state.t ? ` (it ends at step ${other.rows.length - 1})` : '');
+    }).catch((e) => showError(e.message)).finally(() => {
+      other.inFlight = false;
+      if (other.again) requestOtherFrame();
+    });
+  }
+  // the first step and field where the two episodes' states differ (as `compare` finds it), and
+  // the size of the difference of their observations at each step
+  function showDifference() {
+    const a = state.rows, b = other.rows;
+    if (!a || !b || other.source === null) return;
+    const source = data.sources[state.source === 'live' ? state.live.source : state.source];
+    const n = Math.min(a.length, b.length);
+    let first = null;
+    const sizes = [];
+    for (let t = 0; t < n; t++) {
+      const fa = fields(a[t], source), fb = fields(b[t], source);
+      let sum = 0;
+      fa.forEach(([label, va], i) => {
+        const vb = fb[i] ? fb[i][1] : undefined;
+        if (label.startsWith('obs[') && typeof va === 'number' && typeof vb === 'number') sum += (va - vb) * (va - vb);
+        if (!first && label !== 't' && !label.startsWith('contacts') && JSON.stringify(va) !== JSON.stringify(vb)) {
+          first = {t, label, a: va, b: vb};
+        }
+      });
+      sizes.push(Math.sqrt(sum));
+    }
+    const {svg} = stepPlot(sizes, Math.min(state.t, n - 1));
+    otherDiff.replaceChildren(
+        el('p', {class: 'serve-first-difference'}, first ? `first difference: step ${first.t}, ${first.label}: ${shownValue(first.a)} against ${shownValue(first.b)}`
+                                                        : `no difference over the ${n} steps both have`),
+        el('p', {class: 'caption'}, '|observation A − observation B| per step'), svg);
+    otherDiff.dataset.firstStep = first ? String(first.t) : '';
+    otherDiff.dataset.firstField = first ? first.label : '';
   }
 
   // ---- the viewer (viewer.js): one episode at a time, served or live
@@ -659,6 +764,96 @@
     }
   }
 
+  // ---- the episode browser: the listed columns, then those of each episode's rows; a filter
+  // such as "success = no", "distance > 0.05", "dropped" or "first_success <= 10, grasped"
+
+  const FILTER_COLUMNS = {episode: 'index', steps: 'steps', success: 'success', return: 'return', complete: 'complete',
+                          distance: 'final_distance', first_success: 'first_success',
+                          displacement: 'object_displacement', grasped: 'grasped_at', dropped: 'dropped_at'};
+  // the filter as a test of a row; throws an Error naming what it cannot read
+  function parseFilter(text) {
+    const clauses = text.split(/,|\band\b/).map((c) => c.trim()).filter(Boolean);
+    const tests = clauses.map((clause) => {
+      const m = /^(not\s+|!)?([a-z_]+)\s*(?:(==|=|!=|>=|<=|>|<)\s*(\S+))?$/.exec(clause);
+      if (!m) throw new Error(`cannot read '${clause}': use NAME, not NAME, or NAME OP VALUE (=, !=, <, <=, >, >=)`);
+      const key = FILTER_COLUMNS[m[2]];
+      if (!key) throw new Error(`unknown column '${m[2]}': use ${Object.keys(FILTER_COLUMNS).join(', ')}`);
+      if (!m[3]) {
+        const truthy = (r) => r[key] !== null && r[key] !== undefined && r[key] !== false;
+        return m[1] ? (r) => !truthy(r) : truthy;
+      }
+      const word = m[4].toLowerCase();
+      const value = word === 'yes' || word === 'true' ? true : word === 'no' || word === 'false' ? false
+                  : word === 'none' || word === 'null' ? null : Number(m[4]);
+      if (typeof value === 'number' && Number.isNaN(value)) throw new Error(`'${m[4]}' is not a number, yes, no or none`);
+      const op = m[3];
+      return (r) => {
+        const v = r[key] === undefined ? null : r[key];
+        if (op === '=' || op === '==') return v === value;
+        if (op === '!=') return v !== value;
+        if (v === null || value === null) return false;
+        return op === '>' ? v > value : op === '>=' ? v >= value : op === '<' ? v < value : v <= value;
+      };
+    });
+    return (r) => tests.every((t) => t(r));
+  }
+  function episodeBrowser(i, rows) {
+    const element = el('div', {class: 'serve-browser', 'data-source': i});
+    const filter = el('input', {type: 'text', class: 'serve-filter', spellcheck: 'false', placeholder: 'filter: success = no, distance > 0.05, dropped',
+                                'aria-label': 'filter the episodes'});
+    const note = el('p', {class: 'caption serve-filter-note'});
+    const tableBox = el('div', {class: 'table-wrap'});
+    const extra = [];  // the columns of the episodes' rows, once known
+    const mm = (v) => (v === null || v === undefined ? '—' : (1000 * v).toFixed(1));
+    const stepOf = (v) => (v === null || v === undefined ? '—' : String(v));
+    const columns = () => [
+      {label: 'episode', numeric: true, value: (r) => r.index,
+       render: (r) => el('a', {href: '#', 'data-episode': r.index, onclick: (ev) => { ev.preventDefault(); openEpisode(i, r.index); }}, String(r.index))},
+      {label: 'steps', numeric: true, value: (r) => r.steps, render: (r) => String(r.steps) + (r.complete ? '' : ' (cut short)')},
+      {label: 'success', value: (r) => r.success, render: (r) => (r.success === null ? '—' : r.success ? 'yes' : 'no')},
+      {label: 'return', numeric: true, value: (r) => r.return, render: (r) => FS.num(r.return, 2)},
+      ...extra,
+    ];
+    let shown = rows;
+    function draw() {
+      let test = () => true;
+      try {
+        test = parseFilter(filter.value);
+        note.classList.remove('error');
+      } catch (e) {
+        note.textContent = e.message;
+        note.classList.add('error');
+        return;
+      }
+      shown = rows.filter(test);
+      note.textContent = `${shown.length} of ${rows.length} episodes`;
+      element.dataset.shown = String(shown.length);
+      tableBox.replaceChildren(FS.sortableTable(columns(), shown, (r) => (r.success ? 'ok' : 'fail')));
+    }
+    let timer = null;
+    filter.addEventListener('input', () => { clearTimeout(timer); timer = setTimeout(draw, 120); });
+    element.append(filter, note, tableBox);
+    draw();
+    return {
+      element,
+      addColumns(listing) {
+        const byIndex = new Map(listing.map((e) => [e.index, e]));
+        rows.forEach((r) => Object.assign(r, byIndex.get(r.index) || {}));
+        extra.push({label: 'final dist. mm', numeric: true, value: (r) => r.final_distance, render: (r) => mm(r.final_distance)},
+                   {label: 'first success', numeric: true, value: (r) => r.first_success, render: (r) => stepOf(r.first_success)});
+        if (listing.some((e) => e.object_displacement !== null && e.object_displacement !== undefined)) {
+          extra.push({label: 'object moved mm', numeric: true, value: (r) => r.object_displacement, render: (r) => mm(r.object_displacement)});
+        }
+        if (listing.some((e) => 'grasped_at' in e)) {
+          extra.push({label: 'grasped at', numeric: true, value: (r) => r.grasped_at, render: (r) => stepOf(r.grasped_at)},
+                     {label: 'dropped at', numeric: true, value: (r) => r.dropped_at, render: (r) => stepOf(r.dropped_at)});
+        }
+        element.dataset.columns = 'full';
+        draw();
+      },
+    };
+  }
+
   // ---- the sources
 
   const sourcesBox = el('div', {class: 'serve-sources'});
@@ -670,17 +865,17 @@
           `start ${s.env_id} (seed ${s.seed}) live`));
     } else {
       // the table is drawn once the first frame is on screen: a run of a thousand episodes makes
-      // a thousand rows, which would hold the first frame back
+      // a thousand rows, which would hold the first frame back; the columns that need each
+      // episode's rows (distance, first success, the object, grasp and drop) come after
       const rows = s.episodes.map((e) => ({...e, source: i}));
       const waiting = el('p', {class: 'caption'}, `${rows.length} episodes`);
       box.append(waiting);
-      listings.push(() => waiting.replaceWith(FS.sortableTable([
-        {label: 'episode', numeric: true, value: (r) => r.index,
-         render: (r) => el('a', {href: '#', 'data-episode': r.index, onclick: (ev) => { ev.preventDefault(); openEpisode(i, r.index); }}, String(r.index))},
-        {label: 'steps', numeric: true, value: (r) => r.steps, render: (r) => String(r.steps) + (r.complete ? '' : ' (cut short)')},
-        {label: 'success', value: (r) => r.success, render: (r) => (r.success === null ? '—' : r.success ? 'yes' : 'no')},
-        {label: 'return', numeric: true, value: (r) => r.return, render: (r) => FS.num(r.return, 2)},
-      ], rows, (r) => (r.success ? 'ok' : 'fail'))));
+      listings.push(() => {
+        const browser = episodeBrowser(i, rows);
+        waiting.replaceWith(browser.element);
+        api('/api/listing', {source: i}).then(({body}) => browser.addColumns(body.episodes))
+            .catch((e) => showError(e.message));
+      });
     }
     sourcesBox.append(box);
   });
@@ -694,11 +889,11 @@
       el('header', {}, el('h1', {}, 'fetchscope serve'),
          el('p', {class: 'caption'}, `rendered on the server by ${data.gl.renderer} (${data.gl.backend}) with the renderer of the videos`)),
       el('div', {class: 'serve-main'},
-         el('div', {class: 'serve-view'}, image, status, hover,
+         el('div', {class: 'serve-view'}, image, status, hover, otherBox,
             el('div', {class: 'serve-row'}, 'camera ', cameraInput, copyButton, presets),
             el('p', {class: 'caption'}, 'as an option of render and record: ', cameraOption),
             overlayRow,
-            el('div', {class: 'serve-row'}, 'layer ', layerSelect, ' size ', sizeSelect),
+            el('div', {class: 'serve-row'}, 'layer ', layerSelect, ' size ', sizeSelect, ' ', otherSelect),
             liveBox),
          el('div', {class: 'serve-side'}, el('h3', {}, 'Served'), sourcesBox, inspector)),
       viewerBox);
@@ -711,6 +906,7 @@
   }
   syncOverlayBoxes();
   fillPresets(data.sources[0]);
+  fillOtherSelect();
   performance.mark('fetchscope-serve-built');
 
   document.addEventListener('keyup', (e) => keysDown.delete(e.key));
@@ -721,8 +917,8 @@
     if (target && /^(INPUT|TEXTAREA|SELECT)$/.test(target.tagName)) return;
     if (KEYS[e.key]) {
       e.preventDefault();
-      if (KEYS[e.key][0] < 3) keysDown.add(e.key);
-      keyStep(e.key);
+      if (KEYS[e.key][0] < 3) chordKey(e.key);
+      else keyStep(e.key);
       return;
     }
     if (e.key === 'p') { e.preventDefault(); liveStep(null); return; }

@@ -102,9 +102,14 @@ try {
   // hover: the segmentation layer under the pointer
   await a.mouse.move(cx - 20, cy + 30);
   await a.mouse.move(cx - 21, cy + 30);
-  await a.waitForFunction(() => document.querySelector('.serve-hover').textContent !== '', null, {timeout});
+  // the text of the pick at that pixel (an earlier pick, at the drag's end, may answer first)
+  const hoverBox = await frame.boundingBox();
+  const [w, h] = await a.evaluate(() => [window.fetchscopeServe.state.width, window.fetchscopeServe.state.height]);
+  const at = `${Math.floor((cx - 21 - hoverBox.x) * w / hoverBox.width)},${Math.floor((cy + 30 - hoverBox.y) * h / hoverBox.height)}`;
+  await a.waitForFunction((want) => document.querySelector('.serve-hover').dataset.at === want, at, {timeout});
   result.hover = {text: await a.locator('.serve-hover').textContent(),
-                  body: await a.evaluate(() => document.querySelector('.serve-hover').dataset.body)};
+                  body: await a.evaluate(() => document.querySelector('.serve-hover').dataset.body),
+                  at};
 
   // live: the env of --live-source, then the keys
   await a.locator(`button.serve-start-env[data-source="${args['live-source']}"]`).click();

@@ -4,7 +4,8 @@
 //   node check_serve_debug.mjs --url http://127.0.0.1:PORT/?token=T --out DIR --steps 3,17,40
 //        [--live-source 1] [--chromium /usr/bin/chromium] [--timeout-ms 90000]
 // 1. The step inspector of the first served episode at each of --steps: every field's value.
-//    A click on obs[5] plots it over the episode. The overlays the view cannot apply.
+//    A click on obs[5] plots it over the episode. The overlays the view cannot apply. The episode
+//    browser's filters (--filters, separated by |): the episodes each leaves.
 // 2. A grasp from the keys on the live env (--live-source, PickAndPlace): open, chords of two
 //    axes over the block, down, close (latched), four lift presses; each step's row.
 // 3. Play the policy from the reset: it stops at the TimeLimit. Play again (past it), Save while
@@ -32,13 +33,24 @@ const lastRow = (page) => page.evaluate(() => {
   const rows = window.fetchscopeServe.state.live.rows;
   return rows[rows.length - 1];
 });
-async function press(page, keys) {  // one env step with every key of `keys` held at once
+// One env step with every key of `keys` pressed at once: a single key through the keyboard; a
+// chord as its key events dispatched together (two real presses are two CDP calls apart, which
+// a loaded machine can stretch past the page's chord window)
+async function press(page, keys) {
   const n = await liveSteps(page);
-  for (const k of keys.slice(0, -1)) await page.keyboard.down(k);
-  await page.keyboard.press(keys[keys.length - 1]);
-  for (const k of keys.slice(0, -1)) await page.keyboard.up(k);
-  await page.waitForFunction((m) => Number(document.querySelector('.serve-live').dataset.steps) === m + 1, n, {timeout});
+  if (keys.length === 1) {
+    await page.keyboard.press(keys[0]);
+  } else {
+    await page.evaluate((ks) => {
+      for (const key of ks) document.dispatchEvent(new KeyboardEvent('keydown', {key, bubbles: true}));
+      for (const key of ks) document.dispatchEvent(new KeyboardEvent('keyup', {key, bubbles: true}));
+    }, keys);
+  }
+  await page.waitForFunction((m) => Number(document.querySelector('.serve-live').dataset.steps) >= m + 1, n, {timeout});
+  await page.waitForTimeout(CHORD_SETTLE_MS);
+  return (await liveSteps(page)) - n;  // the steps it took: 1
 }
+const CHORD_SETTLE_MS = 120;
 
 try {
   context = await chromium.launchPersistentContext(profile, {
@@ -73,6 +85,40 @@ try {
           .map((b) => [b.value, {disabled: b.disabled, reason: b.dataset.reason || ''}])));
   await a.locator('.serve-side').screenshot({path: join(args.out, 'inspector.png')});
 
+  // 1b. the episode browser: its columns from the episodes' rows, then filters
+  await a.waitForFunction(() => document.querySelector('.serve-browser') &&
+                                document.querySelector('.serve-browser').dataset.columns === 'full', null, {timeout});
+  result.browser_headers = await a.evaluate(() => [...document.querySelectorAll('.serve-browser th')].map((h) => h.textContent));
+  result.filters = {};
+  for (const f of (args.filters || 'success = no|distance > 0.05|grasped|bogus > 1').split('|')) {
+    await a.locator('.serve-filter').fill(f);
+    await a.waitForTimeout(400);
+    result.filters[f] = await a.evaluate(() => ({
+      shown: Number(document.querySelector('.serve-browser').dataset.shown),
+      note: document.querySelector('.serve-filter-note').textContent,
+      episodes: [...document.querySelectorAll('.serve-browser tbody tr a[data-episode]')].map((x) => Number(x.dataset.episode)),
+    }));
+  }
+  await a.locator('.serve-filter').fill('');
+
+  // 1c. side by side: episode 1 beside episode 0, in step at t = 10 and 30
+  await a.locator('select.serve-other-select').selectOption('0/1');
+  result.side_by_side = [];
+  for (const t of [10, 30]) {
+    await a.evaluate((step) => window.fetchscopeServe.viewer.seek(step), t);
+    await a.waitForFunction((step) => document.querySelector('img.serve-other-frame').dataset.step === String(step) &&
+                                      document.querySelector('img.serve-frame').dataset.step === String(step), t, {timeout});
+    result.side_by_side.push(await a.evaluate(() => ({
+      main: document.querySelector('img.serve-frame').dataset.step,
+      other: document.querySelector('img.serve-other-frame').dataset.step,
+      first_step: document.querySelector('.serve-other-diff').dataset.firstStep,
+      first_field: document.querySelector('.serve-other-diff').dataset.firstField,
+      text: document.querySelector('.serve-first-difference').textContent,
+    })));
+  }
+  await a.screenshot({path: join(args.out, 'side_by_side.png'), fullPage: false});
+  await a.locator('select.serve-other-select').selectOption('');
+
   // 2. a grasp from the keys: open, over the block with two-axis chords, down, close, lift x4
   await a.locator(`button.serve-start-env[data-source="${args['live-source']}"]`).click();
   await a.waitForFunction(() => window.fetchscopeServe.state.live !== null, null, {timeout});
@@ -81,6 +127,7 @@ try {
   await a.mouse.click(5, 5);
   await press(a, ['o']);
   result.chords = 0;
+  result.press_steps = [];
   for (let i = 0; i < 40; i++) {  // over the block: both horizontal axes in one step where both are off
     const row = await lastRow(a);
     const dx = row.observation[3] - row.observation[0], dy = row.observation[4] - row.observation[1];
@@ -88,8 +135,9 @@ try {
     if (Math.abs(dx) > 0.006) keys.push(dx > 0 ? 'w' : 's');
     if (Math.abs(dy) > 0.006) keys.push(dy > 0 ? 'a' : 'd');
     if (!keys.length) break;
-    if (keys.length === 2) result.chords++;
-    await press(a, keys);
+    result.press_steps.push(await press(a, keys));
+    const action = (await lastRow(a)).action;
+    if (keys.length === 2 && action[0] !== 0 && action[1] !== 0) result.chords++;
   }
   for (let i = 0; i < 30; i++) {  // down to the block's height
     const row = await lastRow(a);
