@@ -236,6 +236,7 @@ Session& Engine::State::Touch(const std::string& id) {
 
 // ---- served episodes
 
+
 namespace {
 
 // Replays a dataset's episode `index` into `e` (its steps through `keep`, its reset seed, the
@@ -256,6 +257,24 @@ nlohmann::json ReplayDatasetEpisode(FetchEnv& env, const Source& src, int index,
 }
 
 }  // namespace
+
+nlohmann::json Engine::State::DatasetDivergence(int source, int index) {
+  const Source& src = sources[source];
+  FetchEnv& env = *env_of_source[source];
+  if (!starts_resolved[source]) {
+    ResolveStarts(env, src.rows.get());
+    starts_resolved[source] = true;
+  }
+  LoadedEpisode replayed;
+  const auto keep = [&](const StepRecord& row, const StepResult*) {
+    replayed.steps.push_back(row);
+    return true;
+  };
+  const nlohmann::json replay = ReplayDatasetEpisode(env, src, index, keep, &replayed);
+  const nlohmann::json& d = replay["divergence"];
+  return {{"diverges_at", d["first_step"]}, {"max_difference", d["max_difference"]},
+          {"reset", replay["reset"]}};
+}
 
 LoadedEpisode& Engine::State::Load(int source, int index) {
   if (source < 0 || source >= static_cast<int>(sources.size())) {
@@ -403,7 +422,8 @@ nlohmann::json Engine::Listing(const std::string& session, int source) {
       nlohmann::json row;
       try {
         row = EpisodeColumns(*src.spec, EpisodeRows(src, e.index).steps);
-      } catch (const RunError& error) {  // a file gone since: that episode's columns stay empty
+        if (src.kind == SourceKind::kDataset) row.update(s.DatasetDivergence(source, e.index));
+      } catch (const std::exception& error) {  // a file gone since, a replay that cannot start
         row = {{"error", error.what()}};
       }
       row["index"] = e.index;

@@ -121,6 +121,9 @@ struct Engine::State {
   /// The images of --obs-camera drawn on `env` as it stands at `row` (the live episode's last
   /// step): what an exec: policy receives with its line.
   PixelRecorder& DrawPolicyImages(FetchEnv& env, const TrajectoryStep& row);
+  /// A dataset episode's replay against its own rows, for the episode browser: {"diverges_at"
+  /// (the first step beyond the tolerance, or null), "max_difference", "reset" (its rule)}.
+  nlohmann::json DatasetDivergence(int source, int index);
   /// The live episode's data for the page, whole (rows and signals).
   nlohmann::json LiveData(const LiveEpisode& live) const;
   /// What describes the live episode without its rows: source, episode, steps, dtype, ...

@@ -598,5 +598,35 @@ TEST(ServeTest, ADatasetsEpisodesReplayWithTheirDrift) {
             200);
 }
 
+// The episode browser's columns of a dataset: each episode replayed against its rows, the step
+// where one that was edited (episode 1's gripper x at step 5, +1 cm) leaves its tolerance.
+TEST(ServeTest, TheListingOfADatasetSaysWhereAnEditedEpisodeDiverges) {
+  const std::string py = testing::PythonWithH5py();
+  if (py.empty()) GTEST_SKIP() << "python3-h5py is not installed";
+  TempDir dir;
+  const std::string root = (dir.path() / "datasets").string();
+  const auto made = RunFetchscope(
+      "rollout --env-id FetchPush-v4 --policy random --episodes 3 --steps 10 --minari-root '" +
+      root + "' --minari fs/push-v0");
+  ASSERT_EQ(made.exit_code, 0) << made.output;
+  const auto edit = RunCommand(
+      py + " -c \"import h5py; f = h5py.File('" + root +
+      "/fs/push-v0/data/main_data.hdf5', 'r+'); o = f['episode_1/observations/observation']; "
+      "o[5, 0] += 0.01; f.close()\" 2>&1");
+  ASSERT_EQ(edit.exit_code, 0) << edit.output;
+  ServeProcess serve("fs/push-v0 --minari-root '" + root + "'", dir.path());
+  ASSERT_TRUE(serve.started()) << serve.log();
+  Api api(serve);
+  const std::string s = api.NewSession();
+  const json listing = api.Json(api.Get("/api/listing?session=" + s + "&source=0"));
+  ASSERT_EQ(listing["episodes"].size(), 3u) << listing;
+  for (const json& e : listing["episodes"]) {
+    EXPECT_EQ(e["diverges_at"], e["index"] == 1 ? json(5) : json()) << e;
+    EXPECT_TRUE(e.contains("final_distance") && e.contains("object_displacement")) << e;
+  }
+  const json one = api.Json(api.Get("/api/episode?session=" + s + "&source=0&episode=1"));
+  EXPECT_EQ(one["replay"]["divergence"]["first_step"], 5);
+}
+
 }  // namespace
 }  // namespace fetchscope

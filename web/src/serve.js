@@ -769,7 +769,8 @@
 
   const FILTER_COLUMNS = {episode: 'index', steps: 'steps', success: 'success', return: 'return', complete: 'complete',
                           distance: 'final_distance', first_success: 'first_success',
-                          displacement: 'object_displacement', grasped: 'grasped_at', dropped: 'dropped_at'};
+                          displacement: 'object_displacement', grasped: 'grasped_at', dropped: 'dropped_at',
+                          diverges: 'diverges_at'};
   // the filter as a test of a row; throws an Error naming what it cannot read
   function parseFilter(text) {
     const clauses = text.split(/,|\band\b/).map((c) => c.trim()).filter(Boolean);
@@ -843,6 +844,10 @@
                    {label: 'first success', numeric: true, value: (r) => r.first_success, render: (r) => stepOf(r.first_success)});
         if (listing.some((e) => e.object_displacement !== null && e.object_displacement !== undefined)) {
           extra.push({label: 'object moved mm', numeric: true, value: (r) => r.object_displacement, render: (r) => mm(r.object_displacement)});
+        }
+        if (listing.some((e) => 'diverges_at' in e)) {  // a dataset replayed against its rows
+          extra.push({label: 'diverges at', numeric: true, value: (r) => r.diverges_at, render: (r) => stepOf(r.diverges_at)},
+                     {label: 'reset', value: (r) => r.reset, render: (r) => r.reset || '—'});
         }
         if (listing.some((e) => 'grasped_at' in e)) {
           extra.push({label: 'grasped at', numeric: true, value: (r) => r.grasped_at, render: (r) => stepOf(r.grasped_at)},
