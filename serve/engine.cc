@@ -236,7 +236,6 @@ Session& Engine::State::Touch(const std::string& id) {
 
 // ---- served episodes
 
-
 namespace {
 
 // Replays a dataset's episode `index` into `e` (its steps through `keep`, its reset seed, the
@@ -272,7 +271,8 @@ nlohmann::json Engine::State::DatasetDivergence(int source, int index) {
   };
   const nlohmann::json replay = ReplayDatasetEpisode(env, src, index, keep, &replayed);
   const nlohmann::json& d = replay["divergence"];
-  return {{"diverges_at", d["first_step"]}, {"max_difference", d["max_difference"]},
+  return {{"diverges_at", d["first_step"]},
+          {"max_difference", d["max_difference"]},
           {"reset", replay["reset"]}};
 }
 
