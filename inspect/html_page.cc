@@ -7,6 +7,7 @@
 #include "web_page_js.h"
 #include "web_report_js.h"
 #include "web_serve_js.h"
+#include "web_serve_tools_js.h"
 #include "web_uplot_css.h"
 #include "web_uplot_js.h"
 #include "web_viewer_js.h"
@@ -71,9 +72,11 @@ std::string HtmlPage(PageKind kind, const std::string& title, const nlohmann::js
                      const std::vector<std::pair<std::string, std::string>>& blocks) {
   const std::string page_js = Text(kWebPageJs, kWebPageJs_size);
   const std::string viewer_js = Text(kWebViewerJs, kWebViewerJs_size);
-  const std::string kind_js = kind == PageKind::kReport    ? Text(kWebReportJs, kWebReportJs_size)
-                              : kind == PageKind::kCompare ? Text(kWebCompareJs, kWebCompareJs_size)
-                                                           : Text(kWebServeJs, kWebServeJs_size);
+  const std::string kind_js = kind == PageKind::kReport ? Text(kWebReportJs, kWebReportJs_size)
+                              : kind == PageKind::kCompare
+                                  ? Text(kWebCompareJs, kWebCompareJs_size)
+                                  : Text(kWebServeToolsJs, kWebServeToolsJs_size) + "\n" +
+                                        Text(kWebServeJs, kWebServeJs_size);
   std::string html;
   html += "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n";
   html += "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n";
