@@ -50,23 +50,35 @@ const std::string& CheckedFilePath(const std::string& final_path) {
 ParentFolders::ParentFolders(const std::string& file_path) {
   namespace fs = std::filesystem;
   const fs::path folder = fs::path(file_path).parent_path();
-  // the missing folders, innermost first; an error while looking (a file in the way, no
-  // permission) shows up below when the folder cannot be created
-  std::vector<fs::path> missing;
-  for (fs::path p = folder; !p.empty(); p = p.parent_path()) {
-    std::error_code ec;
-    if (fs::exists(p, ec)) break;
-    missing.push_back(p);
-    if (p == p.parent_path()) break;  // the root
-  }
-  for (auto it = missing.rbegin(); it != missing.rend(); ++it) {
-    if (::mkdir(it->c_str(), 0777) == 0) {
-      created_.push_back(it->string());
-    } else if (errno != EEXIST || !fs::is_directory(*it)) {  // EEXIST: made by a concurrent writer
+  // A concurrent writer (another Slurm task on the same datasets root) may remove an empty folder
+  // it made while this one is creating the folders below it: mkdir then fails with ENOENT, and
+  // the missing folders are looked for again (a few times; a real ENOENT ends it).
+  for (int attempt = 0;; ++attempt) {
+    // the missing folders, innermost first; an error while looking (a file in the way, no
+    // permission) shows up below when the folder cannot be created
+    std::vector<fs::path> missing;
+    for (fs::path p = folder; !p.empty(); p = p.parent_path()) {
+      std::error_code ec;
+      if (fs::exists(p, ec)) break;
+      missing.push_back(p);
+      if (p == p.parent_path()) break;  // the root
+    }
+    bool vanished = false;
+    for (auto it = missing.rbegin(); it != missing.rend(); ++it) {
+      if (::mkdir(it->c_str(), 0777) == 0) {
+        created_.push_back(it->string());
+        continue;
+      }
+      if (errno == EEXIST && fs::is_directory(*it)) continue;  // made by a concurrent writer
+      if (errno == ENOENT && attempt < 8) {  // a folder above went meanwhile: look again
+        vanished = true;
+        break;
+      }
       const int error = errno == EEXIST ? ENOTDIR : errno;
       RemoveCreated();
       ThrowPathError("cannot create folder '" + it->string() + "': " + std::strerror(error), error);
     }
+    if (!vanished) return;
   }
 }
 

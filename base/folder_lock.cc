@@ -10,6 +10,7 @@
 #include <atomic>
 #include <cerrno>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <utility>
@@ -126,6 +127,12 @@ FolderLock FolderLock::OnLockFile(const std::filesystem::path& file, const std::
   // removed file finds another file (or none) at the name, and tries again
   for (int attempt = 0; attempt < 100; ++attempt) {
     const int fd = open(file.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+    if (fd < 0 && errno == ENOENT && attempt < 8) {
+      // its folder went meanwhile (another writer removed the empty folder it had made): again
+      std::error_code ec;
+      std::filesystem::create_directories(file.parent_path(), ec);
+      continue;
+    }
     if (fd < 0) {
       throw RunError("cannot make lock file '" + file.string() + "': " + std::strerror(errno));
     }

@@ -196,15 +196,20 @@ void CheckMinariDestination(const MinariWriteOptions& options) {
     }
   }
   // can the dataset be written there? make (and remove again) its temporary folder now, so an
-  // unwritable root fails before a long run, not after it
-  const ParentFolders parents(final_path.string());
-  const fs::path probe = TempPathFor(final_path.string());
-  if (!fs::create_directory(probe, ec) || ec) {
+  // unwritable root fails before a long run, not after it. Another task's check on the same root
+  // (a Slurm array starting together) may remove an empty folder above it meanwhile: made again.
+  for (int attempt = 0;; ++attempt) {
+    const ParentFolders parents(final_path.string());
+    const fs::path probe = TempPathFor(final_path.string());
+    if (fs::create_directory(probe, ec) && !ec) {
+      fs::remove(probe, ec);
+      return;
+    }
+    if (ec == std::errc::no_such_file_or_directory && attempt < 8) continue;
     throw RunError("cannot write Minari dataset '" + options.dataset_id + "' under '" +
                    final_path.parent_path().string() +
                    "': " + (ec ? ec.message() : std::string("it exists")));
   }
-  fs::remove(probe, ec);
 }
 
 std::vector<fs::path> RemoveStaleMinariTemps(const fs::path& final_path) {

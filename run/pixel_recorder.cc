@@ -78,7 +78,14 @@ PixelStaging::PixelStaging(const fs::path& parent)
   std::error_code ec;
   path_ =
       parent / (".fetchscope-pixels-" + std::to_string(getpid()) + "-" + std::to_string(counter++));
-  if (!fs::create_directory(path_, ec) || ec) {
+  bool made = fs::create_directory(path_, ec) && !ec;
+  // another writer on the same root may remove an empty folder it made meanwhile: made again
+  for (int attempt = 0; !made && ec == std::errc::no_such_file_or_directory && attempt < 8;
+       ++attempt) {
+    parents_ = ParentFolders((parent / ".fetchscope-pixels").string());
+    made = fs::create_directory(path_, ec) && !ec;
+  }
+  if (!made) {
     const std::string why = ec ? ec.message() : "it exists";
     path_.clear();
     throw RunError("cannot make the image staging folder in '" + parent.string() + "': " + why);

@@ -272,6 +272,10 @@ TEST_F(SlurmTest, PixelDatasetArrayAndMergeAsTheGuideShows) {
   const std::string merged =
       Submit(env + std::regex_replace(merge[1].str(), std::regex("\\$jobid"), job));
   WaitFor(merged);
+  for (int task = 0; task < 4; ++task) {
+    EXPECT_EQ(State(job + "_" + std::to_string(task)), "COMPLETED") << ReadFile(
+        work_ / "fetchscope-logs" / ("dataset_" + job + "_" + std::to_string(task) + ".log"));
+  }
   EXPECT_EQ(State(merged), "COMPLETED")
       << ReadFile(work_ / "fetchscope-logs" / ("dataset-merge_" + merged + ".log"));
   const std::string id = array[2].str();
