@@ -103,7 +103,7 @@ void StagingConsumer::Add(const EpisodeRecord& episode) {
   fs::remove(StagingFileOf(staging_, episode.index), ec);
 }
 
-PolicyContext WithImages(const PolicyContext& base, const std::optional<PixelRecorder>* pixels) {
+PolicyContext WithImages(const PolicyContext& base, std::optional<PixelRecorder>* pixels) {
   PolicyContext context = base;
   context.images = [pixels](int) -> const WireStep* {
     return *pixels ? (*pixels)->wire() : nullptr;
@@ -189,11 +189,21 @@ void PixelRecorder::Step(const FetchEnv& env, const StepRecord& record) {
   if (plan_.layout.states) job.state = FlatMujocoState(env.model(), env.data());
   if (renderer_) {
     renderer_->Render(env.data(), MakeFrameInfo(env, record));
-    UpdateWire(record.t);
+    drawn_t_ = record.t;
+    ++draws_;
     if (!plan_.stages()) return;
     for (size_t c = 0; c < renderer_->cameras(); ++c) job.images.push_back(renderer_->images(c));
   }
   if (plan_.stages()) Push(std::move(job));
+}
+
+const WireStep* PixelRecorder::wire() {
+  if (!renderer_) return nullptr;
+  if (wired_ != draws_) {
+    UpdateWire(drawn_t_);
+    wired_ = draws_;
+  }
+  return &wire_;
 }
 
 void PixelRecorder::UpdateWire(int t) {

@@ -102,7 +102,8 @@ class PixelRecorder {
   /// could not be written (also from Step, once a write failed).
   void End();
   /// The images of the last Step as an exec: policy receives them; null without cameras.
-  const WireStep* wire() const { return renderer_ ? &wire_ : nullptr; }
+  /// Made when first asked after a Step (a dataset run without an exec: policy never asks).
+  const WireStep* wire();
 
  private:
   // One unit of the writing thread's work, in order.
@@ -123,6 +124,8 @@ class PixelRecorder {
   const PixelPlan& plan_;
   std::optional<ObsRenderer> renderer_;
   WireStep wire_;                               // points into renderer_'s images
+  int drawn_t_ = -1;                            // the step renderer_'s images show
+  uint64_t draws_ = 0, wired_ = 0;              // Steps drawn; the draw wire_ describes
   std::unique_ptr<PixelStagingWriter> writer_;  // the writing thread's
   std::mutex mutex_;
   std::condition_variable changed_;
@@ -135,6 +138,6 @@ class PixelRecorder {
 
 /// `base` with the images of `*pixels` for an exec: policy (PixelRecorder::wire), read when the
 /// policy asks: the recorder may be made after the policy.
-PolicyContext WithImages(const PolicyContext& base, const std::optional<PixelRecorder>* pixels);
+PolicyContext WithImages(const PolicyContext& base, std::optional<PixelRecorder>* pixels);
 
 }  // namespace fetchscope

@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <set>
 #include <string>
@@ -32,12 +33,46 @@ using testing::ScreenshotPath;
 using testing::SourceDir;
 using testing::TempDir;
 
-json ReadJsonFile(const fs::path& path) { return json::parse(ReadFile(path)); }
+using testing::LastJson;
+using testing::ReadJsonFile;
 
-// The JSON object a check script printed last.
-json LastJson(const std::string& output) {
-  const size_t line = output.rfind("\n{");
-  return json::parse(output.substr(line == std::string::npos ? 0 : line + 1), nullptr, false);
+// A served run and what a check script found on its page.
+struct ServedCheck {
+  std::unique_ptr<testing::ServeProcess> serve;
+  json result;  ///< an object, else the check failed (the failures are reported)
+};
+
+// Serves the run `record_args` records in `tmp`/run (with `serve_args`), drives the page with
+// web/test/`script` (`script_args`, screenshots into `tmp`/shots) and returns what it found,
+// checked to hold no error, console error, page error or failed response.
+ServedCheck ServeAndCheck(const TempDir& tmp, const std::string& record_args,
+                          const std::string& serve_args, const std::string& script,
+                          const std::string& script_args) {
+  ServedCheck c;
+  const auto r =
+      RunFetchscope("record " + record_args + " --quiet --out " + (tmp.path() / "run").string());
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  c.serve = std::make_unique<testing::ServeProcess>("'" + (tmp.path() / "run").string() + "' " +
+                                                        serve_args + " --save-dir '" +
+                                                        (tmp.path() / "saved").string() + "'",
+                                                    tmp.path());
+  if (!c.serve->started()) {
+    ADD_FAILURE() << c.serve->log();
+    return c;
+  }
+  const fs::path out = tmp.path() / "shots";
+  fs::create_directories(out);
+  const auto check = RunCommand("node " + (SourceDir() / "web" / "test" / script).string() +
+                                " --url '" + c.serve->url + "' --out " + out.string() + " " +
+                                script_args + " --chromium " + Chromium());
+  c.result = LastJson(check.output);
+  EXPECT_TRUE(c.result.is_object()) << check.output;
+  if (!c.result.is_object()) return c;
+  EXPECT_FALSE(c.result.contains("error")) << c.result["error"] << "\n" << c.serve->log();
+  for (const char* list : {"console_errors", "page_errors", "failed_responses"}) {
+    EXPECT_TRUE(c.result[list].empty()) << list << ": " << c.result[list];
+  }
+  return c;
 }
 
 // fetchscope serve's page over a localhost URL, as through ssh -L (web/test/check_serve.mjs): a
@@ -48,31 +83,15 @@ json LastJson(const std::string& output) {
 // second page gets its own session. No console error and no request leaves the server.
 TEST_F(BrowserTest, ServePageOrbitsDrivesSavesAndKeepsSessionsApart) {
   TempDir tmp;
-  auto r = RunFetchscope(
-      "record --env-id FetchReach-v4 --policy scripted --episodes 1 --steps 10 "
-      "--width 64 --height 64 --quiet --out " +
-      (tmp.path() / "run").string());
-  ASSERT_EQ(r.exit_code, 0) << r.output;
-  testing::ServeProcess serve("'" + (tmp.path() / "run").string() +
-                                  "' --env-id FetchReach-v4 --seed 0 --width 480 --height 360 "
-                                  "--save-dir '" +
-                                  (tmp.path() / "saved").string() + "'",
-                              tmp.path());
-  ASSERT_TRUE(serve.started()) << serve.log();
+  const ServedCheck c = ServeAndCheck(
+      tmp,
+      "--env-id FetchReach-v4 --policy scripted --episodes 1 --steps 10 --width 64 --height 64",
+      "--env-id FetchReach-v4 --seed 0 --width 480 --height 360", "check_serve.mjs",
+      "--keys w,w,w,w,w --live-source 1");
+  ASSERT_TRUE(c.result.is_object() && !c.result.contains("error"));
+  const json& result = c.result;
+  testing::ServeProcess& serve = *c.serve;
   const fs::path out = tmp.path() / "shots";
-  fs::create_directories(out);
-  const auto check =
-      RunCommand("node " + (SourceDir() / "web" / "test" / "check_serve.mjs").string() +
-                 " --url '" + serve.url + "' --out " + out.string() +
-                 " --keys w,w,w,w,w --live-source 1 --chromium " + Chromium());
-  const size_t line = check.output.rfind("\n{");
-  const json result =
-      json::parse(check.output.substr(line == std::string::npos ? 0 : line + 1), nullptr, false);
-  ASSERT_TRUE(result.is_object()) << check.output;
-  ASSERT_FALSE(result.contains("error")) << result["error"] << "\n" << serve.log();
-  EXPECT_TRUE(result["console_errors"].empty()) << result["console_errors"];
-  EXPECT_TRUE(result["failed_responses"].empty()) << result["failed_responses"];
-  EXPECT_TRUE(result["page_errors"].empty()) << result["page_errors"];
   EXPECT_TRUE(result["foreign_requests"].empty()) << result["foreign_requests"];
   EXPECT_EQ(result["url_after_token"].get<std::string>().find("token="), std::string::npos);
   EXPECT_EQ(result["first"]["errors"], 0) << result["first"];
@@ -92,7 +111,8 @@ TEST_F(BrowserTest, ServePageOrbitsDrivesSavesAndKeepsSessionsApart) {
   std::cout << "drag: " << drag.dump() << std::endl;
   // the dragged view, as render draws it from that camera
   const fs::path rendered = tmp.path() / "dragged.png";
-  r = RunFetchscope("render --env-id FetchReach-v4 --policy 'replay:" +
+  auto r =
+      RunFetchscope("render --env-id FetchReach-v4 --policy 'replay:" +
                     (tmp.path() / "run" / "episode_000.json").string() +
                     "' --width 480 --height 360 --camera '" + camera + "' -o " + rendered.string());
   ASSERT_EQ(r.exit_code, 0) << r.output;
@@ -153,29 +173,16 @@ TEST_F(BrowserTest, ServePageOrbitsDrivesSavesAndKeepsSessionsApart) {
 // after another leave the 13th a live session (8 at most at once).
 TEST_F(BrowserTest, ServeInspectsStepsHoldsAGraspAndFreesClosedPages) {
   TempDir tmp;
-  auto r = RunFetchscope(
-      "record --env-id FetchPickAndPlace-v4 --policy scripted --seed 2 --episodes 6 --steps 50 "
-      "--signals contacts --width 64 --height 64 --no-sheets --quiet --out " +
-      (tmp.path() / "run").string());
-  ASSERT_EQ(r.exit_code, 0) << r.output;
-  testing::ServeProcess serve("'" + (tmp.path() / "run").string() +
-                                  "' --env-id FetchPickAndPlace-v4 --seed 5 --policy scripted "
-                                  "--width 320 --height 240 --save-dir '" +
-                                  (tmp.path() / "saved").string() + "'",
-                              tmp.path());
-  ASSERT_TRUE(serve.started()) << serve.log();
+  const ServedCheck c = ServeAndCheck(
+      tmp,
+      "--env-id FetchPickAndPlace-v4 --policy scripted --seed 2 --episodes 6 --steps 50 "
+      "--signals contacts --width 64 --height 64 --no-sheets",
+      "--env-id FetchPickAndPlace-v4 --seed 5 --policy scripted --width 320 --height 240",
+      "check_serve_debug.mjs", "--steps 3,17,40 --live-source 1");
+  ASSERT_TRUE(c.result.is_object() && !c.result.contains("error"));
+  const json& result = c.result;
+  testing::ServeProcess& serve = *c.serve;
   const fs::path out = tmp.path() / "shots";
-  fs::create_directories(out);
-  const auto check =
-      RunCommand("node " + (SourceDir() / "web" / "test" / "check_serve_debug.mjs").string() +
-                 " --url '" + serve.url + "' --out " + out.string() +
-                 " --steps 3,17,40 --live-source 1 --chromium " + Chromium());
-  const json result = LastJson(check.output);
-  ASSERT_TRUE(result.is_object()) << check.output;
-  ASSERT_FALSE(result.contains("error")) << result["error"] << "\n" << serve.log();
-  EXPECT_TRUE(result["console_errors"].empty()) << result["console_errors"];
-  EXPECT_TRUE(result["page_errors"].empty()) << result["page_errors"];
-  EXPECT_TRUE(result["failed_responses"].empty()) << result["failed_responses"];
 
   // 1. the inspector's values are the trajectory's, field by field
   const json episode = ReadJsonFile(tmp.path() / "run" / "episode_000.json")["episodes"][0];

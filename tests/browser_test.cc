@@ -39,7 +39,9 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 using testing::BrowserTest;
 using testing::Chromium;
+using testing::LastJson;
 using testing::ReadFile;
+using testing::ReadJsonFile;
 using testing::RunCommand;
 using testing::RunFetchscope;
 using testing::ScreenshotPath;
@@ -57,8 +59,6 @@ constexpr char kAccent[] = "#2c6db2";
 // A report page's episode viewer plays one of the run's videos (web/src/viewer.js).
 constexpr size_t kViewerVideo = 1;
 
-json ReadJsonFile(const fs::path& path) { return json::parse(ReadFile(path)); }
-
 // Runs the page check on `page` (a file, or an http:// URL) and returns what it found.
 json CheckPage(const std::string& page, int sort_column) {
   const std::string where = page.rfind("http://", 0) == 0 ? " --url " : " --page ";
@@ -66,9 +66,7 @@ json CheckPage(const std::string& page, int sort_column) {
       RunCommand("node " + (SourceDir() / "web" / "test" / "check_page.mjs").string() + where +
                  page + " --screenshot " + ScreenshotPath().string() + " --sort-column " +
                  std::to_string(sort_column) + " --chromium " + Chromium());
-  const size_t line = r.output.rfind("\n{");
-  const std::string last = r.output.substr(line == std::string::npos ? 0 : line + 1);
-  json result = json::parse(last, nullptr, /*allow_exceptions=*/false);
+  json result = LastJson(r.output);
   EXPECT_FALSE(result.is_discarded()) << r.output;
   EXPECT_EQ(r.exit_code, 0) << r.output;
   return result;
@@ -421,9 +419,7 @@ json CheckViewer(const fs::path& page, const std::string& links, int click_step,
                  " --page " + page.string() + " --links " + links + " --click-step " +
                  std::to_string(click_step) + " --grab-dir " + grabs.string() + " --screenshot " +
                  ScreenshotPath().string() + " --chromium " + Chromium());
-  const size_t line = c.output.rfind("\n{");
-  json result = json::parse(c.output.substr(line == std::string::npos ? 0 : line + 1), nullptr,
-                            /*allow_exceptions=*/false);
+  json result = LastJson(c.output);
   EXPECT_EQ(c.exit_code, 0) << c.output;
   EXPECT_TRUE(result.is_object()) << c.output;
   if (!result.is_object()) return json::object({{"links", json::array()}});

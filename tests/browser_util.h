@@ -8,6 +8,7 @@
 
 #include <cstdlib>
 #include <filesystem>
+#include <nlohmann/json.hpp>
 #include <string>
 
 #include "tests/test_util.h"
@@ -38,6 +39,19 @@ inline std::filesystem::path ScreenshotPath() {
   std::filesystem::create_directories(dir);
   return dir /
          (std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) + ".png");
+}
+
+/// The JSON of a file.
+inline nlohmann::json ReadJsonFile(const std::filesystem::path& path) {
+  return nlohmann::json::parse(ReadFile(path));
+}
+
+/// The JSON object a check script (web/test/*.mjs) printed last on its output; discarded (not an
+/// object) when there is none.
+inline nlohmann::json LastJson(const std::string& output) {
+  const size_t line = output.rfind("\n{");
+  return nlohmann::json::parse(output.substr(line == std::string::npos ? 0 : line + 1), nullptr,
+                               /*allow_exceptions=*/false);
 }
 
 /// A browser test: skipped without node, chromium or playwright-core; no stale screenshot.

@@ -22,20 +22,13 @@ namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
 using serve_client::Api;
-using testing::PythonWithH5py;
+using testing::PythonWithPil;
 using testing::ReadFile;
 using testing::RunCommand;
 using testing::RunFetchscope;
 using testing::ServeProcess;
 using testing::SourceDir;
 using testing::TempDir;
-
-// Python with h5py, numpy and PIL, or "".
-std::string PythonWithPil() {
-  const std::string py = PythonWithH5py();
-  if (py.empty() || RunCommand(py + " -c 'import PIL' 2>&1").exit_code != 0) return "";
-  return py;
-}
 
 // --policy for tests/exec/wire_dump.py keeping what it receives in `dump`.
 std::string Dumper(const std::string& py, const fs::path& dump, const std::string& mode = "ok") {

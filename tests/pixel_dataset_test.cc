@@ -21,18 +21,12 @@ namespace {
 
 namespace fs = std::filesystem;
 using fetchscope::testing::PythonWithH5py;
+using fetchscope::testing::PythonWithPil;
 using fetchscope::testing::ReadFile;
 using fetchscope::testing::RunCommand;
 using fetchscope::testing::RunFetchscope;
 using fetchscope::testing::SourceDir;
 using fetchscope::testing::TempDir;
-
-// Python with h5py, numpy and PIL, or "".
-std::string PythonWithPil() {
-  const std::string py = PythonWithH5py();
-  if (py.empty() || RunCommand(py + " -c 'import PIL' 2>&1").exit_code != 0) return "";
-  return py;
-}
 
 std::string Checker() { return (SourceDir() / "tests/pixel/check_pixel_dataset.py").string(); }
 

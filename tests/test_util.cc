@@ -316,6 +316,12 @@ std::string PythonWithH5py() {
   return "";
 }
 
+std::string PythonWithPil() {
+  const std::string py = PythonWithH5py();
+  if (py.empty() || RunCommand(py + " -c 'import PIL' 2>&1").exit_code != 0) return "";
+  return py;
+}
+
 void WriteEdited(const std::filesystem::path& file, const std::string& text,
                  const std::string& from, const std::string& to) {
   const size_t at = text.find(from);

@@ -106,6 +106,9 @@ int DecodedFrames(const std::filesystem::path& video);
 /// A python3 that imports h5py and numpy: the one on PATH, else Debian's; "" when none.
 std::string PythonWithH5py();
 
+/// PythonWithH5py's python when it also imports PIL (python3-pil); "" when it does not.
+std::string PythonWithPil();
+
 /// Writes `text` to `file` with its first `from` replaced by `to` (a test's damaged metadata);
 /// fails the test, writing nothing, where `text` lacks `from`.
 void WriteEdited(const std::filesystem::path& file, const std::string& text,
