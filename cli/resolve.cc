@@ -39,6 +39,13 @@ PolicySpec WithExecFields(PolicySpec policy, const PolicyOptions& options, const
 void ApplyReplayedEnv(const PolicySpec& policy, EnvOptions* env) {
   const Trajectory* file = policy.replay_trajectory();
   if (!file) return;  // a CSV, .npy or JSON-lines action file: no env of its own
+  for (const TrajectoryEpisode& e : file->episodes) {
+    if (!e.placed) continue;
+    throw UsageError("--policy " + policy.text + ": episode " + std::to_string(e.index) +
+                     " starts from a reset placed by hand (serve), which replay: cannot make (it "
+                     "plays the actions from this run's own reset); accepted: record --from " +
+                     policy.text.substr(std::string("replay:").size()) + ", which resets there");
+  }
   if (!env->env_id_option || env->env_id_option->count() == 0) env->env_id = file->env_id;
   if (!env->seed_option || env->seed_option->count() == 0) env->seed = std::to_string(file->seed);
 }

@@ -162,7 +162,8 @@ OutputRun RecordOutputRun(const RecordJob& job) {
   run.policy = plan.policy.text;
   run.episodes = job.episodes_requested;
   run.steps = plan.steps;
-  if (plan.from && plan.from->dataset) {
+  // a dataset's episodes, and a recording's placed by hand (no seed resets to them)
+  if (plan.from) {
     for (const auto& [k, start] : plan.from->starts) run.episode_seeds[k] = start.seed;
   }
   return run;

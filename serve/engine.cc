@@ -310,10 +310,14 @@ LoadedEpisode& Engine::State::Load(int source, int index) {
     } else {
       const TrajectoryEpisode recorded = EpisodeRows(src, index);
       EpisodeReplayer replayer(env, src.seed);
-      replayer.Replay(index, recorded.steps, recorded.complete,
-                      recorded.file.empty() ? src.given : recorded.file, keep);
+      replayer.ReplayEpisode(index, recorded, recorded.file.empty() ? src.given : recorded.file,
+                             keep);
       e->reset_seed = src.seed;
-      replay = {{"reset", index == 0 ? "seed" : "continued generator"}, {"exact", true}};
+      e->placed = recorded.placed;
+      replay = {{"reset", recorded.placed ? "placed"
+                          : index == 0    ? "seed"
+                                          : "continued generator"},
+                {"exact", true}};
       std::vector<std::array<double, 3>> achieved;
       for (const TrajectoryStep& row : e->steps) achieved.push_back(row.obs.achieved_goal);
       e->hindsight = SampleHindsight(

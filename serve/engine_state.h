@@ -34,6 +34,7 @@ struct LoadedEpisode {
   std::vector<std::array<double, 3>> ghost;   ///< a dataset's own achieved goal per row
   std::optional<HindsightEpisode> hindsight;  ///< a recording's relabelling (the overlay)
   std::optional<uint64_t> reset_seed;         ///< the seed record --seed reproduces it with
+  std::optional<PlacedReset> placed;          ///< a recording's reset placed by hand
   bool float32 = false;                       ///< its actions' dtype
   nlohmann::json data;                        ///< Engine::Episode's answer
 };
@@ -44,6 +45,7 @@ struct LiveEpisode {
   int index = 0;                           ///< the episode's index (a live env's: 0)
   int prefix = 0;                          ///< its first steps that came from the served episode
   std::optional<uint64_t> reset_seed;      ///< the record --seed that reproduces its reset
+  std::optional<PlacedReset> placed;       ///< its reset placed by hand (saved; record --from)
   bool float32 = false;                    ///< the dtype of every action it takes
   std::vector<TrajectoryStep> steps;       ///< t = 0 .. n
   std::vector<EnvCheckpoint> checkpoints;  ///< the env after each step

@@ -1,6 +1,7 @@
 // serve's live episodes (serve/engine.h): started from a live env's reset or a served step,
 // stepped by the page's keys or the command line's policy, stepped back, and saved as a replay
 // trajectory with the record command that re-renders it.
+#include <mujoco/mujoco.h>
 #include <sys/stat.h>
 
 #include <cmath>
@@ -13,6 +14,7 @@
 #include "base/process.h"
 #include "base/stop_signal.h"
 #include "serve/engine_state.h"
+#include "src/observation_layout.h"
 #include "src/policy.h"
 
 namespace fetchscope::serve {
@@ -42,17 +44,16 @@ TrajectoryStep RowAfterStep(const FetchEnv& env, const StepResult& r, const Acti
   return row;
 }
 
-// The record command that re-renders a saved live episode: its env, seed, replay, steps and
-// assets (given when the command line gave --assets or they are not the bundled ones), and the
-// view the page showed.
-std::string RecordCommand(const std::string& env_id, uint64_t seed, const std::string& policy,
-                          size_t steps, bool assets_given, const AssetSource& assets,
-                          const ViewRequest& view, const fs::path& out) {
-  std::vector<std::string> argv = {
-      SelfCommand(),        "record",   "--env-id", env_id,    "--seed",
-      std::to_string(seed), "--policy", policy,     "--steps", std::to_string(steps),
-      "--signals",          "contacts"};  // its trajectory has them
-  if (assets_given || assets.kind != "bundled") {
+// The record command that re-renders a saved live episode: `replay` (its env, seed, replay and
+// steps, or --from the saved trajectory), its assets (given when the command line gave --assets
+// or they are not the bundled ones; --from reads them from the trajectory), and the view the page
+// showed.
+std::string RecordCommand(std::vector<std::string> replay, bool assets_given,
+                          const AssetSource& assets, const ViewRequest& view, const fs::path& out) {
+  std::vector<std::string> argv = {SelfCommand(), "record"};
+  argv.insert(argv.end(), replay.begin(), replay.end());
+  argv.insert(argv.end(), {"--signals", "contacts"});  // its trajectory has them
+  if (replay[0] != "--from" && (assets_given || assets.kind != "bundled")) {
     argv.push_back("--assets");
     argv.push_back(assets.kind == "bundled" ? "bundled" : assets.root);
   }
@@ -62,6 +63,57 @@ std::string RecordCommand(const std::string& env_id, uint64_t seed, const std::s
   std::string command;
   for (const std::string& arg : argv) command += (command.empty() ? "" : " ") + ShellQuote(arg);
   return command;
+}
+
+// A reset placed by hand (StartRequest goal, object) on `env`, whose seeded reset gave `reset`:
+// the goal given or drawn, the object (object tasks) at the x, y given, at the z given or the
+// reset's, turned as the reset left it. A point off the table's top (x, y) or below it, or more
+// than 0.6 m above it, is refused in one line naming it and the range accepted.
+PlacedReset PlaceReset(const FetchEnv& env, const Observation& reset, const StartRequest& r) {
+  const mjModel* m = env.model();
+  const int body = mj_name2id(m, mjOBJ_BODY, "table0");
+  if (body < 0 || m->body_geomnum[body] < 1) {
+    throw RequestError(400, "this model has no table0 body to place things on");
+  }
+  const int table = m->body_geomadr[body];  // its box (the world body's child: world frame)
+  double centre[3];
+  for (int i = 0; i < 3; ++i) centre[i] = m->body_pos[3 * body + i] + m->geom_pos[3 * table + i];
+  const double* half = m->geom_size + 3 * table;
+  const double low[3] = {centre[0] - half[0], centre[1] - half[1], centre[2] + half[2]};
+  const double high[3] = {centre[0] + half[0], centre[1] + half[1], centre[2] + half[2] + 0.6};
+  const auto check = [&](const char* what, const std::vector<double>& v) {
+    for (size_t i = 0; i < v.size(); ++i) {
+      if (v[i] < low[i] || v[i] > high[i]) {
+        char range[96];
+        std::snprintf(range, sizeof(range), "%.3f..%.3f", low[i], high[i]);
+        throw RequestError(400, std::string("parameter ") + what + ": " + "xyz"[i] + " = " +
+                                    RoundTrip(v[i]) + " is off the table; accepted: " + range +
+                                    (i == 2 ? " m (its top to 0.6 m above)" : " m (its top)"));
+      }
+    }
+  };
+  PlacedReset placed;
+  placed.goal = r.goal.value_or(reset.desired_goal);
+  check("goal", {placed.goal.begin(), placed.goal.end()});
+  if (!r.object.empty()) {
+    if (!env.spec().has_object) {
+      throw RequestError(
+          400, "parameter object: " + env.spec().id + " has no object; place its goal alone");
+    }
+    check("object", r.object);
+  }
+  if (env.spec().has_object) {
+    const int position = FindObservationSlice(true, "object_pos")->first;
+    const int euler = FindObservationSlice(true, "object_rot")->first;
+    ObjectPose pose;
+    for (int i = 0; i < 3; ++i) {
+      pose.position[i] =
+          i < static_cast<int>(r.object.size()) ? r.object[i] : reset.observation[position + i];
+      pose.euler[i] = reset.observation[euler + i];
+    }
+    placed.object = pose;
+  }
+  return placed;
 }
 
 // The first session_NNN in `dir` with no .json, .csv or folder of that name.
@@ -93,6 +145,7 @@ Trajectory SavedTrajectory(const EnvSpec& spec, const FetchEnv& env, const LiveE
   for (const TrajectoryStep& row : live.steps) {
     if (row.reward) episode.episode_return += *row.reward;
   }
+  episode.placed = live.placed;
   trajectory.episodes = {episode};
   return trajectory;
 }
@@ -117,6 +170,7 @@ nlohmann::json Engine::State::LiveHead(const LiveEpisode& live) const {
           {"source", live.source},
           {"episode", live.index},
           {"prefix", live.prefix},
+          {"placed", live.placed.has_value()},
           {"action_dtype", live.float32 ? "float32" : "float64"},
           {"can_save", live.reset_seed.has_value() && live.steps.size() > 1},
           {"policy", options.policy.text}};
@@ -151,6 +205,10 @@ nlohmann::json Engine::StartLive(const std::string& session, const StartRequest&
       FetchEnv& env = *s.env_of_source[source];
       TrajectoryStep row;
       row.obs = env.Reset(src.seed);
+      if (r.goal || !r.object.empty()) {  // the seed's reset, then the goal and object placed
+        live.placed = PlaceReset(env, row.obs, r);
+        row.obs = env.ResetTo(live.placed->goal, live.placed->object);
+      }
       row.is_success = env.IsSuccess(row.obs.achieved_goal, row.obs.desired_goal);
       row.contacts = env.Contacts();
       live.source = source;
@@ -170,6 +228,7 @@ nlohmann::json Engine::StartLive(const std::string& session, const StartRequest&
       live.index = r.from.episode;
       live.prefix = r.from.step;
       live.reset_seed = e.reset_seed;
+      live.placed = e.placed;
       live.float32 = e.float32;
       live.steps.assign(e.steps.begin(), e.steps.begin() + r.from.step + 1);
       live.checkpoints.assign(e.checkpoints.begin(), e.checkpoints.begin() + r.from.step + 1);
@@ -303,9 +362,16 @@ nlohmann::json Engine::SaveLive(const std::string& session, const ViewRequest& v
       return out;
     }
     const fs::path record_out = dir / name;
+    // a placed reset is in the trajectory alone: record replays it --from there (no seed
+    // resets to it); otherwise the seed's reset and the replay of the saved actions
+    const std::vector<std::string> replay =
+        live.placed
+            ? std::vector<std::string>{"--from", json_path.string()}
+            : std::vector<std::string>{
+                  "--env-id", src.spec->id,      "--seed",  std::to_string(*live.reset_seed),
+                  "--policy", trajectory.policy, "--steps", std::to_string(live.steps.size() - 1)};
     out["command"] =
-        RecordCommand(src.spec->id, *live.reset_seed, trajectory.policy, live.steps.size() - 1,
-                      !options_.assets_flag.empty(), env.assets(), view, record_out);
+        RecordCommand(replay, !options_.assets_flag.empty(), env.assets(), view, record_out);
     out["record_out"] = (dir / name).string();
     char episode_file[32];
     std::snprintf(episode_file, sizeof(episode_file), "episode_%03d.json", live.index);

@@ -188,8 +188,41 @@ StepRequest ParseStepRequest(const Query& query) {
   return r;
 }
 
+namespace {
+
+// The comma-separated finite numbers of parameter `name`, `low` to `high` of them.
+std::vector<double> Coordinates(const Params& p, const char* name, size_t low, size_t high) {
+  const std::string& text = *p.Find(name);
+  const std::string accepted = std::string("; accepted: ") +
+                               (low == high ? "x,y,z" : "x,y or x,y,z") +
+                               ", metres in world coordinates";
+  std::vector<double> out;
+  size_t at = 0;
+  while (true) {
+    const size_t comma = text.find(',', at);
+    const std::string part = text.substr(at, comma == std::string::npos ? comma : comma - at);
+    char* end = nullptr;
+    const double v = std::strtod(part.c_str(), &end);
+    if (part.empty() || !end || *end != '\0' || !std::isfinite(v) || out.size() == high) {
+      Bad("parameter " + std::string(name) + " '" + Params::Printable(text) + "' is not " +
+          std::to_string(low) + (low == high ? "" : " or " + std::to_string(high)) +
+          " comma-separated finite numbers" + accepted);
+    }
+    out.push_back(v);
+    if (comma == std::string::npos) break;
+    at = comma + 1;
+  }
+  if (out.size() < low) {
+    Bad("parameter " + std::string(name) + " '" + Params::Printable(text) + "' has " +
+        std::to_string(out.size()) + " numbers" + accepted);
+  }
+  return out;
+}
+
+}  // namespace
+
 StartRequest ParseStartRequest(const Query& query) {
-  const Params p(query, {"env", "source", "episode", "t"});
+  const Params p(query, {"env", "source", "episode", "t", "goal", "object"});
   StartRequest r;
   if (p.Find("env")) {
     if (p.Find("source") || p.Find("episode") || p.Find("t")) {
@@ -197,7 +230,16 @@ StartRequest ParseStartRequest(const Query& query) {
           "and t to continue a served episode");
     }
     r.env = p.Int("env", 0, 9999, std::nullopt);
+    if (p.Find("goal")) {
+      const std::vector<double> g = Coordinates(p, "goal", 3, 3);
+      r.goal = std::array<double, 3>{g[0], g[1], g[2]};
+    }
+    if (p.Find("object")) r.object = Coordinates(p, "object", 2, 3);
     return r;
+  }
+  if (p.Find("goal") || p.Find("object")) {
+    Bad("parameters goal and object place a live env's reset: give them with env, not with a "
+        "served episode's step");
   }
   r.from = ParseStepRef(p);
   if (r.from.source == kLiveSource) Bad("parameter source 'live': continue from a served episode");

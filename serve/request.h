@@ -8,6 +8,7 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "render/overlay.h"
 #include "render/renderer.h"
@@ -76,6 +77,10 @@ struct StepRequest {
 struct StartRequest {
   std::optional<int> env;  ///< index of a live env (--env-id); else `from`
   StepRef from;
+  /// a live env's reset placed by hand (goal=x,y,z; object=x,y or x,y,z), m in world
+  /// coordinates: the seed's reset with these in place of what it drew
+  std::optional<std::array<double, 3>> goal;
+  std::vector<double> object;  ///< 2 or 3 numbers; empty: where the seed's reset put it
 };
 
 /// The session a request belongs to: its id as given (checked against the sessions later).

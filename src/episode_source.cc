@@ -49,6 +49,12 @@ void AddFile(const std::string& file, TrajectorySource* source, bool first) {
                      source->episodes[index].file + ", " + file + ")");
     }
     source->max_steps = std::max(source->max_steps, static_cast<int>(episode.steps.size()) - 1);
+    if (episode.placed) {
+      EpisodeStart& start = source->starts[index];
+      start.goal = episode.placed->goal;
+      start.object = episode.placed->object;
+      start.placed = true;
+    }
     source->episodes.emplace(index, std::move(episode));
   }
 }
@@ -174,8 +180,23 @@ EpisodeRecord EpisodeReplayer::ReplaySource(const TrajectorySource& source, int 
                   on_step);
   }
   next_ = 0;  // the generator no longer stands where a sequential run's would
-  return ReplayFrom(k, ResetForStart(env_, start->second), recorded.steps, recorded.complete, "",
-                    on_step);
+  EpisodeRecord episode =
+      ReplayFrom(k, ResetForStart(env_, start->second), recorded.steps, recorded.complete,
+                 source.dataset ? "" : recorded.file, on_step);
+  episode.placed = recorded.placed;  // written again where the recording had it
+  return episode;
+}
+
+EpisodeRecord EpisodeReplayer::ReplayEpisode(int k, const TrajectoryEpisode& recorded,
+                                             const std::string& check,
+                                             const StepCallback& on_step) {
+  if (!recorded.placed) return Replay(k, recorded.steps, recorded.complete, check, on_step);
+  next_ = 0;  // the generator no longer stands where a sequential run's would
+  EpisodeRecord episode =
+      ReplayFrom(k, env_.ResetTo(recorded.placed->goal, recorded.placed->object), recorded.steps,
+                 recorded.complete, check, on_step);
+  episode.placed = recorded.placed;
+  return episode;
 }
 
 EpisodeRecord EpisodeReplayer::Replay(int k, const std::vector<StepRecord>& recorded,
@@ -389,9 +410,7 @@ std::optional<std::array<double, 3>> RecordedAchieved(const TrajectorySource& so
 void VerifyRecording(FetchEnv& env, const TrajectorySource& source) {
   if (source.dataset) return;  // a dataset may drift: MeasureDivergence reports it
   EpisodeReplayer replayer(env, source.seed);
-  for (const auto& [k, episode] : source.episodes) {
-    replayer.Replay(k, episode.steps, episode.complete, episode.file, nullptr);
-  }
+  for (const auto& entry : source.episodes) replayer.ReplaySource(source, entry.first, nullptr);
 }
 
 std::optional<std::vector<int>> ReplayedEpisodes(const PolicySpec& policy, int episodes,

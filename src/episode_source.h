@@ -67,10 +67,16 @@ struct EpisodeStart {
   /// rebuild: it is the env's own reset, hidden state (the object's quaternion) included.
   std::optional<NumpyGenerator> generator;
   int continued_from = -1;  ///< the seeded episode whose generator it continues
-  /// "seed", "continued generator" or "first observation": said per episode in the console,
-  /// manifest and report.
+  /// a recording's episode whose reset was placed by hand (TrajectoryEpisode::placed): reset
+  /// there by FetchEnv::ResetTo, and checked step by step as any recording
+  bool placed = false;
+  /// "seed", "continued generator", "placed" or "first observation": said per episode in the
+  /// console, manifest and report.
   const char* Rule() const {
-    return seed ? "seed" : generator ? "continued generator" : "first observation";
+    return seed        ? "seed"
+           : generator ? "continued generator"
+           : placed    ? "placed"
+                       : "first observation";
   }
 };
 
@@ -106,8 +112,9 @@ struct TrajectorySource {
   AssetSource assets;                         ///< trajectory assets (kind, root, sha256, origin)
   std::map<int, TrajectoryEpisode> episodes;  ///< by index; each names the file it came from
   int max_steps = 0;                          ///< the longest episode's steps
-  /// A dataset: how each episode starts (by index); empty for fetchscope recordings, whose
-  /// episode 0 resets with `seed` and the others continue the generator.
+  /// A dataset: how each episode starts (by index). A fetchscope recording: its episodes placed
+  /// by hand (EpisodeStart::placed); the others' episode 0 resets with `seed` and the others
+  /// continue the generator.
   std::map<int, EpisodeStart> starts;
   /// A dataset: replayed steps are compared within `tolerance` and any divergence is reported
   /// (MeasureDivergence), never fatal; the dataset's achieved goal shows as a ghost marker.
@@ -141,6 +148,10 @@ class EpisodeReplayer {
   /// may stop it early).
   EpisodeRecord Replay(int k, const std::vector<StepRecord>& recorded, bool recorded_complete,
                        const std::string& check, const StepCallback& on_step);
+  /// Replays `recorded` as episode `k`: from its reset placed by hand where it has one
+  /// (TrajectoryEpisode::placed, FetchEnv::ResetTo), else as Replay; checked against `check`.
+  EpisodeRecord ReplayEpisode(int k, const TrajectoryEpisode& recorded, const std::string& check,
+                              const StepCallback& on_step);
   /// Replays episode `k` of `source`: as Replay with the exact check for a recording; for a
   /// dataset, from its EpisodeStart and unchecked (MeasureDivergence measured it).
   EpisodeRecord ReplaySource(const TrajectorySource& source, int k, const StepCallback& on_step);

@@ -258,6 +258,35 @@ class TrajectoryReader {
     return step;
   }
 
+  // a reset placed by hand: finite numbers, the object's position and angles together
+  PlacedReset Placed(const json& r, const std::string& key) const {
+    const json* rule = r.is_object() ? Find(r, "rule") : nullptr;
+    if (!rule || *rule != "placed") Fail(key + ".rule", "expected \"placed\"");
+    for (const auto& [member, value] : r.items()) {
+      if (member != "rule" && member != "goal" && member != "object_position" &&
+          member != "object_euler") {
+        Fail(key + "." + member,
+             "unknown member; accepted: rule, goal, object_position, "
+             "object_euler");
+      }
+    }
+    const auto finite = [&](const char* member) {
+      const std::array<double, 3> v = Vector3(r, member, key);
+      for (double x : v) {
+        if (!std::isfinite(x)) Fail(key + "." + member, "expected 3 finite numbers");
+      }
+      return v;
+    };
+    PlacedReset placed;
+    placed.goal = finite("goal");
+    const bool position = r.contains("object_position"), euler = r.contains("object_euler");
+    if (position != euler) {
+      Fail(key, "expected object_position and object_euler together, or neither");
+    }
+    if (position) placed.object = ObjectPose{finite("object_position"), finite("object_euler")};
+    return placed;
+  }
+
   TrajectoryEpisode Episode(const json& e, const std::string& key) const {
     if (!e.is_object()) Fail(key, "expected an object");
     TrajectoryEpisode episode;
@@ -291,6 +320,7 @@ class TrajectoryReader {
       if (t > 0) sum += *episode.steps.back().reward;
     }
     episode.episode_return = sum;
+    if (const json* reset = Find(e, "reset")) episode.placed = Placed(*reset, key + ".reset");
     if (const json* r = Find(e, "return"))
       episode.episode_return = Number(*r, key + ".return", "a number");
     return episode;
@@ -364,6 +394,14 @@ nlohmann::json EpisodeJson(const TrajectoryEpisode& episode) {
   for (const TrajectoryStep& s : episode.steps) {
     if (!s.past_time_limit) continue;
     if (past++ == 0) first = s.t;
+  }
+  if (episode.placed) {
+    json& reset =
+        out["reset"] = {{"rule", "placed"}, {"goal", JsonVector(episode.placed->goal.data(), 3)}};
+    if (const auto& object = episode.placed->object) {
+      reset["object_position"] = JsonVector(object->position.data(), 3);
+      reset["object_euler"] = JsonVector(object->euler.data(), 3);
+    }
   }
   if (past > 0) {
     out["past_time_limit"] = {

@@ -15,7 +15,9 @@
 // Step 0 is the reset (action and reward null). Steps past the env's TimeLimit (--steps above
 // max_episode_steps) carry "past_time_limit": true, their episode "past_time_limit":
 // {"max_episode_steps", "first_step", "steps"} and the file a "note"; files without such steps
-// have none of these keys. Non-finite values are written as the strings
+// have none of these keys. An episode whose reset was placed by hand (serve) carries "reset":
+// {"rule": "placed", "goal", "object_position", "object_euler"} (PlacedReset; an addition like
+// "contacts"). Non-finite values are written as the strings
 // "inf", "-inf" and "nan" (JSON has no literal for them) and read back as such.
 //
 // Versions, as the manifest's (run/manifest.h): the file carries "schema_version"
@@ -56,6 +58,15 @@ struct TrajectoryStep {
   std::optional<ContactSignals> contacts;
 };
 
+/// An episode's reset placed by hand (serve's "place" form) rather than drawn by the reset
+/// generator: FetchEnv::ResetTo(goal, object) after the episode's own reset. Written as the
+/// episode's "reset": {"rule": "placed", "goal", "object_position", "object_euler"} (the object's
+/// members on object tasks only); record --from resets there.
+struct PlacedReset {
+  std::array<double, 3> goal{};      ///< desired goal, m
+  std::optional<ObjectPose> object;  ///< the object's pose (object tasks)
+};
+
 /// One episode: its reset and its steps.
 struct TrajectoryEpisode {
   int index = 0;                      ///< episode number within the run
@@ -68,6 +79,7 @@ struct TrajectoryEpisode {
   /// seed; later episodes continue the generator and have none). Not written to the file.
   std::optional<uint64_t> seed;
   std::string file;  ///< the file it was read from, for messages ("" when played here)
+  std::optional<PlacedReset> placed;  ///< a reset placed by hand; nullopt: the generator's
 };
 
 /// A trajectory file: the run's environment and policy, and its episodes in file order.

@@ -290,6 +290,11 @@ TEST_F(BrowserTest, ServeInspectsStepsHoldsAGraspAndFreesClosedPages) {
     EXPECT_EQ(s["first_field"], first_field) << s;
   }
   std::cout << "side by side: " << result["side_by_side"][0]["text"] << "\n";
+  // each view its own camera: the second's set, the first's kept
+  const json& cameras = result["side_by_side_cameras"];
+  EXPECT_EQ(cameras["other"], "external_camera_0") << cameras;
+  EXPECT_EQ(cameras["main"], cameras["main_before"]) << cameras;
+  EXPECT_NE(cameras["main"], "external_camera_0") << cameras;
 
   // 2. the grasp: closed on the block, it holds through four lifts (both fingers press it)
   EXPECT_GE(result["chords"].get<int>(), 1) << "no step moved along two axes at once";
@@ -304,6 +309,20 @@ TEST_F(BrowserTest, ServeInspectsStepsHoldsAGraspAndFreesClosedPages) {
   std::cout << "block z closed " << closed_z << " m, after four lifts " << lifted_z << " m\n";
   EXPECT_GT(lifted_z, closed_z + 0.02);
   for (const json& a : result["lift_actions"]) EXPECT_EQ(a[3], -1.0) << a;
+
+  // 2b. a placed reset: the block where typed (on the table, as the seed's reset rests it), the
+  // goal at the world point clicked on the table's top
+  const json& fields = result["place_fields"];
+  const json& placed = result["placed_reset"];
+  EXPECT_TRUE(result["place_clicked_table"].get<bool>());
+  EXPECT_EQ(placed["observation"][3], 1.25) << placed;
+  EXPECT_EQ(placed["observation"][4], 0.85) << placed;
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_NEAR(placed["desired_goal"][i].get<double>(), fields[2 + i].get<double>(), 1e-4) << i;
+  }
+  EXPECT_NEAR(placed["desired_goal"][2].get<double>(), 0.4, 0.01) << "not on the table's top";
+  EXPECT_NE(result["placed_info"].get<std::string>().find("reset placed"), std::string::npos)
+      << result["placed_info"];
 
   // 3. play stops at the TimeLimit; Save during play; every pause pauses
   EXPECT_EQ(result["stopped_at"], 50);

@@ -44,16 +44,7 @@ using testing::RunFetchscope;
 using testing::ServeProcess;
 using testing::TempDir;
 
-// A scripted FetchPickAndPlace run of `steps` steps and `episodes` episodes in dir/run.
-fs::path RecordRun(const fs::path& dir, int episodes, int steps) {
-  const auto r = RunFetchscope(
-      "record --env-id FetchPickAndPlace-v4 --policy scripted --seed 2 "
-      "--episodes " +
-      std::to_string(episodes) + " --steps " + std::to_string(steps) +
-      " --width 96 --height 72 --quiet --out '" + (dir / "run").string() + "'");
-  EXPECT_EQ(r.exit_code, 0) << r.output;
-  return dir / "run";
-}
+using serve_client::RecordRun;
 
 int Connect(int port) { return testing::ConnectLoopback(port); }
 using testing::ReadUntilClosed;
@@ -306,68 +297,6 @@ TEST(ServeTest, ALiveFrameIsRendersFramePixelForPixel) {
   EXPECT_EQ(jpeg->get_header_value("Content-Type"), "image/jpeg");
   EXPECT_EQ(jpeg->body.substr(0, 3), "\xff\xd8\xff");
   EXPECT_NE(jpeg->get_header_value("Server-Timing").find("render;dur="), std::string::npos);
-}
-
-// Runs the record command a save printed (fetchscope on PATH, as the guide has it).
-int RunPrinted(const std::string& command) {
-  const std::string path = fs::path(FETCHSCOPE_BIN).parent_path().string();
-  return RunCommand("PATH='" + path + "':\"$PATH\" " + command + " --quiet").exit_code;
-}
-
-TEST(ServeTest, ASavedSessionReRendersByteForByteWithThePrintedCommand) {
-  TempDir dir;
-  const fs::path run = RecordRun(dir.path(), 2, 12);
-  ServeProcess serve("'" + run.string() +
-                         "' --env-id FetchPickAndPlace-v4 --seed 3 --policy "
-                         "scripted --save-dir '" +
-                         (dir.path() / "saved dir").string() + "'",
-                     dir.path());
-  ASSERT_TRUE(serve.started()) << serve.log();
-  Api api(serve);
-  const std::string s = api.NewSession();
-  // a live env: the policy, keys, a step back, the policy again
-  api.Json(api.Post("/api/live/start?session=" + s + "&env=1"));
-  for (int i = 0; i < 6; ++i) api.Json(api.Post("/api/live/step?session=" + s));
-  api.Json(api.Post("/api/live/step?session=" + s + "&action=0.5,0,0,1"));
-  api.Json(api.Post("/api/live/step?session=" + s + "&action=0,-0.25,1,-1"));
-  EXPECT_EQ(api.Json(api.Post("/api/live/back?session=" + s))["steps"], 7);
-  const json last = api.Json(api.Post("/api/live/step?session=" + s));
-  EXPECT_EQ(last["steps"], 8);
-  const json saved =
-      api.Json(api.Post("/api/live/save?session=" + s + "&camera=external_camera_0&overlay=" +
-                        Encode("goal,achieved") + "&width=64&height=48"));
-  const std::string command = saved.value("command", "");
-  EXPECT_NE(command.find("--camera external_camera_0 --overlay goal,achieved --width 64"),
-            std::string::npos)
-      << command;
-  EXPECT_NE(command.find("'replay:"), std::string::npos) << command;  // "saved dir": quoted
-  if (RunCommand("command -v fetchscope").exit_code != 0) {
-    // fetchscope is not on PATH here: the command names the binary by its path and runs as is
-    const std::string bin = fs::canonical(FETCHSCOPE_BIN).string();
-    EXPECT_EQ(command.rfind(bin + " record ", 0), 0u) << command;
-  }
-  ASSERT_EQ(RunPrinted(command), 0) << command;
-  const std::string session_json = saved["files"][0];
-  EXPECT_EQ(ReadFile(saved["episode_file"].get<std::string>()), ReadFile(session_json));
-  // the CSV beside it replays the same actions from the same reset
-  const auto csv = RunFetchscope(
-      "rollout --env-id FetchPickAndPlace-v4 --seed 3 --steps 8 --signals contacts "
-      "--policy 'replay:" +
-      saved["files"][1].get<std::string>() + "'");
-  ASSERT_EQ(csv.exit_code, 0) << csv.output;
-  EXPECT_EQ(json::parse(csv.output)["episodes"][0]["steps"],
-            json::parse(ReadFile(session_json))["episodes"][0]["steps"]);
-
-  // continued from step 4 of the run's episode 1 (a reset that continues the generator)
-  api.Json(api.Post("/api/live/start?session=" + s + "&source=0&episode=1&t=4"));
-  for (const char* a : {"1,0,0,0", "0,0,-1,-1", "0,0,0,1"}) {
-    api.Json(api.Post("/api/live/step?session=" + s + "&action=" + a));
-  }
-  const json again = api.Json(api.Post("/api/live/save?session=" + s + "&width=64&height=48"));
-  ASSERT_EQ(RunPrinted(again.value("command", "")), 0) << again.dump();
-  EXPECT_EQ(fs::path(again["episode_file"].get<std::string>()).filename(), "episode_001.json");
-  EXPECT_EQ(ReadFile(again["episode_file"].get<std::string>()),
-            ReadFile(again["files"][0].get<std::string>()));
 }
 
 TEST(ServeTest, TwoPagesHaveIndependentSessions) {

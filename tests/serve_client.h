@@ -6,6 +6,7 @@
 #include <httplib.h>
 
 #include <cctype>
+#include <filesystem>
 #include <nlohmann/json.hpp>
 #include <string>
 
@@ -63,6 +64,17 @@ inline void ExpectRefusal(const httplib::Result& r, int status, const std::strin
   EXPECT_NE(body["error"].get<std::string>().find(says), std::string::npos)
       << what << ": " << r->body;
   EXPECT_EQ(r->get_header_value("Content-Type"), "application/json") << what;
+}
+
+// A scripted FetchPickAndPlace run of `steps` steps and `episodes` episodes in dir/run.
+inline std::filesystem::path RecordRun(const std::filesystem::path& dir, int episodes, int steps) {
+  const auto r = testing::RunFetchscope(
+      "record --env-id FetchPickAndPlace-v4 --policy scripted --seed 2 "
+      "--episodes " +
+      std::to_string(episodes) + " --steps " + std::to_string(steps) +
+      " --width 96 --height 72 --quiet --out '" + (dir / "run").string() + "'");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  return dir / "run";
 }
 
 }  // namespace fetchscope::serve_client

@@ -348,7 +348,30 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"NoSuccess", [](json& j) { j["episodes"][1]["steps"][1].erase("is_success"); },
                 "episodes[1].steps[1].is_success: expected true or false"},
         BadCase{"CompleteNotABool", [](json& j) { j["episodes"][1]["complete"] = "no"; },
-                "episodes[1].complete: expected true or false"}),
+                "episodes[1].complete: expected true or false"},
+        BadCase{"ResetNotPlaced",
+                [](json& j) {
+                  j["episodes"][0]["reset"] = {{"rule", "seed"}, {"goal", {1, 2, 3}}};
+                },
+                "episodes[0].reset.rule: expected \"placed\""},
+        BadCase{"ResetUnknownMember",
+                [](json& j) {
+                  j["episodes"][0]["reset"] = {{"rule", "placed"}, {"goal", {1, 2, 3}}, {"g", 1}};
+                },
+                "episodes[0].reset.g: unknown member; accepted: rule, goal, object_position, "
+                "object_euler"},
+        BadCase{"ResetGoalInfinite",
+                [](json& j) {
+                  j["episodes"][0]["reset"] = {{"rule", "placed"}, {"goal", {1, "inf", 3}}};
+                },
+                "episodes[0].reset.goal: expected 3 finite numbers"},
+        BadCase{"ResetObjectHalf",
+                [](json& j) {
+                  j["episodes"][0]["reset"] = {
+                      {"rule", "placed"}, {"goal", {1, 2, 3}}, {"object_position", {1, 2, 3}}};
+                },
+                "episodes[0].reset: expected object_position and object_euler together, or "
+                "neither"}),
     [](const ::testing::TestParamInfo<BadCase>& info) { return std::string(info.param.name); });
 
 TEST(Trajectory, TextThatIsNotJsonNamesTheFile) {
@@ -443,6 +466,69 @@ TEST(EpisodeSource, ARecordingReplaysExactlyAndAnEditIsCaught) {
     FAIL() << "mixed runs accepted";
   } catch (const RunError& e) {
     EXPECT_NE(std::string(e.what()).find("one run at a time"), std::string::npos) << e.what();
+  }
+}
+
+// An episode whose reset was placed by hand (serve's form): written with its "reset", replayed
+// from there and checked step by step; an edited placement is caught at the reset.
+TEST(EpisodeSource, APlacedResetReplaysExactlyAndAnEditedPlacementIsCaught) {
+  TempDir tmp;
+  const EnvSpec& spec = FindEnvSpec("FetchPush-v4");
+  FetchEnv env(spec, ResolveAssets("bundled"));
+  const Observation drawn = env.Reset(4);
+  PlacedReset placed;
+  placed.goal = {1.4, 0.6, 0.42};
+  placed.object = ObjectPose{{1.2, 0.9, drawn.observation[5]},
+                             {drawn.observation[11], drawn.observation[12], drawn.observation[13]}};
+  TrajectoryEpisode episode;
+  episode.placed = placed;
+  TrajectoryStep row;
+  row.obs = env.ResetTo(placed.goal, placed.object);
+  row.is_success = env.IsSuccess(row.obs.achieved_goal, row.obs.desired_goal);
+  episode.steps.push_back(row);
+  for (int t = 1; t <= 4; ++t) {
+    Action a;
+    a.value = {0.3 * t, -0.5, 0.1, 1};
+    const StepResult r = env.Step(a);
+    TrajectoryStep step;
+    step.t = t;
+    step.obs = r.obs;
+    step.action = a;
+    step.reward = r.reward;
+    step.is_success = r.is_success;
+    episode.steps.push_back(step);
+    episode.episode_return += r.reward;
+  }
+  Trajectory written;
+  written.env_id = spec.id;
+  written.seed = 4;
+  written.policy = "keys";
+  written.assets = env.assets();
+  written.episodes = {episode};
+  const fs::path file = tmp.path() / "placed.json";
+  std::ofstream(file) << TrajectoryText(written);
+
+  const TrajectorySource source = LoadTrajectorySource(file.string());
+  ASSERT_EQ(source.starts.count(0), 1u);
+  EXPECT_STREQ(source.starts.at(0).Rule(), "placed");
+  FetchEnv fresh(spec, ResolveAssets("bundled"));
+  EXPECT_NO_THROW(VerifyRecording(fresh, source));
+  EpisodeReplayer replayer(fresh, 4);
+  Trajectory again = written;
+  again.episodes = {replayer.ReplaySource(source, 0, nullptr)};
+  EXPECT_EQ(TrajectoryText(again), TrajectoryText(written));  // "reset" written again
+
+  nlohmann::json j = nlohmann::json::parse(TrajectoryText(written));
+  j["episodes"][0]["reset"]["object_position"][0] = 1.21;
+  std::ofstream(file) << j.dump();
+  try {
+    FetchEnv other(spec, ResolveAssets("bundled"));
+    VerifyRecording(other, LoadTrajectorySource(file.string()));
+    FAIL() << "the edited placement was not caught";
+  } catch (const ReplayMismatch& e) {
+    EXPECT_NE(std::string(e.what()).find("episode 0 step 0: observation[3] recorded 1.2"),
+              std::string::npos)
+        << e.what();
   }
 }
 

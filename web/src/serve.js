@@ -9,7 +9,7 @@
 (() => {
   performance.mark('fetchscope-serve-script');
   const {el} = FS;
-  const {episodeBrowser, growLists, cutLists, cameraText, parseCamera, DEFAULT_FREE} = FSServeTools;
+  const {episodeBrowser, placementForm, growLists, cutLists, cameraText, parseCamera, DEFAULT_FREE} = FSServeTools;
   // serve accepts a POST on the cookie only with this Content-Type (and this page's Origin, which
   // the browser sends): a form or a no-cors fetch on another site's page cannot send it
   const POST_HEADERS = {'Content-Type': 'application/json'};
@@ -36,6 +36,7 @@
     gripper: 0,      // the latched gripper command every move carries: +1 open, -1 closed, 0 none
     savedSteps: 0,   // the live steps the last save holds (a reload with more asks first)
     rows: null,      // the rows of the episode shown (the step inspector's)
+    placePick: null, // set by a placement form: the next click on the view gives it its world point
   };
   const stats = {requested: 0, received: 0, dropped: 0, errors: 0, lastError: '', renderMs: [], encodeMs: [],
                  roundTripMs: [], times: [], lastCamera: '', lastFormat: '',
@@ -148,6 +149,13 @@
   let drag = null;
   image.addEventListener('contextmenu', (e) => e.preventDefault());
   image.addEventListener('pointerdown', (e) => {
+    if (state.placePick) {  // a placement form asked for the point under this click
+      e.preventDefault();
+      const give = state.placePick;
+      state.placePick = null;
+      pickAt(e).then((p) => (p && p.point ? give(p.point) : showError('no surface under the pointer: click the table or a body')));
+      return;
+    }
     const source = data.sources[state.source === 'live' ? state.live.source : state.source];
     const free = parseCamera(state.camera, source);
     if (!free) { showError('only one camera orbits: this view tiles several (choose one, or a free camera, to drag it)'); return; }
@@ -377,7 +385,8 @@
     state.rows = live.rows;
     requestFrame();  // the new step's frame first; the plots are rebuilt while it renders
     liveInfo.textContent = `live episode: ${data.sources[live.source].title}, episode ${live.episode}, ` +
-        (live.prefix ? `continued from step ${live.prefix}, ` : '') + `${live.steps} steps, actions ${live.action_dtype}`;
+        (live.prefix ? `continued from step ${live.prefix}, ` : '') + (live.placed ? 'reset placed, ' : '') +
+        `${live.steps} steps, actions ${live.action_dtype}`;
     liveBox.dataset.steps = String(live.steps);
     showInspector();
     // the plots once the new step's frame is on screen (unless another step came meanwhile)
@@ -388,13 +397,14 @@
     });
   }
 
-  async function startLive({from = false, env = null} = {}) {
-    const params = from ? {source: state.source, episode: state.episode, t: state.t} : {env};
+  async function startLive({from = false, env = null, place = {}} = {}) {
+    const params = from ? {source: state.source, episode: state.episode, t: state.t} : {env, ...place};
     if (from && (state.source === null || state.source === 'live')) return;
     const live = await liveCall('/api/live/start', params);
     if (live) {
       state.savedSteps = 0;
       showLive(live);
+      if (!from && placeForms[env]) placeForms[env].fill(live.rows[0]);
     }
   }
   async function liveStep(action, {wait = false} = {}) {
@@ -582,11 +592,14 @@
 
   const sourcesBox = el('div', {class: 'serve-sources'});
   const listings = [];  // the episode tables, drawn after the first frame
+  const placeForms = {};  // a live env's placement form, by source
   data.sources.forEach((s, i) => {
     const box = el('details', {class: 'serve-source', open: true}, el('summary', {}, s.title));
     if (s.kind === 'live') {
+      const place = placeForms[i] = placementForm({source: s, index: i, start: ({env, ...at}) => startLive({env, place: at}),
+                                                   armPick: (give) => { state.placePick = give; }});
       box.append(el('button', {type: 'button', class: 'serve-start-env', 'data-source': i, onclick: () => startLive({env: i})},
-          `start ${s.env_id} (seed ${s.seed}) live`));
+          `start ${s.env_id} (seed ${s.seed}) live`), place.element);
     } else {
       // the table is drawn once the first frame is on screen: a run of a thousand episodes makes
       // a thousand rows, which would hold the first frame back; the columns that need each

@@ -139,6 +139,7 @@ window.FSServeTools = (() => {
     ];
     let shown = rows;
     function draw() {
+      const began = performance.now();
       let test = () => true;
       try {
         test = parseFilter(filter.value);
@@ -152,6 +153,7 @@ window.FSServeTools = (() => {
       note.textContent = `${shown.length} of ${rows.length} episodes`;
       element.dataset.shown = String(shown.length);
       tableBox.replaceChildren(FS.sortableTable(columns(), shown, (r) => (r.success ? 'ok' : 'fail')));
+      performance.measure('fetchscope-serve-browser-drawn', {start: began});  // bench reads it
     }
     let timer = null;
     filter.addEventListener('input', () => { clearTimeout(timer); timer = setTimeout(draw, 120); });
@@ -177,6 +179,7 @@ window.FSServeTools = (() => {
         }
         element.dataset.columns = 'full';
         draw();
+        performance.mark('fetchscope-serve-columns');
       },
     };
   }
@@ -219,15 +222,21 @@ window.FSServeTools = (() => {
     return {element: inspector, show: showInspector};
   }
 
-  // ---- side by side: a second served episode, its own view at the same step (the camera,
-  // overlays and size of the first), compare's first state difference and the difference's plot
+  // ---- side by side: a second served episode, its own view at the same step (the overlays and
+  // size of the first; its own camera, else the first's), compare's first state difference and the
+  // difference's plot
 
   function sideBySide({data, state, api, viewParams, showError}) {
     const other = {source: null, episode: null, rows: null, inFlight: false, again: false, url: null};
     const otherImage = el('img', {class: 'serve-other-frame', alt: 'the second episode', draggable: 'false'});
     const otherCaption = el('p', {class: 'caption serve-other-caption'});
     const otherDiff = el('div', {class: 'serve-other-diff'});
-    const otherBox = el('div', {class: 'serve-other', hidden: true}, otherCaption, otherImage, otherDiff);
+    const otherCamera = el('input', {type: 'text', class: 'serve-other-camera', spellcheck: 'false', list: 'serve-other-cameras',
+                                     'aria-label': 'camera of the second view', placeholder: 'its camera: empty for the first view\'s'});
+    const cameraList = el('datalist', {id: 'serve-other-cameras'});
+    otherCamera.addEventListener('change', () => requestOtherFrame());
+    const otherBox = el('div', {class: 'serve-other', hidden: true}, otherCaption, otherImage,
+                        el('div', {class: 'serve-row'}, 'camera ', otherCamera, cameraList), otherDiff);
     const otherSelect = el('select', {'aria-label': 'side by side with', class: 'serve-other-select'});
     otherSelect.addEventListener('change', () => {
       if (!otherSelect.value) { other.source = null; otherBox.hidden = true; return; }
@@ -244,6 +253,8 @@ window.FSServeTools = (() => {
       try {
         const {body} = await api('/api/episode', {source, episode});
         Object.assign(other, {source, episode, rows: body.rows});
+        cameraList.replaceChildren(...['default', 'track', ...(data.sources[source].cameras || []).map((c) => c.name)]
+            .map((name) => el('option', {value: name})));
         otherBox.hidden = false;
         otherBox.dataset.episode = `${source}/${episode}`;
         requestOtherFrame();
@@ -259,10 +270,12 @@ window.FSServeTools = (() => {
       other.again = false;
       const t = Math.min(state.t, other.rows.length - 1);
       const params = {...viewParams(state.moving || state.playing ? 'jpeg' : 'png'), source: other.source, episode: other.episode, t};
-      api('/api/frame', params).then(({body}) => {
+      if (otherCamera.value.trim()) params.camera = otherCamera.value.trim();
+      api('/api/frame', params).then(({body, response}) => {
         if (other.url) URL.revokeObjectURL(other.url);
         other.url = URL.createObjectURL(body);
         otherImage.dataset.step = String(t);
+        otherImage.dataset.camera = response.headers.get('X-Fetchscope-Camera') || '';
         otherImage.src = other.url;
         otherCaption.textContent = `${data.sources[other.source].title} · episode ${other.episode} · step ${t}` +
             (t < state.t ? ` (it ends at step ${other.rows.length - 1})` : '');
@@ -303,6 +316,56 @@ window.FSServeTools = (() => {
     return {box: otherBox, select: otherSelect, fill: fillOtherSelect, requestFrame: requestOtherFrame, showDifference};
   }
 
-  return {fields, shownValue, stepPlot, parseFilter, episodeBrowser, inspector, sideBySide,
+  // ---- placing a live env's reset: where the block and the goal start, typed or clicked on the
+  // view (the next click's world point), sent with the start (goal=x,y,z, object=x,y); the saved
+  // session records it, so that its record command resets there too
+
+  function placementForm({source, index, start, armPick}) {
+    const number = (label) => el('input', {type: 'number', step: '0.001', class: 'serve-place-value', 'aria-label': label, placeholder: 'as drawn'});
+    const block = [number('block x'), number('block y')];
+    const goal = [number('goal x'), number('goal y'), number('goal z')];
+    const note = el('p', {class: 'caption serve-place-note'}, 'empty: where the seed\'s reset puts it');
+    const pick = (what, inputs) => el('button', {type: 'button', class: `serve-place-pick-${what}`,
+        title: `the next click on the view sets the ${what} to the world point under the pointer (x, y${inputs.length > 2 ? ', z' : ''})`,
+        onclick: () => {
+          note.textContent = `click the view where the ${what} should start`;
+          armPick((point) => {
+            inputs.forEach((input, i) => { input.value = point[i].toFixed(4); });
+            note.textContent = `${what} at (${inputs.map((i) => i.value).join(', ')}) m`;
+          });
+        }}, `${what} ← click`);
+    const read = (inputs) => {
+      const values = inputs.map((i) => i.value.trim());
+      if (values.every((v) => v === '')) return null;
+      if (values.some((v) => v === '' || !Number.isFinite(Number(v)))) throw new Error('give every coordinate, or none');
+      return values.join(',');
+    };
+    const go = el('button', {type: 'button', class: 'serve-start-placed', 'data-source': index, onclick: () => {
+      try {
+        const params = {env: index};
+        const g = read(goal);
+        const b = source.has_object ? read(block) : null;
+        if (g) params.goal = g;
+        if (b) params.object = b;
+        start(params);
+      } catch (e) {
+        note.textContent = `not started: ${e.message}`;
+      }
+    }}, 'start placed');
+    const rows = [];
+    if (source.has_object) rows.push(el('div', {class: 'serve-row'}, 'block x ', block[0], ' y ', block[1], pick('block', block)));
+    rows.push(el('div', {class: 'serve-row'}, 'goal x ', goal[0], ' y ', goal[1], ' z ', goal[2], pick('goal', goal)));
+    const element = el('details', {class: 'serve-place'}, el('summary', {}, 'place the block and goal, then start'), ...rows,
+                       el('div', {class: 'serve-row'}, go), note);
+    // a live episode's reset (the seed's, or placed) fills the empty fields, for editing
+    function fill(row) {
+      const values = [...goal.map((_, i) => row.desired_goal[i])];
+      goal.forEach((input, i) => { if (input.value === '') input.value = values[i].toFixed(4); });
+      if (source.has_object) block.forEach((input, i) => { if (input.value === '') input.value = row.observation[3 + i].toFixed(4); });
+    }
+    return {element, fill};
+  }
+
+  return {fields, shownValue, stepPlot, parseFilter, episodeBrowser, inspector, sideBySide, placementForm,
           growLists, cutLists, cameraText, parseCamera, DEFAULT_FREE};
 })();

@@ -116,6 +116,14 @@ try {
       text: document.querySelector('.serve-first-difference').textContent,
     })));
   }
+  // its own camera: the second view alone changes
+  const mainCamera = await a.evaluate(() => document.querySelector('img.serve-frame').dataset.camera);
+  await a.locator('input.serve-other-camera').fill('external_camera_0');
+  await a.locator('input.serve-other-camera').dispatchEvent('change');
+  await a.waitForFunction(() => document.querySelector('img.serve-other-frame').dataset.camera === 'external_camera_0', null, {timeout});
+  result.side_by_side_cameras = await a.evaluate((before) => ({
+    main_before: before, main: document.querySelector('img.serve-frame').dataset.camera,
+    other: document.querySelector('img.serve-other-frame').dataset.camera}), mainCamera);
   await a.screenshot({path: join(args.out, 'side_by_side.png'), fullPage: false});
   await a.locator('select.serve-other-select').selectOption('');
 
@@ -154,6 +162,33 @@ try {
   }
   result.lift_actions = await a.evaluate(() => window.fetchscopeServe.state.live.rows.slice(-4).map((r) => r.action));
   await a.screenshot({path: join(args.out, 'grasp.png'), fullPage: false});
+
+  // 2b. a placed reset: the block typed, the goal clicked on the view (the pick's world point)
+  await a.locator('details.serve-place summary').first().click();
+  await a.locator('input[aria-label="block x"]').fill(args['block-x'] || '1.25');
+  await a.locator('input[aria-label="block y"]').fill(args['block-y'] || '0.85');
+  for (const axis of ['x', 'y', 'z']) await a.locator(`input[aria-label="goal ${axis}"]`).fill('');
+  // a pixel on the table's top: hovered until the pick names the table
+  const view = await a.locator('img.serve-frame').boundingBox();
+  let at = null;
+  for (const [fx, fy] of [[0.5, 0.62], [0.5, 0.7], [0.4, 0.66], [0.6, 0.66], [0.5, 0.55], [0.45, 0.75]]) {
+    const p = {x: Math.round(view.x + view.width * fx), y: Math.round(view.y + view.height * fy)};
+    await a.mouse.move(p.x, p.y);
+    await a.waitForFunction(() => document.querySelector('.serve-hover').dataset.body !== undefined &&
+                                  document.querySelector('.serve-hover').dataset.at !== '', null, {timeout});
+    await a.waitForTimeout(300);
+    if (await a.evaluate(() => document.querySelector('.serve-hover').dataset.body) === 'table0') { at = p; break; }
+  }
+  result.place_clicked_table = at !== null;
+  await a.locator('button.serve-place-pick-goal').click();
+  await a.mouse.click(at.x, at.y);
+  await a.waitForFunction(() => document.querySelector('input[aria-label="goal z"]').value !== '', null, {timeout});
+  result.place_fields = await a.evaluate(() => ['block x', 'block y', 'goal x', 'goal y', 'goal z']
+      .map((l) => Number(document.querySelector(`input[aria-label="${l}"]`).value)));
+  await a.locator('button.serve-start-placed').click();
+  await a.waitForFunction(() => window.fetchscopeServe.state.live && window.fetchscopeServe.state.live.placed, null, {timeout});
+  result.placed_reset = await a.evaluate(() => window.fetchscopeServe.state.live.rows[0]);
+  result.placed_info = await a.evaluate(() => document.querySelector('.serve-live p.caption').textContent);
 
   // 3. the policy from the reset stops at the TimeLimit; past it, Save during play, pause x9
   await a.locator(`button.serve-start-env[data-source="${args['live-source']}"]`).click();

@@ -48,6 +48,39 @@ try {
             dom_content_loaded_ms: nav.domContentLoadedEventEnd, listed_ms: mark('fetchscope-serve-listed'),
             load_ms: nav.loadEventEnd, episodes_listed: document.querySelectorAll('.serve-source tbody tr').length};
   });
+  // the episode browser: every episode's columns (GET /api/listing, then the table redrawn),
+  // then a filter typed: from the keystroke to the table drawn (the box waits 120 ms for more
+  // keys first), and the draw alone
+  await page.waitForFunction(() => performance.getEntriesByName('fetchscope-serve-columns').length > 0, null, {timeout: 120000});
+  result.browser = await page.evaluate(() => {
+    const listing = performance.getEntriesByType('resource').find((e) => e.name.includes('/api/listing'));
+    const draws = performance.getEntriesByName('fetchscope-serve-browser-drawn');
+    return {columns_ms: performance.getEntriesByName('fetchscope-serve-columns')[0].startTime,
+            listing_request_ms: listing ? listing.duration : null, columns_draw_ms: draws[draws.length - 1].duration,
+            rows: document.querySelectorAll('.serve-browser tbody tr').length};
+  });
+  for (const text of ['distance > 0.05', 'success = no, first_success > 10']) {
+    const before = await page.evaluate(() => performance.getEntriesByName('fetchscope-serve-browser-drawn').length);
+    const typed = await page.evaluate((t) => {
+      const box = document.querySelector('.serve-filter');
+      box.value = t;
+      const at = performance.now();
+      box.dispatchEvent(new Event('input', {bubbles: true}));
+      return at;
+    }, text);
+    await page.waitForFunction((n) => performance.getEntriesByName('fetchscope-serve-browser-drawn').length > n, before, {timeout: 60000});
+    result.browser[text] = await page.evaluate((at) => {
+      const draws = performance.getEntriesByName('fetchscope-serve-browser-drawn');
+      const last = draws[draws.length - 1];
+      return {typed_to_drawn_ms: last.startTime + last.duration - at, draw_ms: last.duration,
+              shown: Number(document.querySelector('.serve-browser').dataset.shown)};
+    }, typed);
+  }
+  await page.evaluate(() => {
+    const box = document.querySelector('.serve-filter');
+    box.value = '';
+    box.dispatchEvent(new Event('input', {bubbles: true}));
+  });
   await page.waitForTimeout(500);
   // drag at the display's rate: a pointer move each animation frame (60 Hz headless), dispatched
   // on the view as the browser dispatches a real drag's
