@@ -94,9 +94,10 @@ int RunProbeActions(const ProbeOptions& o) {
 
 Command AddProbeActions(CLI::App& app) {
   auto o = std::make_shared<ProbeOptions>();
-  // Small frames and a closer view than Gymnasium's: the probes move the gripper centimetres.
-  o->view.width = 240;
-  o->view.height = 240;
+  // A closer view than Gymnasium's, as the probes move the gripper centimetres, in frames big
+  // enough to show the fingers open and shut (at 240 px they were a few pixels).
+  o->view.width = 480;
+  o->view.height = 480;
   o->view.overlay = "action,trail";
   o->view.camera = "free:lookat=1.3,0.75,0.5,distance=1.1,azimuth=150,elevation=-25";
   CLI::App* sub = app.add_subcommand(
