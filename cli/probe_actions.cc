@@ -33,6 +33,7 @@ struct ProbeOptions {
   ViewOptions view;
   int steps = 10;
   std::string magnitudes = "0.25,0.5,1,2";
+  std::string sweep_axis = "auto";
   std::string out;
   std::string json_out;
 };
@@ -43,6 +44,7 @@ int RunProbeActions(const ProbeOptions& o) {
                      " is out of range: use 1 to 50 (the episode limit)");
   }
   const std::vector<double> magnitudes = ParseProbeMagnitudes(o.magnitudes);
+  const std::optional<int> sweep_axis = ParseSweepAxis(o.sweep_axis);
   const EnvSpec& spec = FindEnvSpec(o.env.env_id);
   const uint64_t seed = ParseSeed(o.env.seed);
   ParseOverlays(o.view.overlay);  // reject a bad --overlay before any work
@@ -59,7 +61,7 @@ int RunProbeActions(const ProbeOptions& o) {
   }
 
   ProbeResult result =
-      ProbeActions(env, seed, o.steps, magnitudes, renderer ? &*renderer : nullptr);
+      ProbeActions(env, seed, o.steps, magnitudes, sweep_axis, renderer ? &*renderer : nullptr);
   nlohmann::json& report = result.report;
   // the grasp: after a close from above the object, which fingers touch it and does it lift
   report["grasp"] = GraspProbe(env, seed, renderer ? &*renderer : nullptr, &result.tiles);
@@ -92,9 +94,10 @@ int RunProbeActions(const ProbeOptions& o) {
 
 Command AddProbeActions(CLI::App& app) {
   auto o = std::make_shared<ProbeOptions>();
-  // Small frames and a closer view than Gymnasium's: the probes move the gripper centimetres.
-  o->view.width = 240;
-  o->view.height = 240;
+  // A closer view than Gymnasium's, as the probes move the gripper centimetres, in frames big
+  // enough to show the fingers open and shut (at 240 px they were a few pixels).
+  o->view.width = 480;
+  o->view.height = 480;
   o->view.overlay = "action,trail";
   o->view.camera = "free:lookat=1.3,0.75,0.5,distance=1.1,azimuth=150,elevation=-25";
   CLI::App* sub = app.add_subcommand(
@@ -105,7 +108,11 @@ Command AddProbeActions(CLI::App& app) {
   AddViewOptions(sub, &o->view);
   sub->add_option("--steps", o->steps, "Steps per probe, 1 to 50")->capture_default_str();
   sub->add_option("--magnitudes", o->magnitudes,
-                  "Comma list of positive magnitudes for the +x sweep (x@M probes)")
+                  "Comma list of positive magnitudes for the sweep (<axis>@M probes, e.g. +y@0.5)")
+      ->capture_default_str();
+  sub->add_option("--sweep-axis", o->sweep_axis,
+                  "The sweep's axis: +x, -x, +y, -y, +z, -z, or auto (the axis probe that went the "
+                  "most steps before reach, table or object limited it)")
       ->capture_default_str();
   sub->add_option("--out", o->out,
                   "Output folder: probe_actions.json and probe_actions_sheet.png (none: no files "

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -11,6 +12,8 @@
 #include "base/errors.h"
 #include "base/json_util.h"
 #include "base/number_format.h"
+#include "inspect/probe_parts.h"
+#include "inspect/probe_steps.h"
 #include "render/vec.h"
 #include "src/episode.h"
 #include "src/observation_layout.h"
@@ -18,41 +21,16 @@
 namespace fetchscope {
 namespace {
 
-// Steps of action[3] = +1 that open the fingers before grip- is measured.
-constexpr int kOpenPrepSteps = 5;
-// Thresholds behind the flags (m, per step unless said otherwise).
-constexpr double kCosineFloor = 0.9;
-constexpr double kStillPerStep = 1e-3;         // slower than this counts as not moving
-constexpr double kFingerStill = 1e-4;          // |finger change| below this over a probe: no motion
-constexpr double kFingerUncommanded = 2e-3;    // finger change without a gripper command
-constexpr double kSaturationTolerance = 0.05;  // relative: "same displacement as |a| = 1"
-constexpr int kMaxMagnitudes = 16;
-
-// One probe: a constant command held for the measured steps, after optional preparation.
-struct Probe {
-  std::string name;
-  std::array<double, 4> command{};
-  std::vector<std::array<double, 4>> prep;  // steps before the measurement starts
-  int axis = -1;                            // commanded axis 0..2; -1 for gripper probes
-  double magnitude = 1;                     // |command| on `axis` (or on action[3])
-  bool sweep = false;                       // part of the +x magnitude sweep
-};
-
-// What one probe measured.
-struct Measurement {
-  Vec3 mean_step{};            // (p_end - p_start) / steps, m
-  double norm = 0;             // |mean_step|
-  double along = 0;            // mean_step . axis (signed), m per step
-  double cosine = NAN;         // with the commanded axis; NaN for gripper probes or no motion
-  double drift = 0;            // |component perpendicular to the axis| per step (all of it if
-                               // no axis was commanded)
-  double finger_delta = 0;     // change of r + l finger opening over the probe, m
-  double finger_baseline = 0;  // the same change with an all-zero command (same preparation)
-  double commanded = 0;        // 0.05 * min(|a|, 1) m per step along the axis
-  double ratio = NAN;          // along / commanded
-  std::vector<std::string> flags;
-  SheetTile first, last;  // frames, when rendering
-};
+using probe_detail::kAxisNames;
+using probe_detail::kCosineFloor;
+using probe_detail::kFingerStill;
+using probe_detail::kFingerUncommanded;
+using probe_detail::kMaxMagnitudes;
+using probe_detail::kOpenPrepSteps;
+using probe_detail::kSaturationTolerance;
+using probe_detail::kStillPerStep;
+using probe_detail::Measurement;
+using probe_detail::Probe;
 
 std::string FormatMagnitude(double m) {
   char buf[32];
@@ -60,17 +38,15 @@ std::string FormatMagnitude(double m) {
   return buf;
 }
 
-std::vector<Probe> MakeProbes(const std::vector<double>& magnitudes) {
+// The six axis probes, then grip+ and grip- (the sweep comes once its axis is chosen).
+std::vector<Probe> MakeProbes() {
   std::vector<Probe> probes;
-  const char* axes = "xyz";
-  for (int axis = 0; axis < 3; ++axis) {
-    for (int sign : {+1, -1}) {
-      Probe p;
-      p.name = std::string(sign > 0 ? "+" : "-") + axes[axis];
-      p.command[axis] = sign;
-      p.axis = axis;
-      probes.push_back(p);
-    }
+  for (int i = 0; i < 6; ++i) {
+    Probe p;
+    p.name = kAxisNames[i];
+    p.axis = i / 2;
+    p.command[p.axis] = i % 2 ? -1 : 1;
+    probes.push_back(p);
   }
   Probe open;
   open.name = "grip+";
@@ -81,16 +57,37 @@ std::vector<Probe> MakeProbes(const std::vector<double>& magnitudes) {
   close.command[3] = -1;
   close.prep.assign(kOpenPrepSteps, {0, 0, 0, 1});  // open first, so there is room to close
   probes.push_back(close);
+  return probes;
+}
+
+// The sweep along signed axis `signed_axis` (0..5 as kAxisNames): "+y@0.5", ...
+std::vector<Probe> MakeSweep(int signed_axis, const std::vector<double>& magnitudes) {
+  std::vector<Probe> probes;
   for (double m : magnitudes) {
     Probe p;
-    p.name = "x@" + FormatMagnitude(m);
-    p.command[0] = m;
-    p.axis = 0;
+    p.name = std::string(kAxisNames[signed_axis]) + "@" + FormatMagnitude(m);
+    p.axis = signed_axis / 2;
+    p.command[p.axis] = signed_axis % 2 ? -m : m;
     p.magnitude = m;
     p.sweep = true;
     probes.push_back(p);
   }
   return probes;
+}
+
+// The signed axis with the most room: the axis probe with the most steps before its first
+// limited step (all of them when none is limited); the first in kAxisNames on a tie.
+int AxisWithRoom(const std::vector<Measurement>& axis_probes) {
+  int best = 0, best_room = -1;
+  for (int i = 0; i < 6; ++i) {
+    const std::vector<ProbeStep>& steps = axis_probes[static_cast<size_t>(i)].steps;
+    int room = 0;
+    while (room < static_cast<int>(steps.size()) && !steps[static_cast<size_t>(room)].limited()) {
+      ++room;
+    }
+    if (room > best_room) best = i, best_room = room;
+  }
+  return best;
 }
 
 Vec3 GripPos(const Observation& obs, bool has_object) {
@@ -138,9 +135,74 @@ double FingerBaseline(FetchEnv& env, uint64_t seed, int steps, int prep_steps) {
   return FingerOpening(obs, has_object) - f0;
 }
 
+// Steps `probe`'s command `steps` times from `start`, filling m's per-step series and totals.
+void MeasureSteps(FetchEnv& env, int steps, const Probe& probe, const Observation& start,
+                  Measurement* m) {
+  const bool has_object = env.spec().has_object;
+  Observation before = start;
+  for (int t = 0; t < steps; ++t) {
+    const Observation after = env.Step(Action{probe.command, false}).obs;
+    ProbeStep s;
+    const Vec3 p0 = GripPos(before, has_object), p1 = GripPos(after, has_object);
+    for (int k = 0; k < 3; ++k) s.displacement[k] = p1[k] - p0[k];
+    if (probe.axis >= 0) {
+      s.along = (probe.command[probe.axis] < 0 ? -1.0 : 1.0) * s.displacement[probe.axis];
+    }
+    s.finger_width = FingerOpening(after, has_object);
+    s.finger_change = s.finger_width - FingerOpening(before, has_object);
+    ReadRobotContacts(env, &s);
+    m->steps.push_back(s);
+    before = after;
+  }
+  FlagStepLimits(probe.command, probe.axis, &m->steps);
+  m->steady = FindSteadyState(m->steps);
+  const Vec3 p0 = GripPos(start, has_object), p1 = GripPos(before, has_object);
+  for (int k = 0; k < 3; ++k) m->mean_step[k] = (p1[k] - p0[k]) / steps;
+  m->norm = Norm(m->mean_step);
+  m->finger_delta = FingerOpening(before, has_object) - FingerOpening(start, has_object);
+}
+
+// The probe's totals and flags from its steps. `finger_baseline`: the finger width change of
+// the same preparation with an all-zero command (gripper probes); an axis probe's own command
+// has action[3] = 0 already, so it is its own baseline and nothing is due to action[3].
+void Analyse(const Probe& probe, double finger_baseline, Measurement* m) {
+  m->finger_baseline = probe.command[3] == 0 ? m->finger_delta : finger_baseline;
+  const double finger_effect = m->finger_delta - m->finger_baseline;
+  if (probe.axis >= 0) {
+    const double sign = probe.command[probe.axis] < 0 ? -1.0 : 1.0;
+    m->along = sign * m->mean_step[probe.axis];
+    m->cosine = m->norm > 0 ? m->along / m->norm : NAN;
+    m->drift = std::sqrt(std::max(0.0, m->norm * m->norm - m->along * m->along));
+    m->commanded = kProbeMetresPerUnit * std::min(std::fabs(probe.command[probe.axis]), 1.0);
+    m->ratio = m->along / m->commanded;
+    if (!(m->cosine >= kCosineFloor)) m->flags.push_back("cosine below 0.9");
+    for (const char* limit : {"table", "object", "reach"}) {
+      const int first = FirstLimited(m->steps, limit);
+      if (first > 0) {
+        m->flags.push_back("limited by " + std::string(limit) + " from step " +
+                           std::to_string(first));
+      }
+    }
+    if (FirstLimited(m->steps, "clip") > 0) {
+      m->flags.push_back("clipped: the env clips |a| > 1 to 1");
+    }
+    if (std::fabs(m->finger_delta) > kFingerUncommanded) {
+      char text[120];
+      std::snprintf(text, sizeof(text),
+                    "finger width changed %+.1f mm with action[3] = 0 (not from the gripper "
+                    "command)",
+                    1000 * m->finger_delta);
+      m->flags.push_back(text);
+    }
+  } else {
+    m->drift = m->norm;
+    if (m->norm > kStillPerStep) m->flags.push_back("gripper motion where none was commanded");
+    if (std::fabs(finger_effect) < kFingerStill) m->flags.push_back("gripper blocked");
+  }
+}
+
 Measurement RunProbe(FetchEnv& env, uint64_t seed, int steps, const Probe& probe,
                      double finger_baseline, Renderer* renderer) {
-  const bool has_object = env.spec().has_object;
   // Measured on the observations the env returns, i.e. what an agent sees.
   Observation start = env.Reset(seed);
   for (const auto& a : probe.prep) start = env.Step(Action{a, false}).obs;
@@ -148,45 +210,23 @@ Measurement RunProbe(FetchEnv& env, uint64_t seed, int steps, const Probe& probe
   if (renderer) {
     renderer->ResetTrail();
     char label[96];
-    std::snprintf(label, sizeof(label), "%s start\na = %g %g %g %g", probe.name.c_str(),
-                  probe.command[0], probe.command[1], probe.command[2], probe.command[3]);
+    std::snprintf(label, sizeof(label), "%s start%s\na = %g %g %g %g", probe.name.c_str(),
+                  probe.prep.empty() ? "" : " (after the preparation)", probe.command[0],
+                  probe.command[1], probe.command[2], probe.command[3]);
     m.first = RenderTile(*renderer, env, 0, probe, label);
   }
-  Observation end = start;
-  for (int t = 0; t < steps; ++t) end = env.Step(Action{probe.command, false}).obs;
-
-  const Vec3 p0 = GripPos(start, has_object), p1 = GripPos(end, has_object);
-  for (int k = 0; k < 3; ++k) m.mean_step[k] = (p1[k] - p0[k]) / steps;
-  m.norm = Norm(m.mean_step);
-  m.finger_delta = FingerOpening(end, has_object) - FingerOpening(start, has_object);
-  m.finger_baseline = finger_baseline;
-  const double finger_effect = m.finger_delta - finger_baseline;
-  if (probe.axis >= 0) {
-    const double sign = probe.command[probe.axis] < 0 ? -1.0 : 1.0;
-    m.along = sign * m.mean_step[probe.axis];
-    m.cosine = m.norm > 0 ? m.along / m.norm : NAN;
-    m.drift = std::sqrt(std::max(0.0, m.norm * m.norm - m.along * m.along));
-    m.commanded = kProbeMetresPerUnit * std::min(std::fabs(probe.command[probe.axis]), 1.0);
-    m.ratio = m.along / m.commanded;
-    if (!(m.cosine >= kCosineFloor)) m.flags.push_back("cosine below 0.9");
-    if (m.ratio < 0.5) m.flags.push_back("achieved under half the commanded displacement");
-    if (std::fabs(finger_effect) > kFingerUncommanded) {
-      m.flags.push_back("finger motion where none was commanded");
-    }
-  } else {
-    m.drift = m.norm;
-    if (m.norm > kStillPerStep) m.flags.push_back("gripper motion where none was commanded");
-    if (std::fabs(finger_effect) < kFingerStill) m.flags.push_back("gripper blocked");
-  }
+  MeasureSteps(env, steps, probe, start, &m);
+  Analyse(probe, finger_baseline, &m);
   if (renderer) {
     char label[96];
     if (probe.axis >= 0) {
-      std::snprintf(label, sizeof(label), "%s end t=%d\n%s m/step cos %s", probe.name.c_str(),
-                    steps, PictureNumber("%.4f", m.norm).c_str(),
+      std::snprintf(label, sizeof(label), "%s end t=%d\nsteady %s mm/step cos %s",
+                    probe.name.c_str(), steps,
+                    m.steady.valid() ? PictureNumber("%.1f", 1000 * m.steady.along).c_str() : "-",
                     PictureNumber("%.2f", m.cosine).c_str());
     } else {
-      std::snprintf(label, sizeof(label), "%s end t=%d\nfingers %s m", probe.name.c_str(), steps,
-                    PictureNumber("%+.4f", m.finger_delta).c_str());
+      std::snprintf(label, sizeof(label), "%s end t=%d\nfinger width %s mm", probe.name.c_str(),
+                    steps, PictureNumber("%+.1f", 1000 * m.finger_delta).c_str());
     }
     m.last = RenderTile(*renderer, env, steps, probe, label);
   }
@@ -194,11 +234,12 @@ Measurement RunProbe(FetchEnv& env, uint64_t seed, int steps, const Probe& probe
 }
 
 // Adds the saturation flags of the sweep: above |a| = 1 the env clips, so the displacement
-// should equal the one at |a| = 1 (the +x probe).
-void FlagSaturation(const std::vector<Probe>& probes, std::vector<Measurement>* ms) {
+// should equal the one at |a| = 1 (the axis probe of the sweep's axis, `unit_probe`).
+void FlagSaturation(const std::vector<Probe>& probes, const std::string& unit_probe,
+                    std::vector<Measurement>* ms) {
   double unit = NAN;
   for (size_t i = 0; i < probes.size(); ++i) {
-    if (probes[i].name == "+x") unit = (*ms)[i].along;
+    if (probes[i].name == unit_probe) unit = (*ms)[i].along;
   }
   for (size_t i = 0; i < probes.size(); ++i) {
     if (!probes[i].sweep || probes[i].magnitude <= 1) continue;
@@ -210,103 +251,6 @@ void FlagSaturation(const std::vector<Probe>& probes, std::vector<Measurement>* 
       (*ms)[i].flags.push_back("not saturated: displacement differs from |a| = 1");
     }
   }
-}
-
-nlohmann::json ProbeJson(const Probe& p, const Measurement& m) {
-  nlohmann::json flags = nlohmann::json::array();
-  for (const auto& f : m.flags) flags.push_back(f);
-  nlohmann::json j = {
-      {"name", p.name},
-      {"command", JsonVector(p.command.data(), 4)},
-      {"preparation_steps", static_cast<int>(p.prep.size())},
-      {"mean_step_displacement",
-       {{"vector", JsonVector(m.mean_step.data(), 3)}, {"norm", JsonDouble(m.norm)}}},
-      {"along_axis", p.axis >= 0 ? JsonDouble(m.along) : nlohmann::json(nullptr)},
-      {"cosine", std::isfinite(m.cosine) ? JsonDouble(m.cosine) : nlohmann::json(nullptr)},
-      {"cross_axis_drift", JsonDouble(m.drift)},
-      {"finger_delta", JsonDouble(m.finger_delta)},
-      {"finger_delta_without_command", JsonDouble(m.finger_baseline)},
-      {"finger_delta_from_command", JsonDouble(m.finger_delta - m.finger_baseline)},
-      {"commanded_displacement", JsonDouble(m.commanded)},
-      {"achieved_ratio", std::isfinite(m.ratio) ? JsonDouble(m.ratio) : nlohmann::json(nullptr)},
-      {"flags", flags}};
-  if (p.sweep) j["magnitude"] = JsonDouble(p.magnitude);
-  return j;
-}
-
-nlohmann::json SummaryJson(const EnvSpec& spec, const std::vector<Probe>& probes,
-                           const std::vector<Measurement>& ms) {
-  double open_delta = 0, close_delta = 0, step_sum = 0;
-  bool saturated = false, any_above_one = false;
-  for (size_t i = 0; i < probes.size(); ++i) {
-    const double effect = ms[i].finger_delta - ms[i].finger_baseline;
-    if (probes[i].name == "grip+") open_delta = effect;
-    if (probes[i].name == "grip-") close_delta = effect;
-    if (probes[i].axis >= 0 && !probes[i].sweep) step_sum += ms[i].norm;
-    if (probes[i].sweep && probes[i].magnitude > 1) {
-      any_above_one = true;
-      saturated = saturated || std::find(ms[i].flags.begin(), ms[i].flags.end(),
-                                         "saturated: same displacement as |a| = 1 (actions are "
-                                         "clipped to [-1, 1])") != ms[i].flags.end();
-    }
-  }
-  const bool blocked =
-      std::fabs(open_delta) < kFingerStill && std::fabs(close_delta) < kFingerStill;
-  std::string opens;
-  if (blocked) {
-    opens = "neither: the fingers do not move (gripper blocked)";
-  } else if (open_delta > 0 && close_delta < 0) {
-    opens = "action[3] > 0 opens the fingers, action[3] < 0 closes them";
-  } else if (open_delta < 0 && close_delta > 0) {
-    opens = "action[3] < 0 opens the fingers, action[3] > 0 closes them";
-  } else {
-    opens = "unclear: grip+ and grip- did not move the fingers in opposite directions";
-  }
-  const double step = step_sum / 6;
-  char step_text[160];
-  std::snprintf(step_text, sizeof(step_text),
-                "%.4f m per step at |a| = 1 (mean over the six axis probes; commanded %.2f m)",
-                step, kProbeMetresPerUnit);
-  std::string saturation = !any_above_one ? "not measured (no magnitude above 1 in --magnitudes)"
-                           : saturated    ? "yes: magnitudes above 1 move as far as 1"
-                                          : "no: a magnitude above 1 moved differently from 1";
-  return {{"opens_fingers", opens},
-          {"opening_sign",
-           blocked ? nlohmann::json(nullptr) : nlohmann::json(open_delta > 0 ? "+" : "-")},
-          {"gripper", std::string(blocked ? "blocked" : "free") + " in " + spec.id +
-                          (blocked ? ": action[3] does not move the fingers"
-                                   : ": action[3] moves the fingers")},
-          {"gripper_blocked", blocked},
-          {"block_gripper_setting", spec.block_gripper},
-          {"step_size_at_unit_action", JsonDouble(step)},
-          {"step_size", step_text},
-          {"saturation_above_one", saturation}};
-}
-
-void PrintTable(const EnvSpec& spec, uint64_t seed, int steps, const std::vector<Probe>& probes,
-                const std::vector<Measurement>& ms, const nlohmann::json& summary) {
-  std::printf("probe-actions %s seed %llu, %d steps per probe\n", spec.id.c_str(),
-              static_cast<unsigned long long>(seed), steps);
-  std::printf("%-8s %-26s %9s %7s %9s %6s %9s %9s  %s\n", "probe", "m/step (x y z)", "|d|", "cos",
-              "drift", "ratio", "fingers", "by cmd", "flags");
-  for (size_t i = 0; i < probes.size(); ++i) {
-    const Measurement& m = ms[i];
-    char vec[64];
-    std::snprintf(vec, sizeof(vec), "%+.4f %+.4f %+.4f", m.mean_step[0], m.mean_step[1],
-                  m.mean_step[2]);
-    std::string flags;
-    for (const auto& f : m.flags) flags += (flags.empty() ? "" : "; ") + f;
-    char cosine[16] = "-", ratio[16] = "-";
-    if (std::isfinite(m.cosine)) std::snprintf(cosine, sizeof(cosine), "%.3f", m.cosine);
-    if (std::isfinite(m.ratio)) std::snprintf(ratio, sizeof(ratio), "%.2f", m.ratio);
-    std::printf("%-8s %-26s %9.5f %7s %9.5f %6s %+9.5f %+9.5f  %s\n", probes[i].name.c_str(), vec,
-                m.norm, cosine, m.drift, ratio, m.finger_delta, m.finger_delta - m.finger_baseline,
-                flags.c_str());
-  }
-  std::printf("gripper: %s\n", summary["gripper"].get<std::string>().c_str());
-  std::printf("opening: %s\n", summary["opens_fingers"].get<std::string>().c_str());
-  std::printf("step:    %s\n", summary["step_size"].get<std::string>().c_str());
-  std::printf("clip:    %s\n", summary["saturation_above_one"].get<std::string>().c_str());
 }
 
 }  // namespace
@@ -336,11 +280,21 @@ std::vector<double> ParseProbeMagnitudes(const std::string& text) {
   return values;
 }
 
+std::optional<int> ParseSweepAxis(const std::string& text) {
+  if (text == "auto") return std::nullopt;
+  for (int i = 0; i < 6; ++i) {
+    if (text == kAxisNames[i]) return i;
+  }
+  throw UsageError("--sweep-axis '" + text +
+                   "' is not an axis: use auto, +x, -x, +y, -y, +z or -z");
+}
+
 ProbeResult ProbeActions(FetchEnv& env, uint64_t seed, int steps,
-                         const std::vector<double>& magnitudes, Renderer* renderer) {
+                         const std::vector<double>& magnitudes, std::optional<int> sweep_axis,
+                         Renderer* renderer) {
   const EnvSpec& spec = env.spec();
   const FingerIndices fingers = FingerPositionIndices(spec.has_object);
-  const std::vector<Probe> probes = MakeProbes(magnitudes);
+  std::vector<Probe> probes = MakeProbes();
   const double baseline_reset = FingerBaseline(env, seed, steps, 0);
   const double baseline_open = FingerBaseline(env, seed, steps, kOpenPrepSteps);
   std::vector<Measurement> ms;
@@ -348,21 +302,33 @@ ProbeResult ProbeActions(FetchEnv& env, uint64_t seed, int steps,
     const double baseline = p.prep.empty() ? baseline_reset : baseline_open;
     ms.push_back(RunProbe(env, seed, steps, p, baseline, renderer));
   }
-  FlagSaturation(probes, &ms);
+  const int axis = sweep_axis ? *sweep_axis : AxisWithRoom(ms);
+  const std::string why = sweep_axis ? "--sweep-axis" : "the axis probe with the most room";
+  for (const Probe& p : MakeSweep(axis, magnitudes)) {
+    probes.push_back(p);
+    ms.push_back(RunProbe(env, seed, steps, p, baseline_reset, renderer));
+  }
+  FlagSaturation(probes, kAxisNames[axis], &ms);
 
   nlohmann::json probes_json = nlohmann::json::array();
-  for (size_t i = 0; i < probes.size(); ++i) probes_json.push_back(ProbeJson(probes[i], ms[i]));
-  const nlohmann::json summary = SummaryJson(spec, probes, ms);
+  for (size_t i = 0; i < probes.size(); ++i) {
+    probes_json.push_back(probe_detail::ProbeJson(probes[i], ms[i]));
+  }
+  const nlohmann::json summary = probe_detail::SummaryJson(spec, probes, ms, kAxisNames[axis], why);
   ProbeResult result;
   result.report = {{"env_id", spec.id},
                    {"seed", seed},
                    {"steps", steps},
                    {"metres_per_unit_action", kProbeMetresPerUnit},
+                   {"units",
+                    {{"displacement", "m per step (grip_pos, obs[0:3])"},
+                     {"finger", "m (finger width: gripper_state.right + gripper_state.left)"}}},
                    {"finger_indices", {fingers.right, fingers.left}},
+                   {"sweep_axis", kAxisNames[axis]},
                    {"assets", AssetsJson(env.assets())},
                    {"probes", probes_json},
                    {"summary", summary}};
-  PrintTable(spec, seed, steps, probes, ms, summary);
+  probe_detail::PrintTable(spec, seed, steps, probes, ms, summary);
   if (renderer) {
     for (auto& m : ms) {
       result.tiles.push_back(std::move(m.first));

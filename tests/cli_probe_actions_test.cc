@@ -76,7 +76,9 @@ TEST(ProbeActionsTest, PickAndPlaceAxesMoveAlongTheirAxis) {
   EXPECT_GT(step, 0.005);
   EXPECT_LT(step, 0.05);
   // the human-readable table lists every probe
-  for (const char* name : {"+x", "-z", "grip+", "grip-", "x@0.25", "x@2"}) {
+  const std::string sweep = r.full["sweep_axis"];
+  for (const std::string& name : {std::string("+x"), std::string("-z"), std::string("grip+"),
+                                  std::string("grip-"), sweep + "@0.25", sweep + "@2"}) {
     EXPECT_NE(r.table.find(std::string("\n") + name + " "), std::string::npos) << name;
   }
 }
@@ -123,21 +125,24 @@ TEST(ProbeActionsTest, ReachAndPushBlockTheGripper) {
 }
 
 TEST(ProbeActionsTest, MagnitudeSweepSaturatesAboveOne) {
-  const Report r = Probe("FetchPickAndPlace-v4", "--magnitudes 0.25,1,2,3.5");
-  const double small = r.probes.at("x@0.25")["along_axis"].get<double>();
-  const double unit = r.probes.at("x@1")["along_axis"].get<double>();
+  const Report r = Probe("FetchPickAndPlace-v4", "--magnitudes 0.25,1,2,3.5 --sweep-axis -y");
+  EXPECT_EQ(r.full["sweep_axis"], "-y");
+  const double small = r.probes.at("-y@0.25")["along_axis"].get<double>();
+  const double unit = r.probes.at("-y@1")["along_axis"].get<double>();
+  EXPECT_DOUBLE_EQ(unit, r.probes.at("-y")["along_axis"].get<double>());  // the same command
   EXPECT_LT(small, 0.75 * unit);
-  for (const char* name : {"x@2", "x@3.5"}) {
+  for (const char* name : {"-y@2", "-y@3.5"}) {
     SCOPED_TRACE(name);
     const json& p = r.probes.at(name);
     EXPECT_NEAR(p["along_axis"].get<double>(), unit, 1e-9);
     EXPECT_TRUE(HasFlag(p, "saturated"));
     EXPECT_DOUBLE_EQ(p["commanded_displacement"].get<double>(), 0.05);  // clipped to 1
   }
-  EXPECT_FALSE(HasFlag(r.probes.at("x@1"), "saturated"));
-  EXPECT_DOUBLE_EQ(r.probes.at("x@0.25")["commanded_displacement"].get<double>(), 0.0125);
+  EXPECT_FALSE(HasFlag(r.probes.at("-y@1"), "saturated"));
+  EXPECT_DOUBLE_EQ(r.probes.at("-y@0.25")["commanded_displacement"].get<double>(), 0.0125);
+  EXPECT_EQ(r.probes.at("-y@0.25")["command"], json({0.0, -0.25, 0.0, 0.0}));
   EXPECT_EQ(r.full["summary"]["saturation_above_one"].get<std::string>().rfind("yes", 0), 0u);
-  EXPECT_EQ(r.probes.count("x@0.5"), 0u);  // only the magnitudes asked for
+  EXPECT_EQ(r.probes.count("-y@0.5"), 0u);  // only the magnitudes asked for
 }
 
 TEST(ProbeActionsTest, OutWritesReportAndSheet) {
@@ -220,6 +225,7 @@ TEST(ProbeActionsTest, BadInputIsAUsageError) {
       {"--magnitudes 1,", "--magnitudes"},
       {"--magnitudes inf", "--magnitudes"},
       {"--env-id FetchNope-v4", "FetchNope"},
+      {"--sweep-axis z", "--sweep-axis"},
   };
   for (const Case& c : cases) {
     SCOPED_TRACE(c.args);

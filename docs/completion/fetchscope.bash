@@ -68,7 +68,7 @@ _fetchscope() {
       local root=${MINARI_DATASETS_PATH:-$HOME/.minari/datasets} ids=''
       [[ -d $root ]] && ids=$(cd "$root" && find . -path '*/data/metadata.json' 2>/dev/null | sed 's|^\./||; s|/data/metadata.json$||')
       COMPREPLY=($(compgen -W "$ids" -- "$cur") $(compgen -f -- "$cur")); return ;;
-    --backends|--crf|--dataset-episodes|--dataset-size|--episodes|--exec-episodes|--exec-fields|--exec-python|--exec-size|--exec-timeout|--fps|--gif-fps|--gif-width|--height|--host|--hud-opacity|--idle-timeout|--jobs|--json-out|--keep|--magnitudes|--max-queued|--max-sessions|--minari|--minari-author|--minari-author-email|--n-episodes|--n-steps|--obs-camera|--obs-layers|--obs-overlay|--obs-size|--only|--output|--pixel-tolerance|--port|--robomimic|--seconds|--seed|--serve-height|--serve-width|--shard|--shard-count|--sheet-every|--signals|--soak-frames|--steps|--stop-after-success|--token-file|--tolerance|--valid-fraction|--width|-j|-o)
+    --backends|--crf|--dataset-episodes|--dataset-size|--episodes|--exec-episodes|--exec-fields|--exec-python|--exec-size|--exec-timeout|--fps|--gif-fps|--gif-width|--height|--host|--hud-opacity|--idle-timeout|--jobs|--json-out|--keep|--magnitudes|--max-queued|--max-sessions|--minari|--minari-author|--minari-author-email|--n-episodes|--n-steps|--obs-camera|--obs-layers|--obs-overlay|--obs-size|--only|--output|--pixel-tolerance|--port|--robomimic|--seconds|--seed|--serve-height|--serve-width|--shard|--shard-count|--sheet-every|--signals|--soak-frames|--steps|--stop-after-success|--sweep-axis|--token-file|--tolerance|--valid-fraction|--width|-j|-o)
       COMPREPLY=($(compgen -f -- "$cur")); return ;;
   esac
   local words=''
@@ -86,7 +86,7 @@ _fetchscope() {
     'list-cameras') words='--help -h --env-id --assets' ;;
     'record') words='--help -h --env-id --assets --seed --camera --overlay --width --height --hud-position --hud-opacity --backend --msaa --readback --gpu --episodes --steps --policy --exec-timeout --exec-fields --replay-dtype --fps --codec --crf --preset --format --gif-fps --gif-width --signals --layers --sheet-every --no-sheets --out --quiet -q --minari --minari-root --minari-author --minari-author-email --overwrite --resume --jobs -j --worker-mode --shard --shard-count --no-report --from --tolerance --obs-camera --obs-size --obs-layers --obs-overlay --robomimic --no-next-obs --valid-fraction --keep --stop-after-success' ;;
     'bench') words='--help -h --what --exec-episodes --exec-size --exec-python --dataset-episodes --dataset-size --serve-width --serve-height --soak-frames --width --height --assets --seconds --backends --no-peers --json-out' ;;
-    'probe-actions') words='--help -h --env-id --assets --seed --camera --overlay --width --height --hud-position --hud-opacity --backend --msaa --readback --gpu --steps --magnitudes --out --json-out' ;;
+    'probe-actions') words='--help -h --env-id --assets --seed --camera --overlay --width --height --hud-position --hud-opacity --backend --msaa --readback --gpu --steps --magnitudes --sweep-axis --out --json-out' ;;
     'merge-manifests') words='--help -h --out --quiet -q --no-report' ;;
     'merge-datasets') words='--help -h --minari --minari-root --robomimic --valid-fraction --overwrite --quiet -q' ;;
     'golden') words='check update --help -h' ;;
