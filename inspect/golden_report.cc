@@ -144,8 +144,8 @@ std::string SceneSection(const GoldenRow& r) {
   for (const std::string& n : r.notes) h << "<li>" << Escape(n) << "</li>";
   h << "<li>" << Escape(PixelLine(r)) << "</li>";
   if (r.region.width > 0) {
-    h << "<li>changed region (box): " << r.region.width << "x" << r.region.height << " at ("
-      << r.region.x << ", " << r.region.y << ")</li>";
+    h << "<li>pixels over the threshold (box): " << r.region.width << "x" << r.region.height
+      << " at (" << r.region.x << ", " << r.region.y << ")</li>";
   }
   h << "</ul><div class=\"panels\">";
   if (!r.golden_png.empty()) h << Panel(r, r.golden_png, "golden");
@@ -225,7 +225,7 @@ std::string WriteGoldenReviewPage(const std::string& out, const GoldenRun& run) 
     << Count(run, "fail") << " failed, " << Count(run, "error") << " could not be checked, "
     << Count(run, "skipped") << " skipped.</p>\n"
     << "<div class=\"scale\"><b>diff scale</b> (largest channel difference, levels; the box "
-       "marks the changed region)<img src=\"diff_scale.png\" alt=\"diff scale\">"
+       "marks the pixels over the threshold)<img src=\"diff_scale.png\" alt=\"diff scale\">"
        "<div class=\"ticks\"><span>0</span><span>64</span><span>128</span><span>192</span>"
        "<span>255</span></div></div>\n";
   size_t shown = 0;
