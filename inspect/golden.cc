@@ -243,26 +243,57 @@ void WriteImages(const std::string& out, const std::string& name, const Image* g
            side.data());
 }
 
-// Checks one scene; RunError or UsageError for a scene that cannot be checked.
+// A scene that cannot be checked: its assets or XML do not load, a golden cannot be read, the
+// GL fails, a mask lies outside the frame. Its row is an error; the check exits 2.
+class SceneUnusable : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// What one scene is checked with: its render and its goldens.
+struct SceneInputs {
+  SceneResult actual;
+  nlohmann::json meta;          // null: none recorded
+  nlohmann::json golden_state;  // null: no state golden
+  std::optional<Image> golden;  // nullopt: `missing` says why
+  std::string missing;
+};
+
+SceneInputs LoadScene(GlContext& gl, const GoldenManifest& m, const GoldenScene& s,
+                      const std::string& genuine) {
+  try {
+    SceneInputs in;
+    in.actual = RenderScene(gl, s, SceneAssets(s, m.dir, genuine));
+    const std::string bad = MaskOutsideFrame(s, in.actual.width, in.actual.height);
+    if (!bad.empty()) throw UsageError("golden manifest '" + m.dir + "/manifest.json': " + bad);
+    in.meta = ReadGoldenMeta(GoldenMetaPath(m, s));
+    in.golden_state = ReadState(GoldenState(m, s));
+    in.golden = ReadGoldenImage(GoldenPng(m, s), in.actual.width, in.actual.height, &in.missing);
+    return in;
+  } catch (const std::runtime_error& e) {
+    throw SceneUnusable(e.what());
+  }
+}
+
+// Checks one scene; SceneUnusable for one that cannot be checked.
 GoldenRow CheckScene(GlContext& gl, const GoldenManifest& m, const GoldenScene& s,
                      const std::string& genuine, const GoldenOptions& o,
                      const ToleranceOverride& tolerance) {
+  const SceneInputs in = LoadScene(gl, m, s, genuine);
+  const SceneResult& actual = in.actual;
+  const nlohmann::json& meta = in.meta;
+  const nlohmann::json& golden_state = in.golden_state;
+  const std::optional<Image>& golden = in.golden;
   GoldenRow row;
   row.scene = s.name;
-  const SceneResult actual = RenderScene(gl, s, SceneAssets(s, m.dir, genuine));
   row.width = actual.width;
   row.height = actual.height;
-  if (const std::string bad = MaskOutsideFrame(s, actual.width, actual.height); !bad.empty()) {
-    throw UsageError("golden manifest '" + m.dir + "/manifest.json': " + bad);
-  }
-  const nlohmann::json meta = ReadGoldenMeta(GoldenMetaPath(m, s));
   const ToleranceChoice choice = ChooseTolerance(s, meta, gl.info(), tolerance);
   row.tolerance = choice.tolerance;
   row.tolerance_why = choice.why;
   row.notes = MetaNotes(s, meta, actual);
 
   // the state first: it says whether the physics or model changed
-  const nlohmann::json golden_state = ReadState(GoldenState(m, s));
   bool state_equal = false;
   if (golden_state.is_null()) {
     row.verdict = "no state golden (run golden update)";
@@ -276,12 +307,9 @@ GoldenRow CheckScene(GlContext& gl, const GoldenManifest& m, const GoldenScene& 
       row.notes.push_back("first difference: " + c.first);
     }
   }
-  std::string missing;
-  const std::optional<Image> golden =
-      ReadGoldenImage(GoldenPng(m, s), actual.width, actual.height, &missing);
   std::vector<uint8_t> masked = actual.rgb;
   if (!golden) {
-    if (row.verdict.empty()) row.verdict = missing;
+    if (row.verdict.empty()) row.verdict = in.missing;
   } else {
     ComparePixels(s, *golden, actual, &row, &masked);
     if (!PixelsPass(row) && row.verdict.empty()) {
@@ -303,39 +331,6 @@ GoldenRow CheckScene(GlContext& gl, const GoldenManifest& m, const GoldenScene& 
   return row;
 }
 
-void PrintTable(const std::vector<GoldenRow>& rows) {
-  size_t name_width = 5;
-  for (const GoldenRow& r : rows) name_width = std::max(name_width, r.scene.size());
-  // every column named: "result" is ok, FAIL, ERROR or skip
-  std::printf("%-*s  %-6s  %9s %8s  %4s  %6s %6s  %s\n", static_cast<int>(name_width), "scene",
-              "result", "over thr", "limit", "max", "rms", "limit", "verdict");
-  for (const GoldenRow& r : rows) {
-    const GoldenTolerance& t = r.tolerance;
-    char over[32] = "-", limit[32] = "-", max[16] = "-", rms[16] = "-", rms_limit[16] = "-";
-    if (r.have_pixels) {
-      std::snprintf(over, sizeof(over), "%.3f%%", 100 * r.stats.fraction_over);
-      std::snprintf(limit, sizeof(limit), "%.3f%%", 100 * t.max_fraction);
-      std::snprintf(max, sizeof(max), "%d", r.stats.max_diff);
-      std::snprintf(rms, sizeof(rms), "%.3f", r.stats.rms);
-      std::snprintf(rms_limit, sizeof(rms_limit), "%.3f", t.max_rms);
-    }
-    const char* result = r.status == "pass"    ? "ok"
-                         : r.status == "fail"  ? "FAIL"
-                         : r.status == "error" ? "ERROR"
-                                               : "skip";
-    std::printf("%-*s  %-6s  %9s %8s  %4s  %6s %6s  %s\n", static_cast<int>(name_width),
-                r.scene.c_str(), result, over, limit, max, rms, rms_limit, r.verdict.c_str());
-  }
-  for (const GoldenRow& r : rows) {
-    if (!r.state_change.empty()) {
-      std::printf("  %s: state: %s\n", r.scene.c_str(), r.state_change.c_str());
-    }
-    for (const std::string& n : r.notes) {
-      if (n.rfind("these goldens record no metadata", 0) == 0) continue;  // said once above
-      std::printf("  %s: %s\n", r.scene.c_str(), n.c_str());
-    }
-  }
-}
 }  // namespace
 
 namespace {
@@ -373,7 +368,7 @@ std::vector<GoldenRow> CheckScenes(GlContext& gl, const GoldenManifest& manifest
     const auto start = std::chrono::steady_clock::now();
     try {
       rows.push_back(CheckScene(gl, manifest, *s, genuine, o, tolerance));
-    } catch (const std::runtime_error& e) {  // its assets, XML or goldens cannot be used
+    } catch (const SceneUnusable& e) {  // its assets, XML or goldens cannot be used
       GoldenRow row;
       row.scene = s->name;
       row.status = "error";
@@ -477,7 +472,7 @@ int GoldenCheck(const GoldenOptions& options) {
       scenes.size(), run.manifest.c_str(), run.running_on.c_str(), kSameBackendTolerance.threshold,
       100 * kSameBackendTolerance.max_fraction, kSameBackendTolerance.max_rms);
   PrintFirstNotes(run.rows);
-  PrintTable(run.rows);
+  PrintGoldenTable(run.rows);
   WriteReports(o, run);
   const size_t failed = count("fail"), errors = count("error");
   if (failed + errors > 0) {

@@ -175,6 +175,40 @@ ChangedRegion FindChangedRegion(const uint8_t* golden, const uint8_t* actual, in
   return {};
 }
 
+void PrintGoldenTable(const std::vector<GoldenRow>& rows) {
+  size_t name_width = 5;
+  for (const GoldenRow& r : rows) name_width = std::max(name_width, r.scene.size());
+  // every column named: "result" is ok, FAIL, ERROR or skip
+  std::printf("%-*s  %-6s  %9s %8s  %4s  %6s %6s  %s\n", static_cast<int>(name_width), "scene",
+              "result", "over thr", "limit", "max", "rms", "limit", "verdict");
+  for (const GoldenRow& r : rows) {
+    const GoldenTolerance& t = r.tolerance;
+    char over[32] = "-", limit[32] = "-", max[16] = "-", rms[16] = "-", rms_limit[16] = "-";
+    if (r.have_pixels) {
+      std::snprintf(over, sizeof(over), "%.3f%%", 100 * r.stats.fraction_over);
+      std::snprintf(limit, sizeof(limit), "%.3f%%", 100 * t.max_fraction);
+      std::snprintf(max, sizeof(max), "%d", r.stats.max_diff);
+      std::snprintf(rms, sizeof(rms), "%.3f", r.stats.rms);
+      std::snprintf(rms_limit, sizeof(rms_limit), "%.3f", t.max_rms);
+    }
+    const char* result = r.status == "pass"    ? "ok"
+                         : r.status == "fail"  ? "FAIL"
+                         : r.status == "error" ? "ERROR"
+                                               : "skip";
+    std::printf("%-*s  %-6s  %9s %8s  %4s  %6s %6s  %s\n", static_cast<int>(name_width),
+                r.scene.c_str(), result, over, limit, max, rms, rms_limit, r.verdict.c_str());
+  }
+  for (const GoldenRow& r : rows) {
+    if (!r.state_change.empty()) {
+      std::printf("  %s: state: %s\n", r.scene.c_str(), r.state_change.c_str());
+    }
+    for (const std::string& n : r.notes) {
+      if (n.rfind("these goldens record no metadata", 0) == 0) continue;  // said once above
+      std::printf("  %s: %s\n", r.scene.c_str(), n.c_str());
+    }
+  }
+}
+
 void WriteGoldenJunit(const std::string& path, const GoldenRun& run) {
   std::ostringstream x;
   x << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<testsuites>\n"

@@ -54,6 +54,12 @@ struct GoldenRun {
   std::vector<GoldenRow> rows;
 };
 
+/// Prints the table of `rows` in their order: scene, result (ok, FAIL, ERROR or skip), the share
+/// of pixels over the threshold and its limit, the largest difference, the RMS and its limit, the
+/// verdict; then each row's named state change and notes (all but the missing-metadata one, which
+/// the caller says once).
+void PrintGoldenTable(const std::vector<GoldenRow>& rows);
+
 /// Writes the JUnit XML report to `path` (whole or not at all): one testsuite "fetchscope golden
 /// <command>", one testcase per scene, a <failure> for a failed scene (its verdict; the notes,
 /// numbers and image paths in the text), an <error> for one that cannot be checked, <skipped/>.

@@ -2,7 +2,7 @@
 // xml.etree) and JSON reports, the same-backend tolerance catching a block's red 0.2 -> 0.25
 // while a cross-backend set keeps the measured 32 levels, the assets-changed line, a state
 // difference named by quantity (a table raised 2 mm), masks, --require-genuine, goldens
-// without metadata, and update saying what changed.
+// without metadata, a capped msaa, and update saying what changed.
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -281,6 +281,22 @@ TEST(GoldenCheck, GoldensWithoutMetadataStillCheckWithANote) {
   const CommandResult r = g.Run("check", "--backend osmesa --only reach_reset,slide_reset");
   EXPECT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("2 scene(s) have no NAME_meta.json"), std::string::npos) << r.output;
+}
+
+TEST(GoldenCheck, AnMsaaTheDriverCapsIsReported) {
+  Goldens g;
+  g.Scene("reach_reset")["msaa"] = 16;  // llvmpipe (OSMesa) offers fewer samples
+  g.SaveManifest();
+  const fs::path json = g.root() / "r.json";
+  const CommandResult r =
+      g.Run("check", "--backend osmesa --only reach_reset --json " + json.string());
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(r.output, m, std::regex(R"(msaa 16 asked, (\d+) used: )")))
+      << r.output;
+  EXPECT_LT(std::stoi(m[1]), 16);
+  EXPECT_NE(
+      nlohmann::json::parse(ReadFile(json))["scenes"][0]["notes"].dump().find("msaa 16 asked"),
+      std::string::npos);
 }
 
 }  // namespace
