@@ -181,7 +181,13 @@ std::vector<std::string> MetaNotes(const GoldenScene& s, const nlohmann::json& m
   }
   const nlohmann::json now = VersionsJson();
   if (meta.contains("versions") && meta["versions"] != now) {
-    notes.push_back("goldens made with " + meta["versions"].dump() + ", this is " + now.dump());
+    auto words = [](const nlohmann::json& v) {
+      return "fetchscope " + v.value("fetchscope", std::string("?")) + ", MuJoCo " +
+             v.value("mujoco", std::string("?"));
+    };
+    const nlohmann::json& then = meta["versions"];
+    notes.push_back("goldens made with " + (then.is_object() ? words(then) : then.dump()) +
+                    "; this is " + words(now));
   }
   if (meta.contains("msaa") && meta["msaa"].is_object() &&
       meta["msaa"].value("used", actual.msaa_used) != actual.msaa_used) {
