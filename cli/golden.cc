@@ -32,6 +32,8 @@ void AddOptions(CLI::App* sub, GoldenCommandOptions* command) {
                   "\"genuine\" (default: $FETCHSCOPE_SHARED_DIR/gymnasium-robotics-assets, else "
                   "GOLDEN_DIR/../../shared/gymnasium-robotics-assets); those scenes are skipped "
                   "when it is absent");
+  sub->add_flag("--require-genuine", o->require_genuine,
+                "Exit 2 instead of skipping the genuine-asset scenes when their assets are absent");
 }
 
 }  // namespace
@@ -46,14 +48,28 @@ Command AddGolden(CLI::App& app) {
   golden->require_subcommand(1);
   CLI::App* check = golden->add_subcommand(
       "check",
-      "Compare every scene with its goldens; on failure write NAME_actual.png, "
-      "NAME_diff.png and NAME_side.png under --out, print a table worst first, exit 1");
+      "Compare every scene with its goldens; print a table worst first and write a review page "
+      "(index.html: golden, actual and diff of each failed scene) under --out. Exit 0 every "
+      "scene passes, 1 a scene regressed, 2 the manifest, assets or GL cannot be used");
   AddOptions(check, command.get());
-  check->add_option("--out", options->out, "Folder for the images of failed scenes")
+  check->add_option("--out", options->out, "Folder for the review page and the failures' images")
+      ->capture_default_str();
+  check->add_option("--junit", options->junit,
+                    "Write a JUnit XML report here (one testcase per scene)");
+  check->add_option("--json", options->json, "Write a JSON report here");
+  check
+      ->add_option("--tolerance", options->tolerance,
+                   "auto (the goldens' own backend and GL renderer: threshold 8 levels, 0.02 %, "
+                   "rms 1; else the manifest's cross-backend tolerance, threshold 32, 0.2 %, rms "
+                   "2), same, cross, or threshold=N[,max_fraction=F][,max_rms=R] for every scene")
       ->capture_default_str();
   CLI::App* update = golden->add_subcommand(
-      "update", "Render every scene and write its goldens (NAME.png, NAME_state.json)");
+      "update",
+      "Render every scene and write its goldens (NAME.png, NAME_state.json, NAME_meta.json); "
+      "say what changed (pixels, state by named quantity) and review it in --out/index.html");
   AddOptions(update, command.get());
+  update->add_option("--out", options->out, "Folder for the review page of the changes")
+      ->capture_default_str();
   return {golden, [command, check] {
             command->golden.backend = ResolveGlBackend(command->backend);
             return check->parsed() ? GoldenCheck(command->golden) : GoldenUpdate(command->golden);

@@ -1,5 +1,6 @@
 #include "inspect/golden_scene.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -9,6 +10,7 @@
 
 #include "base/errors.h"
 #include "base/json_util.h"
+#include "base/sha256.h"
 #include "base/suggest.h"
 #include "render/camera.h"
 #include "render/overlay.h"
@@ -69,11 +71,11 @@ class ManifestReader {
   }
 
   GoldenTolerance Tolerance(const nlohmann::json& obj, const std::string& where,
-                            const GoldenTolerance& fallback) const {
+                            const GoldenTolerance& fallback, const char* key = "tolerance") const {
     GoldenTolerance t = fallback;
-    if (!obj.contains("tolerance")) return t;
-    const nlohmann::json& tol = obj["tolerance"];
-    if (!tol.is_object()) Fail(where, "\"tolerance\" must be an object");
+    if (!obj.contains(key)) return t;
+    const nlohmann::json& tol = obj[key];
+    if (!tol.is_object()) Fail(where, std::string("\"") + key + "\" must be an object");
     for (const auto& item : tol.items()) {
       if (item.key() != "threshold" && item.key() != "max_fraction" && item.key() != "max_rms") {
         Fail(where,
@@ -81,11 +83,36 @@ class ManifestReader {
       }
     }
     const int64_t threshold = t.threshold;
-    t.threshold =
-        static_cast<int>(Integer(tol, "threshold", where + " tolerance", 0, 255, &threshold));
-    t.max_fraction = Number(tol, "max_fraction", where + " tolerance", t.max_fraction);
-    t.max_rms = Number(tol, "max_rms", where + " tolerance", t.max_rms);
+    const std::string in = where + " " + key;
+    t.threshold = static_cast<int>(Integer(tol, "threshold", in, 0, 255, &threshold));
+    t.max_fraction = Number(tol, "max_fraction", in, t.max_fraction);
+    t.max_rms = Number(tol, "max_rms", in, t.max_rms);
     return t;
+  }
+
+  // "mask": [[x, y, width, height], ...]; whether each lies in the frame is checked with the
+  // frame (MaskOutsideFrame).
+  std::vector<GoldenMask> Masks(const nlohmann::json& obj, const std::string& where) const {
+    std::vector<GoldenMask> masks;
+    if (!obj.contains("mask")) return masks;
+    const nlohmann::json& list = obj["mask"];
+    const std::string accepted =
+        "a list of [x, y, width, height] rectangles, non-negative integers, width and height > 0";
+    if (!list.is_array()) Fail(where, "\"mask\" must be " + accepted);
+    for (size_t i = 0; i < list.size(); ++i) {
+      const nlohmann::json& r = list[i];
+      bool ok = r.is_array() && r.size() == 4;
+      for (size_t k = 0; ok && k < 4; ++k) {
+        ok = r[k].is_number_integer() && r[k].get<int64_t>() >= 0 && r[k].get<int64_t>() <= 65536;
+      }
+      const std::string bad =
+          "\"mask\"[" + std::to_string(i) + "] " + (ok ? r.dump() : "") + " must be " + accepted;
+      if (!ok) Fail(where, bad);
+      GoldenMask m{r[0].get<int>(), r[1].get<int>(), r[2].get<int>(), r[3].get<int>()};
+      if (m.width == 0 || m.height == 0) Fail(where, bad);
+      masks.push_back(m);
+    }
+    return masks;
   }
 
  private:
@@ -195,6 +222,8 @@ GoldenScene ReadDefaults(ManifestReader& r, const nlohmann::json& root) {
     defaults.msaa = static_cast<int>(r.Integer(d, "msaa", "defaults", 0, 16, &msaa));
     defaults.state_atol = r.Number(d, "state_atol", "defaults", defaults.state_atol);
     defaults.tolerance = r.Tolerance(d, "defaults", defaults.tolerance);
+    defaults.same_tolerance =
+        r.Tolerance(d, "defaults", defaults.same_tolerance, "same_backend_tolerance");
   }
   return defaults;
 }
@@ -205,8 +234,10 @@ GoldenScene ReadScene(ManifestReader& r, const nlohmann::json& s, size_t i,
                       const GoldenScene& defaults, const std::string& dir,
                       std::set<std::string>* names) {
   static const std::set<std::string> kKnown = {
-      "name",    "env_id", "assets", "seed", "policy",    "steps",      "camera",
-      "overlay", "width",  "height", "msaa", "tolerance", "state_atol", "note"};
+      "name",  "env_id",    "assets",     "seed",  "policy",
+      "steps", "camera",    "overlay",    "width", "height",
+      "msaa",  "tolerance", "state_atol", "note",  "same_backend_tolerance",
+      "mask"};
   std::string where = "scenes[" + std::to_string(i) + "]";
   if (!s.is_object()) r.Fail(where, "must be an object");
   GoldenScene scene;
@@ -244,7 +275,9 @@ GoldenScene ReadScene(ManifestReader& r, const nlohmann::json& s, size_t i,
   const int64_t msaa = defaults.msaa;
   scene.msaa = static_cast<int>(r.Integer(s, "msaa", where, 0, 16, &msaa));
   scene.tolerance = r.Tolerance(s, where, defaults.tolerance);
+  scene.same_tolerance = r.Tolerance(s, where, defaults.same_tolerance, "same_backend_tolerance");
   scene.state_atol = r.Number(s, "state_atol", where, defaults.state_atol);
+  scene.masks = r.Masks(s, where);
   try {
     ParseOverlays(scene.overlay);
   } catch (const UsageError& e) {
@@ -319,7 +352,8 @@ SceneResult RenderScene(GlContext& gl, const GoldenScene& scene, const std::stri
   context.seed = scene.seed;
   context.steps_per_episode = scene.steps;
   auto policy = MakePolicy(scene.policy, spec, context);
-  FetchEnv env(spec, ResolveAssets(assets_root));
+  const AssetSource assets = ResolveAssets(assets_root);
+  FetchEnv env(spec, assets);
   // the scene's own cameras and overlays (golden/scenes.json, checked when it was read)
   RenderOptions options;
   options.width = scene.width;
@@ -349,7 +383,41 @@ SceneResult RenderScene(GlContext& gl, const GoldenScene& scene, const std::stri
     renderer.Render(env.data(), MakeFrameInfo(env, episode.steps.back()), result.rgb.data());
   }
   result.state = StateJson(scene, episode);
+  result.assets_sha256 = assets.sha256;
+  result.msaa_used = renderer.msaa_samples();
+  result.msaa_reason = renderer.msaa_reason();
+  // the objects each pixel shows: unchanged by a material or colour, changed by a camera,
+  // a pose or a shape
+  std::vector<int32_t> segments;
+  renderer.RenderSegmentIndices(env.data(), MakeFrameInfo(env, episode.steps.back()), &segments);
+  result.segmentation_sha256 = Sha256Hex(std::string(reinterpret_cast<const char*>(segments.data()),
+                                                     segments.size() * sizeof(int32_t)));
   return result;
+}
+
+std::string MaskOutsideFrame(const GoldenScene& scene, int width, int height) {
+  for (size_t i = 0; i < scene.masks.size(); ++i) {
+    const GoldenMask& m = scene.masks[i];
+    if (m.x + m.width > width || m.y + m.height > height) {
+      return "scene '" + scene.name + "': \"mask\"[" + std::to_string(i) + "] [" +
+             std::to_string(m.x) + ", " + std::to_string(m.y) + ", " + std::to_string(m.width) +
+             ", " + std::to_string(m.height) + "] reaches outside the " + std::to_string(width) +
+             "x" + std::to_string(height) + " frame: give rectangles inside it";
+    }
+  }
+  return "";
+}
+
+void ApplyMasks(const std::vector<GoldenMask>& masks, const uint8_t* golden, uint8_t* actual,
+                int width, int height) {
+  for (const GoldenMask& m : masks) {
+    for (int y = m.y; y < std::min(height, m.y + m.height); ++y) {
+      const int x1 = std::min(width, m.x + m.width);
+      if (x1 <= m.x) continue;
+      const size_t at = (static_cast<size_t>(y) * width + m.x) * 3;
+      std::copy(golden + at, golden + at + static_cast<size_t>(x1 - m.x) * 3, actual + at);
+    }
+  }
 }
 
 StateComparison CompareStates(const nlohmann::json& golden, const nlohmann::json& actual,

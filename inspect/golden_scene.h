@@ -9,9 +9,14 @@
 //    "scenes": [{"name": "reach_reset", "env_id": "FetchReach-v4", "assets": "bundled",
 //                "seed": 0, "policy": "zero", "steps": 0, "camera": "default",
 //                "overlay": "none", "width": 320, "height": 240, "msaa": 4,
-//                "tolerance": {"max_fraction": 0.002}}, ...]}
-// A scene's tolerance members override the defaults one by one. Its goldens are NAME.png and
-// NAME_state.json beside the manifest.
+//                "tolerance": {"max_fraction": 0.002},
+//                "same_backend_tolerance": {"threshold": 8},
+//                "mask": [[x, y, width, height], ...]}, ...]}
+// "tolerance" applies when the goldens were made on another backend or GL renderer,
+// "same_backend_tolerance" (defaults: kSameBackendTolerance) when on this one; a scene's members
+// override the defaults one by one. "mask" lists frame rectangles left out of the image
+// comparison. Its goldens are NAME.png, NAME_state.json and NAME_meta.json (how and where they
+// were made, inspect/golden_meta.h) beside the manifest.
 #pragma once
 
 #include <cstdint>
@@ -32,6 +37,19 @@ struct GoldenTolerance {
   double max_rms = 2.0;         ///< RMS error over all channels, levels
 };
 
+/// The built-in tolerance of a check on the backend and GL renderer the goldens were made on:
+/// such a renderer gives the same pixels again, so a change of a few levels in a colour (a
+/// block's red 0.2 -> 0.25 moves it 15-18 levels) fails.
+inline constexpr GoldenTolerance kSameBackendTolerance{8, 0.0002, 1.0};
+
+/// A frame rectangle left out of the image comparison, pixels, row 0 at the top.
+struct GoldenMask {
+  int x = 0;       ///< left column
+  int y = 0;       ///< top row
+  int width = 0;   ///< columns
+  int height = 0;  ///< rows
+};
+
 /// One canonical scene.
 struct GoldenScene {
   std::string name;    ///< file stem of its goldens; [A-Za-z0-9_-]+
@@ -47,8 +65,10 @@ struct GoldenScene {
   int width = 320;                 ///< pixels of each camera tile (the frame is FrameSize)
   int height = 240;                ///< pixels
   int msaa = 4;                    ///< multisample count, pinned so goldens never follow a default
-  GoldenTolerance tolerance;       ///< image tolerance
-  double state_atol = 1e-6;        ///< absolute tolerance on every state number
+  GoldenTolerance tolerance;       ///< image tolerance across backends or GL renderers
+  GoldenTolerance same_tolerance = kSameBackendTolerance;  ///< on the goldens' own backend
+  std::vector<GoldenMask> masks;                           ///< left out of the image comparison
+  double state_atol = 1e-6;  ///< absolute tolerance on every state number
 };
 
 /// A parsed manifest.
@@ -68,10 +88,14 @@ std::vector<const GoldenScene*> SelectScenes(const GoldenManifest& manifest,
 
 /// What one scene gives: its frame and the trajectory up to it.
 struct SceneResult {
-  int width = 0;             ///< frame width: the scene's width per camera tile (FrameSize)
-  int height = 0;            ///< frame height
-  std::vector<uint8_t> rgb;  ///< width * height * 3 bytes, row 0 = top
-  nlohmann::json state;      ///< see StateJson
+  int width = 0;                    ///< frame width: the scene's width per camera tile (FrameSize)
+  int height = 0;                   ///< frame height
+  std::vector<uint8_t> rgb;         ///< width * height * 3 bytes, row 0 = top
+  nlohmann::json state;             ///< see StateJson
+  std::string assets_sha256;        ///< the assets' content hash (AssetSource::sha256)
+  int msaa_used = 0;                ///< multisamples the renderer used (the driver may cap)
+  std::string msaa_reason;          ///< why, e.g. "capped at the driver's maximum 4"
+  std::string segmentation_sha256;  ///< hash of the frame's segmentation object indices
 };
 
 /// Runs the scene's episode and renders its last frame on `gl` (current on this thread).
@@ -82,6 +106,15 @@ SceneResult RenderScene(GlContext& gl, const GoldenScene& scene, const std::stri
 /// relative to `golden_dir`.
 std::string SceneAssets(const GoldenScene& scene, const std::string& golden_dir,
                         const std::string& genuine_dir);
+
+/// The one line saying which of the scene's masks reaches outside a width x height frame, or ""
+/// when every one lies inside it.
+std::string MaskOutsideFrame(const GoldenScene& scene, int width, int height);
+
+/// Copies `golden`'s pixels into `actual` inside each mask (clipped to the frame), so that masked
+/// pixels never differ. Both are width * height * 3 bytes.
+void ApplyMasks(const std::vector<GoldenMask>& masks, const uint8_t* golden, uint8_t* actual,
+                int width, int height);
 
 /// Result of comparing two state JSON documents.
 struct StateComparison {

@@ -272,9 +272,9 @@ std::vector<Case> Matrix() {
        "golden check --golden-dir {src}/golden --only nosuchscene --out {tmp}/g", 2, "nosuchscene"},
       {"GoldenMalformedManifest",
        "golden check --golden-dir {tmp}/gd --out {tmp}/g",
-       1,
+       2,
        "manifest.json",
-       {},
+       {"g"},
        file("gd/manifest.json", "{\"scenes\": [")},
       {"MergeNoFolder", "merge-manifests", 2, "DIR"},
       // ---- report and compare

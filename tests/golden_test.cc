@@ -41,7 +41,9 @@ using testing::SplitLines;
 using testing::TempDir;
 
 constexpr char kStateLayer[] = "state differs (physics or model)";
-constexpr char kPixelLayer[] = "state equal, pixels differ (renderer or camera)";
+constexpr char kPixelLayer[] = "state equal, pixels differ";  // and why, where it can tell
+constexpr char kAppearance[] = "state equal, pixels differ (model appearance";
+constexpr char kGeometry[] = "state equal, pixels differ (camera or model geometry";
 
 // ---------------------------------------------------------------- image comparison
 
@@ -244,7 +246,7 @@ void ExpectFailureNaming(const CommandResult& r, const GoldenCopy& copy, const s
   EXPECT_EQ(r.exit_code, 1) << r.output;
   EXPECT_NE(r.output.find(layer), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("FAIL"), std::string::npos) << r.output;
-  for (const char* suffix : {"_actual.png", "_diff.png", "_side.png"}) {
+  for (const char* suffix : {"_golden.png", "_actual.png", "_diff.png", "_side.png"}) {
     EXPECT_TRUE(fs::exists(copy.out() / (scene + suffix))) << scene + suffix;
   }
 }
@@ -254,7 +256,7 @@ TEST(GoldenSensitivity, CameraAzimuthPlusTwoDegreesFailsInPixels) {
   copy.Scene("reach_reset")["camera"] = "free:azimuth=134";  // default is 132
   copy.SaveManifest();
   const CommandResult r = copy.Run("check", "--backend osmesa --only reach_reset");
-  ExpectFailureNaming(r, copy, "reach_reset", kPixelLayer);
+  ExpectFailureNaming(r, copy, "reach_reset", kGeometry);
   const Image side = ReadPng((copy.out() / "reach_reset_side.png").string());
   EXPECT_EQ(side.width, SideBySideWidth(320));
   EXPECT_EQ(side.height, SideBySideHeight(240));  // the panel labels' strip and the panels
@@ -276,7 +278,9 @@ TEST(GoldenSensitivity, BlockColourChangeFailsInPixels) {
   copy.Scene("push_reset_external")["assets"] = "red_block";
   copy.SaveManifest();
   const CommandResult r = copy.Run("check", "--backend osmesa --only push_reset_external");
-  ExpectFailureNaming(r, copy, "push_reset_external", kPixelLayer);
+  ExpectFailureNaming(r, copy, "push_reset_external", kAppearance);
+  EXPECT_NE(r.output.find("the assets changed since these goldens were made"), std::string::npos)
+      << r.output;
 }
 
 TEST(GoldenSensitivity, GoalMovedOneCentimetreFailsInState) {

@@ -11,7 +11,11 @@
 # whole page once its videos are loaded and shown at 70 % of their length.
 # docs/contacts.png and docs/contacts_plot.png: a scripted FetchPickAndPlace grasp at step 16 with
 # --overlay default,contacts, and the viewer's finger-force plot of that episode.
+# docs/golden_review.png: golden check's review page after the block's red went 0.2 -> 0.25 (the
+# bundled models copied with that one change; a same-backend check fails it), photographed by
+# web/test/check_golden_review.mjs.
 # Needs a build (build/fetchscope), Debian's chromium and web/node_modules (tools/install-deps.sh).
+# `tools/docs-screenshots.sh BUILD OUT golden` makes only the golden review page's picture.
 #   tools/docs-screenshots.sh [BUILD_DIR] [OUT_DIR (default docs)]
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -21,6 +25,26 @@ chromium="${FETCHSCOPE_CHROMIUM:-/usr/bin/chromium}"
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 mkdir -p "$out"
+golden_review() {  # the block's red 0.2 -> 0.25 in a copy of the goldens' assets, checked
+  cp -r golden "$work/golden"
+  mkdir -p "$work/golden/redder/fetch"
+  cp models/*.xml "$work/golden/redder/fetch/"
+  sed -i 's|name="block_mat" rgba="0.2 0.2 0.2 1"|name="block_mat" rgba="0.25 0.2 0.2 1"|' \
+    "$work/golden/redder/fetch/fetch_shared.xml"
+  python3 -c 'import json, sys
+m = json.load(open(sys.argv[1]))
+for s in m["scenes"]:
+    if s["name"] == "push_reset_external": s["assets"] = "redder"
+json.dump(m, open(sys.argv[1], "w"), indent=1)' "$work/golden/manifest.json"
+  FETCHSCOPE_SHARED_DIR="$work/none" "$bin" golden check --backend osmesa --golden-dir "$work/golden" \
+    --only push_reset_external,reach_reset,slide_reset --out "$work/golden-out" >/dev/null || [[ $? -eq 1 ]]
+  node web/test/check_golden_review.mjs --page "$work/golden-out/index.html" \
+    --screenshot "$out/golden_review.png" --chromium "$chromium" >"$work/golden.json"
+  grep -q '"console_errors":\[\],"page_errors":\[\]' "$work/golden.json" ||
+    { cat "$work/golden.json" >&2; echo "docs-screenshots: the golden review page has errors" >&2; exit 1; }
+}
+golden_review
+if [[ "${3:-}" == golden ]]; then echo "docs-screenshots: $out/golden_review.png"; exit 0; fi
 common=(--env-id FetchPush-v4 --episodes 5 --steps 20 --width 240 --height 240 --quiet)
 "$bin" record "${common[@]}" --policy scripted --out "$work/scripted"
 "$bin" record "${common[@]}" --policy zero --out "$work/zero"
@@ -79,4 +103,4 @@ kill -INT "$serve_pid"; wait "$serve_pid" || true
 grep -q '"console_errors":\[\],"page_errors":\[\]' "$work/debug.json" && [[ -f "$work/inspector.png" ]] ||
   { cat "$work/debug.json" >&2; echo "docs-screenshots: the serve page has errors" >&2; exit 1; }
 cp "$work/inspector.png" "$out/serve_inspector.png"
-echo "docs-screenshots: $out/report.png $out/compare.png $out/viewer.png $out/pick_and_place.png $out/push_three_views.png $out/contacts.png $out/contacts_plot.png $out/serve_inspector.png"
+echo "docs-screenshots: $out/report.png $out/compare.png $out/viewer.png $out/pick_and_place.png $out/push_three_views.png $out/contacts.png $out/contacts_plot.png $out/serve_inspector.png $out/golden_review.png"

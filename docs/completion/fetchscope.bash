@@ -68,7 +68,7 @@ _fetchscope() {
       local root=${MINARI_DATASETS_PATH:-$HOME/.minari/datasets} ids=''
       [[ -d $root ]] && ids=$(cd "$root" && find . -path '*/data/metadata.json' 2>/dev/null | sed 's|^\./||; s|/data/metadata.json$||')
       COMPREPLY=($(compgen -W "$ids" -- "$cur") $(compgen -f -- "$cur")); return ;;
-    --backends|--crf|--dataset-episodes|--dataset-size|--episodes|--exec-episodes|--exec-fields|--exec-python|--exec-size|--exec-timeout|--fps|--gif-fps|--gif-width|--height|--host|--hud-opacity|--idle-timeout|--jobs|--json-out|--keep|--magnitudes|--max-queued|--max-sessions|--minari|--minari-author|--minari-author-email|--n-episodes|--n-steps|--obs-camera|--obs-layers|--obs-overlay|--obs-size|--only|--output|--pixel-tolerance|--port|--robomimic|--seconds|--seed|--serve-height|--serve-width|--shard|--shard-count|--sheet-every|--signals|--soak-frames|--steps|--stop-after-success|--sweep-axis|--token-file|--tolerance|--valid-fraction|--width|-j|-o)
+    --backends|--crf|--dataset-episodes|--dataset-size|--episodes|--exec-episodes|--exec-fields|--exec-python|--exec-size|--exec-timeout|--fps|--gif-fps|--gif-width|--height|--host|--hud-opacity|--idle-timeout|--jobs|--json|--json-out|--junit|--keep|--magnitudes|--max-queued|--max-sessions|--minari|--minari-author|--minari-author-email|--n-episodes|--n-steps|--obs-camera|--obs-layers|--obs-overlay|--obs-size|--only|--output|--pixel-tolerance|--port|--robomimic|--seconds|--seed|--serve-height|--serve-width|--shard|--shard-count|--sheet-every|--signals|--soak-frames|--steps|--stop-after-success|--sweep-axis|--token-file|--tolerance|--valid-fraction|--width|-j|-o)
       COMPREPLY=($(compgen -f -- "$cur")); return ;;
   esac
   local words=''
@@ -90,8 +90,8 @@ _fetchscope() {
     'merge-manifests') words='--help -h --out --quiet -q --no-report' ;;
     'merge-datasets') words='--help -h --minari --minari-root --robomimic --valid-fraction --overwrite --quiet -q' ;;
     'golden') words='check update --help -h' ;;
-    'golden check') words='--help -h --golden-dir --backend --gpu --only --genuine-assets --out' ;;
-    'golden update') words='--help -h --golden-dir --backend --gpu --only --genuine-assets' ;;
+    'golden check') words='--help -h --golden-dir --backend --gpu --only --genuine-assets --require-genuine --out --junit --json --tolerance' ;;
+    'golden update') words='--help -h --golden-dir --backend --gpu --only --genuine-assets --require-genuine --out' ;;
     'list-gpus') words='--help -h --gpu --json' ;;
     'report') words='--help -h --quiet -q' ;;
     'compare') words='--help -h --out --tolerance --pixel-tolerance --states-only --quiet -q' ;;
