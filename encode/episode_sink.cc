@@ -261,6 +261,7 @@ void EpisodeEncoder::Finalize() {
   entry.is_success = episode_.steps.back().is_success;
   entry.layers = std::move(layers);
   entry.hindsight = hindsight_;
+  if (!episode_.look.is_null()) entry.extra["look"] = episode_.look;  // --randomize's draw
   done_(k_, std::move(result));
 }
 

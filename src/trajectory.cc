@@ -321,6 +321,10 @@ class TrajectoryReader {
     }
     episode.episode_return = sum;
     if (const json* reset = Find(e, "reset")) episode.placed = Placed(*reset, key + ".reset");
+    if (const json* look = Find(e, "look")) {  // its members are render/look.h's to check
+      if (!look->is_object()) Fail(key + ".look", "expected an object");
+      episode.look = *look;
+    }
     if (const json* r = Find(e, "return"))
       episode.episode_return = Number(*r, key + ".return", "a number");
     return episode;
@@ -403,6 +407,7 @@ nlohmann::json EpisodeJson(const TrajectoryEpisode& episode) {
       reset["object_euler"] = JsonVector(object->euler.data(), 3);
     }
   }
+  if (!episode.look.is_null()) out["look"] = episode.look;
   if (past > 0) {
     out["past_time_limit"] = {
         {"max_episode_steps", first - 1}, {"first_step", first}, {"steps", past}};

@@ -17,8 +17,9 @@
 // {"max_episode_steps", "first_step", "steps"} and the file a "note"; files without such steps
 // have none of these keys. An episode whose reset was placed by hand (serve) carries "reset":
 // {"rule": "placed", "goal", "object_position", "object_euler"} (PlacedReset; an addition like
-// "contacts"). Non-finite values are written as the strings
-// "inf", "-inf" and "nan" (JSON has no literal for them) and read back as such.
+// "contacts"), and one rendered with a randomized look its draw, "look" (render/look.h). Non-finite
+// values are written as the strings "inf", "-inf" and "nan" (JSON has no literal for them) and read
+// back as such.
 //
 // Versions, as the manifest's (run/manifest.h): the file carries "schema_version"
 // (kTrajectorySchemaVersion). A file without one was written before versions existed and is read
@@ -80,6 +81,9 @@ struct TrajectoryEpisode {
   std::optional<uint64_t> seed;
   std::string file;  ///< the file it was read from, for messages ("" when played here)
   std::optional<PlacedReset> placed;  ///< a reset placed by hand; nullopt: the generator's
+  /// the randomized look its frames were drawn with (--randomize: render/look.h's LookJson, read
+  /// back there); null: the plain look. Written as the episode's "look", only when set
+  nlohmann::json look;
 };
 
 /// A trajectory file: the run's environment and policy, and its episodes in file order.
