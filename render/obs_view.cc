@@ -59,6 +59,16 @@ ObsRenderer::ObsRenderer(GlContext& gl, mjModel* model, const ObsSetup& setup) :
 
 ObsRenderer::~ObsRenderer() = default;
 
+void ObsRenderer::SetLook(const LookDraw* look) {
+  for (auto& r : renderers_) r->SetLook(look);
+}
+
+std::vector<std::string> ObsRenderer::camera_keys() const {
+  std::vector<std::string> keys;
+  for (const ObsCamera& c : setup_.cameras) keys.push_back(c.text);
+  return keys;
+}
+
 void ObsRenderer::Render(const mjData* data, const FrameInfo& info) {
   for (size_t i = 0; i < renderers_.size(); ++i) {
     Renderer& r = *renderers_[i];

@@ -83,6 +83,13 @@ class ObsRenderer {
   /// Renders every camera's layers of the current state of `data` (overlays as setup.overlays;
   /// the goal marker where `info` puts it).
   void Render(const mjData* data, const FrameInfo& info);
+  /// Draws every later Render with `look` (Renderer::SetLook; nullptr: the plain look). Each
+  /// camera's jitter is the look's entry for its ObsCamera::text; the images' geometry follows it.
+  void SetLook(const LookDraw* look);
+  /// The --camera texts of the observed cameras: DrawLook's camera keys.
+  std::vector<std::string> camera_keys() const;
+  /// Camera i's renderer (its texture_uploads(), for one).
+  const Renderer& renderer(size_t i) const { return *renderers_.at(i); }
   /// Camera i's images of the last Render.
   const ObsImages& images(size_t i) const { return images_.at(i); }
   size_t cameras() const { return images_.size(); }

@@ -233,6 +233,7 @@ Renderer::~Renderer() {
   try {
     gl_.MakeCurrent();
     if (async_) pbo_gl_->DeleteBuffers(kReadbackDepth, pbos_);
+    FreeLookTextures();
   } catch (...) {
     // nothing better to do in a destructor; MuJoCo then frees into whatever is current
   }
@@ -336,6 +337,7 @@ void Renderer::Draw(const mjData* data, const FrameInfo& info, bool overlays) {
       mjv_updateScene(model_, readonly, &option_, &perturb_, &cameras_[0], mjCAT_ALL, scene);
       bool placed = PlaceSiteGeom(scene, target_site_, info.goal);
       if (drop_mocap_) DropMocapGeoms(model_, scene);
+      if (look_) ApplyLook(data, scene);
       if (overlays) {
         std::array<double, 3> grip = info.achieved;
         if (grip_site_ >= 0) {
@@ -350,6 +352,7 @@ void Renderer::Draw(const mjData* data, const FrameInfo& info, bool overlays) {
     } else {
       mjv_updateCamera(model_, readonly, &cameras_[i], scene);  // same geoms, next view
     }
+    if (look_) JitterView(i, scene);
     const auto submit_start = Clock::now();
     scene_ms += std::chrono::duration<double, std::milli>(submit_start - scene_start).count();
     lap.Into(&cpu_.scene);
@@ -382,6 +385,7 @@ void Renderer::SetView(const std::vector<CameraSpec>& cameras, const OverlaySet&
   cameras_ = std::move(made);
   options_.cameras = cameras;
   options_.overlays = overlays;
+  UpdateViewJitter();
 }
 
 void Renderer::SetTrail(const std::vector<std::array<double, 3>>& points) {

@@ -16,6 +16,7 @@
 #include "base/cpu_clock.h"
 #include "render/camera.h"
 #include "render/gl_context.h"
+#include "render/look.h"
 #include "render/mjr_handles.h"
 #include "render/overlay.h"
 
@@ -195,6 +196,20 @@ class Renderer {
   /// and copy of base/cpu_clock.h; the other stages stay 0): Submit, Collect and Render.
   const CpuStages& cpu() const { return cpu_; }
 
+  /// Draws every later frame with `look` (render/look.h), or the plain look for nullptr: colours
+  /// by part, the table and floor textures, the model's lights and each view's camera jitter
+  /// (the view's key is CameraText of its camera) are edited into the scene after
+  /// mjv_updateScene / mjv_updateCamera, never into the model or data. rgb, depth and
+  /// segmentation all use the jittered camera (view_camera() follows it); segmentation keeps
+  /// its own colours. Textures that differ from those already on the GPU are uploaded here,
+  /// once, never per frame (texture_uploads() counts them). The look is copied.
+  void SetLook(const LookDraw* look);
+  /// The camera keys of the views (CameraText of each view's camera, in tile order): the keys
+  /// DrawLook draws camera jitter for.
+  std::vector<std::string> camera_keys() const;
+  /// How many textures SetLook has uploaded since the renderer was made.
+  int texture_uploads() const { return texture_uploads_; }
+
   /// Starts a new episode's trail.
   void ResetTrail() { trail_.Clear(); }
 
@@ -305,6 +320,24 @@ class Renderer {
   // Draws the segmentation scene and reads its segid colours (segid + 1, 0 = none) into `out`.
   void DrawSegmentIds(const mjData* data, const FrameInfo& info, std::vector<uint8_t>* out);
   std::vector<uint8_t> pick_ids_;  // Pick's readback, reused
+
+  // The look (SetLook; renderer_look.cc). Per model geom its part key ("object", "table",
+  // "floor", a robot0: body's name; "" for none) and surface (0 table, 1 floor, -1 none).
+  std::optional<LookDraw> look_;
+  std::vector<std::string> geom_part_;
+  std::vector<int> geom_surface_;
+  std::vector<const CameraJitter*> view_jitter_;  // per view, into look_; nullptr: none
+  unsigned look_textures_[2] = {0, 0};            // GL names of the table and floor textures
+  std::optional<SurfaceTexture> uploaded_[2];     // what each holds
+  int texture_uploads_ = 0;
+  void FindLookParts();
+  void UpdateViewJitter();
+  void UploadLookTexture(int surface, const SurfaceTexture& texture);
+  void FreeLookTextures() noexcept;
+  // Edits the scene's geoms and lights for look_ (after mjv_updateScene).
+  void ApplyLook(const mjData* data, mjvScene* scene) const;
+  // Moves and turns the scene's camera of view `view` for look_ (after its camera update).
+  void JitterView(size_t view, mjvScene* scene) const;
 };
 
 }  // namespace fetchscope
