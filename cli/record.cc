@@ -22,6 +22,7 @@
 #include "cli/command.h"
 #include "cli/common.h"
 #include "cli/jobs_options.h"
+#include "cli/look_options.h"
 #include "cli/obs_options.h"
 #include "cli/record_from.h"
 #include "cli/resolve.h"
@@ -87,6 +88,7 @@ struct RecordOptions {
   DatasetAuthor author;               // --minari-author, --minari-author-email
   double tolerance = 1e-6;            // --tolerance: record --from DATASET
   ObsOptions obs;                     // --obs-camera, --obs-size, --obs-layers, --obs-overlay
+  LookOptions look;                   // --randomize, --randomize-config
   RobomimicOptions robomimic;         // --robomimic, --no-next-obs, --valid-fraction
   EpisodeSelectionOptions selection;  // --keep, --stop-after-success
 };
@@ -164,6 +166,17 @@ void ResolveRecordVideo(const RecordOptions& o, RecordPlan* plan) {
   ValidateVideoOptions(plan->video);
 }
 
+// Whether an episode's look may jitter the cameras: --randomize camera, or (record --from
+// without --randomize) a recorded episode whose look did.
+bool CameraLookDrawn(const RecordPlan& plan) {
+  if (plan.look) return plan.look->camera;
+  if (!plan.from) return false;
+  for (const auto& [k, episode] : plan.from->episodes) {
+    if (episode.look.is_object() && episode.look.value("camera", false)) return true;
+  }
+  return false;
+}
+
 // The policy checked, the font and the frame size: the model
 // is loaded once here so that bad assets, cameras or an edited recording fail before any file.
 void ResolveRecordWorld(const RecordOptions& o, RecordJob* job) {
@@ -179,8 +192,11 @@ void ResolveRecordWorld(const RecordOptions& o, RecordJob* job) {
     job->model_path = env.model_path();
     if (plan.from) VerifyRecording(env, *plan.from);  // an edited recording stops here
     // --obs-camera: the dataset's images, at the run's --msaa (as render draws them)
-    plan.pixels = PlanPixels(ResolveObs(o.obs, env.model(), plan.view.render.msaa_samples),
-                             env.model(), !o.minari.empty(), !o.robomimic.file.empty());
+    ObsSetup obs = ResolveObs(o.obs, env.model(), plan.view.render.msaa_samples);
+    if (CameraLookDrawn(plan)) {  // each episode's jitter moves every camera: poses per step
+      for (ObsCamera& camera : obs.cameras) camera.moving = true;
+    }
+    plan.pixels = PlanPixels(obs, env.model(), !o.minari.empty(), !o.robomimic.file.empty());
     if (plan.pixels.stages() && o.resume) {
       throw UsageError(std::string(plan.pixels.setup.enabled() ? "--obs-camera" : "--robomimic") +
                        " cannot --resume: the images and states of the episodes already "
@@ -203,6 +219,7 @@ RecordJob ResolveRecord(RecordOptions* options, const PolicySpec& policy,
   const OverlaySet overlays = ParseOverlays(o.view.overlay);
   plan.hindsight = overlays.hindsight;
   job.hud = overlays.hud;
+  plan.look = ResolveLook(o.look);
   // the one resolver: env, seed, assets, the episodes (a replayed trajectory's own) and the
   // policy's context
   EpisodeRequest request{policy,  o.episodes, o.episodes_given,
@@ -381,6 +398,9 @@ Command AddRecord(CLI::App& app) {
                 "Do not write the run's HTML report (index.html; see `fetchscope report`)");
   AddFromOption(sub, &o->from, &o->tolerance);
   AddObsOptions(sub, &o->obs);
+  AddLookOptions(sub, &o->look,
+                 "; record --from without it draws each episode as it was recorded (its stored "
+                 "look), --randomize none plainly");
   AddRobomimicOptions(sub, &o->robomimic);
   AddEpisodeSelectionOptions(sub, &o->selection);
   return {sub, [o, sub] {

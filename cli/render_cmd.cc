@@ -9,6 +9,7 @@
 #include "base/text_table.h"
 #include "cli/command.h"
 #include "cli/common.h"
+#include "cli/look_options.h"
 #include "cli/resolve.h"
 #include "cli/view_options.h"
 #include "encode/png_io.h"
@@ -53,8 +54,7 @@ struct RenderCommandOptions {
   std::string layers = "rgb";
   std::string output;
   bool verbose = false;
-  std::string randomize = "none";  // see ParseRandomize
-  std::string randomize_config;    // --randomize-config FILE.json; empty: the default ranges
+  LookOptions look;  // --randomize, --randomize-config
 };
 
 int RunRender(const RenderCommandOptions& o) {
@@ -64,8 +64,7 @@ int RunRender(const RenderCommandOptions& o) {
   const bool want_rgb = want(Layer::kRgb), want_depth = want(Layer::kDepth),
              want_seg = want(Layer::kSegmentation);
   ParseOverlays(o.view.overlay);  // reject a bad --overlay before any work
-  LookConfig look_config = ParseRandomize(o.randomize);
-  if (!o.randomize_config.empty()) ReadLookConfig(o.randomize_config, &look_config);
+  const LookConfig look_config = ResolveLook(o.look).value_or(LookConfig{});
   EpisodeRequest request;
   request.policy = ParsePolicySpec(o.policy_spec);
   request.steps = o.steps;
@@ -85,9 +84,9 @@ int RunRender(const RenderCommandOptions& o) {
   const EpisodeRecord episode = sequence.Play(k);
   auto gl = CreateViewContext(view.backend, ResolveGpuChoice(view));
   Renderer renderer(*gl, fetch.model(), view.render);
-  if (look_config.any()) {  // the frame's episode is the draw's episode 0 (render shows one)
+  if (look_config.any()) {  // episode k's draw, as record draws it for its frames
     const LookDraw look =
-        DrawLook(look_config, LookSeed(seed, 0), renderer.camera_keys(), fetch.model());
+        DrawLook(look_config, LookSeed(seed, k), renderer.camera_keys(), fetch.model());
     renderer.SetLook(&look);
   }
   if (o.verbose) {
@@ -157,16 +156,7 @@ Command AddRender(CLI::App& app) {
   sub->add_option("-o,--output", o->output,
                   "Output PNG: a name ending in .png (other image formats are refused)")
       ->required();
-  sub->add_option("--randomize", o->randomize,
-                  "Randomized look: a comma list of colors (object, table, floor), textures "
-                  "(checker, gradient or noise on the table and floor), lighting (the model's "
-                  "lights) and camera (pose and fovy jitter of every view), or none. Drawn from "
-                  "the seed, apart from the physics (the state is the plain run's); ranges as "
-                  "docs/guide/recording.md, \"Randomized looks\"")
-      ->capture_default_str();
-  sub->add_option("--randomize-config", o->randomize_config,
-                  "JSON file of [min, max] ranges (and robot_colors) for --randomize, e.g. "
-                  "{\"camera_fovy\": [-2, 2]}; keys not given keep their defaults");
+  AddLookOptions(sub, &o->look);
   sub->add_flag("-v,--verbose", o->verbose,
                 "Print the GL vendor, renderer and version, and the MSAA samples used and why");
   return {sub, [o] { return RunRender(*o); }};

@@ -10,6 +10,7 @@
 #include "cli/command.h"
 #include "cli/common.h"
 #include "cli/jobs_options.h"
+#include "cli/look_options.h"
 #include "cli/obs_options.h"
 #include "cli/resolve.h"
 #include "cli/shard_options.h"
@@ -46,6 +47,7 @@ struct RolloutOptions {
   DatasetAuthor author;               // --minari-author, --minari-author-email
   std::string signals = "none";       // --signals
   ObsOptions obs;                     // --obs-camera, --obs-size, --obs-layers, --obs-overlay
+  LookOptions look;                   // --randomize, --randomize-config (the images' look)
   RobomimicOptions robomimic;         // --robomimic, --no-next-obs, --valid-fraction
   EpisodeSelectionOptions selection;  // --keep, --stop-after-success
   std::string shard;                  // --shard I/N
@@ -140,10 +142,19 @@ int RunRollout(const RolloutOptions& o) {
   CheckJsonOutReplaces(path, {{"env_id", spec.id}, {"seed", seed}}, o.overwrite);
   const bool robomimic = !o.robomimic.file.empty();
   PixelPlan pixels;
+  const std::optional<LookConfig> look = ResolveLook(o.look);
   {
     FetchEnv check(spec, assets);  // bad assets fail here, before any worker starts
-    pixels = PlanPixels(ResolveObs(o.obs, check.model(), kMsaaAuto), check.model(),
-                        !o.minari.empty(), robomimic);
+    ObsSetup obs = ResolveObs(o.obs, check.model(), kMsaaAuto);
+    if (look && look->any() && !obs.enabled()) {
+      throw UsageError("--randomize " + o.look.randomize +
+                       " draws the look of images, and rollout renders none; accepted: with "
+                       "--obs-camera (the dataset's or an exec: policy's images)");
+    }
+    if (look && look->camera) {  // each episode's jitter moves every camera: poses per step
+      for (ObsCamera& camera : obs.cameras) camera.moving = true;
+    }
+    pixels = PlanPixels(obs, check.model(), !o.minari.empty(), robomimic);
   }
   // a shard plays its share of the run's episodes (episode k in shard k mod N), each as in the
   // whole run; merge-datasets puts the shards' datasets together
@@ -158,6 +169,7 @@ int RunRollout(const RolloutOptions& o) {
   job.policy = WithExecFields(request.policy, o.policy, spec);
   job.policy_context = &run.policy_context;
   job.steps = o.steps;
+  job.look = look;
   job.contact_signals = ParseContactSignals(o.signals);
   job.episodes = episodes;
   job.episodes_requested = static_cast<int>(run.episodes.size());
@@ -228,6 +240,7 @@ Command AddRollout(CLI::App& app) {
                 "result file of another env, seed or task");
   AddDatasetAuthorOptions(sub, &o->author);
   AddObsOptions(sub, &o->obs);
+  AddLookOptions(sub, &o->look);
   AddRobomimicOptions(sub, &o->robomimic);
   AddEpisodeSelectionOptions(sub, &o->selection);
   sub->add_option(

@@ -5,6 +5,7 @@
 
 #include <hdf5.h>
 
+#include <string>
 #include <utility>
 
 namespace fetchscope {
@@ -56,5 +57,17 @@ using H5Dataspace = Hdf5Handle<H5Sclose>;  ///< a dataspace (H5Screate*, H5Dget_
 using H5Datatype = Hdf5Handle<H5Tclose>;   ///< a datatype we made or got (not the predefined ones)
 using H5Attribute = Hdf5Handle<H5Aclose>;  ///< an attribute (H5Acreate2 / H5Aopen)
 using H5PropList = Hdf5Handle<H5Pclose>;   ///< a property list (H5Pcreate / H5Pcopy)
+
+/// Writes `value` as a variable-length UTF-8 string attribute `name` of `object`, as h5py writes
+/// a Python str. False where HDF5 refuses (the caller names the file).
+inline bool WriteStringAttribute(hid_t object, const char* name, const std::string& value) {
+  const H5Datatype type(H5Tcopy(H5T_C_S1));
+  H5Tset_size(type.get(), H5T_VARIABLE);
+  H5Tset_cset(type.get(), H5T_CSET_UTF8);
+  const H5Dataspace space(H5Screate(H5S_SCALAR));
+  const H5Attribute a(H5Acreate2(object, name, type.get(), space.get(), H5P_DEFAULT, H5P_DEFAULT));
+  const char* text = value.c_str();
+  return a && H5Awrite(a.get(), type.get(), &text) >= 0;
+}
 
 }  // namespace fetchscope

@@ -27,6 +27,7 @@ struct MinariEpisode {
   std::vector<uint8_t> terminations;  ///< T, 0 or 1
   std::vector<uint8_t> truncations;   ///< T, 0 or 1
   std::vector<float> is_success;      ///< T+1 (0 or 1), or empty where the dataset has none
+  std::string look;                   ///< a randomized look's draw as JSON text ("" plain)
 
   /// T, the number of steps (the length of `rewards`).
   int steps() const { return static_cast<int>(rewards.size()); }

@@ -12,6 +12,7 @@ MinariEpisode ToMinariEpisode(const EpisodeRecord& episode, std::optional<uint64
   MinariEpisode m;
   m.id = episode.index;
   m.seed = seed;
+  if (!episode.look.is_null()) m.look = episode.look.dump();
   m.obs_dim = obs_dim;
   const size_t rows = episode.steps.size();
   if (rows == 0) throw RunError("episode " + std::to_string(episode.index) + " has no reset");

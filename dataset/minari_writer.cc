@@ -323,6 +323,10 @@ void MinariWriter::Add(const MinariEpisode& e, const StagedEpisode* staged) {
     }
   }
   w.Attribute(group.get(), "total_steps", H5T_STD_I64LE, H5T_NATIVE_INT64, &total_steps);
+  // a randomized look's draw (--randomize), as JSON text: Minari's loader passes it over
+  if (!e.look.empty() && !WriteStringAttribute(group.get(), "look", e.look)) {
+    w.Fail("attribute look");
+  }
 
   {
     const H5Group obs = w.Group(group.get(), "observations");

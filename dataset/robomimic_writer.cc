@@ -45,14 +45,7 @@ struct Writer {
   }
   // a variable-length UTF-8 string attribute, as h5py writes a Python str
   void StringAttribute(hid_t object, const char* name, const std::string& value) const {
-    const H5Datatype type(H5Tcopy(H5T_C_S1));
-    H5Tset_size(type.get(), H5T_VARIABLE);
-    H5Tset_cset(type.get(), H5T_CSET_UTF8);
-    const H5Dataspace space(H5Screate(H5S_SCALAR));
-    const H5Attribute a(
-        H5Acreate2(object, name, type.get(), space.get(), H5P_DEFAULT, H5P_DEFAULT));
-    const char* text = value.c_str();
-    if (!a || H5Awrite(a.get(), type.get(), &text) < 0) Fail(std::string("attribute ") + name);
+    if (!WriteStringAttribute(object, name, value)) Fail(std::string("attribute ") + name);
   }
   // names as fixed-length ASCII bytes, as np.array(names, dtype='S') makes them
   void Names(hid_t parent, const std::string& name, const std::vector<std::string>& names) const {
@@ -145,6 +138,7 @@ void RobomimicWriter::Add(const MinariEpisode& e, const StagedEpisode& staged) {
   if (demos_ == 0) FillCameraGeometry(staged, &pixels_);
   const H5Group demo = w.Group(data_.get(), "demo_" + std::to_string(demos_));
   w.Int64Attribute(demo.get(), "num_samples", static_cast<int64_t>(n));
+  if (!e.look.empty()) w.StringAttribute(demo.get(), "look", e.look);  // --randomize's draw
   const std::vector<double> actions(e.actions.begin(), e.actions.end());
   w.Dataset(demo.get(), "actions", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, {n, 4}, actions.data());
   std::vector<double> states;

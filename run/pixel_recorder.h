@@ -101,6 +101,14 @@ class PixelRecorder {
   /// Waits until the episode's staging file is written and closed. Throws RunError where it
   /// could not be written (also from Step, once a write failed).
   void End();
+  /// Draws the images of later Steps with `look` (ObsRenderer::SetLook; nullptr: plain).
+  void SetLook(const LookDraw* look) {
+    if (renderer_) renderer_->SetLook(look);
+  }
+  /// The observed cameras' keys (ObsRenderer::camera_keys), for DrawLook; none without cameras.
+  std::vector<std::string> camera_keys() const {
+    return renderer_ ? renderer_->camera_keys() : std::vector<std::string>{};
+  }
   /// The images of the last Step as an exec: policy receives them; null without cameras.
   /// Made when first asked after a Step (a dataset run without an exec: policy never asks).
   const WireStep* wire();

@@ -11,6 +11,7 @@
 #include "base/cores.h"
 #include "base/cpu_clock.h"
 #include "render/layers.h"
+#include "run/episode_look.h"
 #include "src/policy.h"
 
 namespace fetchscope {
@@ -187,9 +188,11 @@ void RecordRunner::Run(int k, WorkerChannel& channel) {
     return !channel.StopRequested();
   };
   EpisodeRecord episode;
+  const std::optional<LookDraw> look = SetEpisodeLook(k);
   try {
     if (pixels_) pixels_->Begin(k);
     episode = PlayEpisode(k, on_step, channel);
+    if (look) episode.look = LookJson(*look);
     if (pixels_) pixels_->End();
     const auto drain_start = Clock::now();
     lap.Into(&sim_cpu);  // the last step's
@@ -206,6 +209,23 @@ void RecordRunner::Run(int k, WorkerChannel& channel) {
   encoder->Close(std::move(episode), sim_s, render_s,
                  EpisodeCpu(renderer_before, renderer_->cpu(), sim_cpu, render_cpu));
   encoders_.push_back(std::move(encoder));
+}
+
+std::optional<LookDraw> RecordRunner::SetEpisodeLook(int k) {
+  const TrajectoryEpisode* recorded = nullptr;
+  if (plan_.from) {
+    const auto it = plan_.from->episodes.find(k);
+    if (it != plan_.from->episodes.end()) recorded = &it->second;
+  }
+  std::vector<std::string> keys = renderer_->camera_keys();
+  if (pixels_) {
+    for (const std::string& key : pixels_->camera_keys()) keys.push_back(key);
+  }
+  const std::optional<LookDraw> look =
+      EpisodeLook(plan_.look, plan_.seed, k, recorded, keys, sequence_.env().model());
+  renderer_->SetLook(look ? &*look : nullptr);
+  if (pixels_) pixels_->SetLook(look ? &*look : nullptr);
+  return look;
 }
 
 void RecordRunner::Finish(WorkerChannel& channel) {

@@ -59,6 +59,9 @@ struct RecordPlan {
   /// --obs-camera: each step's images (and states) rendered and staged for the dataset
   PixelPlan pixels;
   int stop_after_success = -1;  ///< --stop-after-success K (-1: off)
+  /// --randomize: each episode's look drawn from LookSeed(seed, k) (none: plain); nullopt: not
+  /// given (record --from then draws each episode as it stored its look)
+  std::optional<LookConfig> look;
 };
 
 /// The episode sinks' options for `plan`.
@@ -96,6 +99,8 @@ class RecordRunner : public EpisodeRunner {
   HindsightEpisode SampleEpisodeHindsight(int k, const std::vector<StepRecord>& steps);
   EpisodeHindsight HindsightCounts(const EpisodeRecord& episode);
   void AddRelabelled(int t, FrameInfo* info) const;
+  // Episode k's look (run/episode_look.h), set on the renderer and the pixel recorder.
+  std::optional<LookDraw> SetEpisodeLook(int k);
   void RenderLayers(const mjData* data, const FrameInfo& info, Frame* f, EpisodeLegend* legend,
                     std::vector<DepthScale>* depth_scales);
 

@@ -8,6 +8,7 @@
 #include "base/errors.h"
 #include "dataset/minari_writer.h"
 #include "render/view.h"
+#include "run/episode_look.h"
 #include "src/episode.h"
 #include "src/fetch_env.h"
 #include "src/policy.h"
@@ -40,13 +41,19 @@ class RolloutRunner : public EpisodeRunner {
     return nullptr;
   }
   void Run(int k, WorkerChannel& channel) override {
+    std::optional<LookDraw> look;
+    if (pixels_) {
+      look = EpisodeLook(job_.look, job_.seed, k, nullptr, pixels_->camera_keys(),
+                         sequence_.env().model());
+      pixels_->SetLook(look ? &*look : nullptr);
+    }
     if (pixels_) pixels_->Begin(k);
-    const EpisodeRecord episode =
-        sequence_.Play(k, [&](const StepRecord& record, const StepResult*) {
-          if (pixels_) pixels_->Step(sequence_.env(), record);
-          return !channel.StopRequested();
-        });
+    EpisodeRecord episode = sequence_.Play(k, [&](const StepRecord& record, const StepResult*) {
+      if (pixels_) pixels_->Step(sequence_.env(), record);
+      return !channel.StopRequested();
+    });
     if (pixels_) pixels_->End();
+    if (look) episode.look = LookJson(*look);
     channel.Progress(static_cast<int>(episode.steps.size()) - 1);
     channel.Done(k, EpisodeJson(episode));
   }

@@ -41,6 +41,7 @@ struct RolloutJob {
   GlBackend backend = GlBackend::kAuto;  ///< the GL backend of the workers' images
   GpuChoice gpu;                         ///< their EGL devices
   int stop_after_success = -1;           ///< --stop-after-success K (-1: off)
+  std::optional<LookConfig> look;        ///< --randomize: each episode's images' look
   std::function<void()> on_episode;      ///< called as each episode is done (progress), if set
   /// the episodes' trajectory JSON is wanted (--json-out, or JSON on stdout); else the result
   /// keeps each episode's success alone, so that memory stays flat over a long dataset run
