@@ -14,6 +14,7 @@
 #include "base/stop_signal.h"
 #include "cli/command.h"
 #include "cli/common.h"
+#include "cli/look_options.h"
 #include "cli/obs_options.h"
 #include "cli/resolve.h"
 #include "cli/view_options.h"
@@ -31,7 +32,8 @@ struct ServeOptions {
   std::vector<std::string> sources;
   EnvOptions env;
   PolicyOptions policy;
-  ObsOptions obs;  // --obs-camera...: the images an exec: policy's lines carry
+  ObsOptions obs;    // --obs-camera...: the images an exec: policy's lines carry
+  LookOptions look;  // --randomize, --randomize-config: the looks the page draws
   ViewOptions view;
   std::string minari_root;
   std::string host = "127.0.0.1";
@@ -89,6 +91,7 @@ int RunServe(const ServeOptions& o, const CLI::App& sub) {
     sources.push_back(serve::LiveSource(*env.spec, env.assets, env.seed));
   }
   serve::EngineOptions engine_options;
+  engine_options.look = ResolveLook(o.look);
   {
     // the view options checked against the first source's model (its cameras), as are the
     // exec: policy's cameras
@@ -162,6 +165,9 @@ Command AddServe(CLI::App& app) {
   AddEnvOptions(sub, &o->env);
   AddPolicyOptions(sub, &o->policy);
   AddObsOptions(sub, &o->obs);
+  AddLookOptions(sub, &o->look,
+                 "; a recording's episodes keep their stored looks, and the page's look control "
+                 "redraws any step plainly, as recorded, or under another draw");
   o->view.width = 640;  // the page's first view; it can change it
   AddViewOptions(sub, &o->view);
   sub->add_option("--minari-root", o->minari_root,

@@ -110,19 +110,12 @@ H5File OpenReadOnly(const fs::path& path, const std::string& label) {
 }
 
 std::string StringAttribute(hid_t object, const char* name, const std::string& label) {
-  const H5Attribute a(H5Aexists(object, name) > 0 ? H5Aopen(object, name, H5P_DEFAULT) : -1);
-  if (!a) throw UsageError("merge-datasets: " + label + " has no attribute " + name);
-  const H5Datatype type(H5Aget_type(a.get()));
-  if (H5Tget_class(type.get()) != H5T_STRING || H5Tis_variable_str(type.get()) <= 0) {
-    throw UsageError("merge-datasets: " + label + ": attribute " + name + " is not a string");
+  std::string why;
+  std::optional<std::string> text = ReadStringAttribute(object, name, &why);
+  if (!text) {
+    throw UsageError("merge-datasets: " + label + (why.rfind("has no", 0) == 0 ? " " : ": ") + why);
   }
-  char* text = nullptr;
-  if (H5Aread(a.get(), type.get(), &text) < 0 || !text) {
-    throw UsageError("merge-datasets: " + label + ": cannot read attribute " + name);
-  }
-  std::string out(text);
-  H5free_memory(text);
-  return out;
+  return *text;
 }
 
 int64_t Int64Attribute(hid_t object, const char* name, const std::string& label) {

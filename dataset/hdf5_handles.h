@@ -5,6 +5,7 @@
 
 #include <hdf5.h>
 
+#include <optional>
 #include <string>
 #include <utility>
 
@@ -57,6 +58,30 @@ using H5Dataspace = Hdf5Handle<H5Sclose>;  ///< a dataspace (H5Screate*, H5Dget_
 using H5Datatype = Hdf5Handle<H5Tclose>;   ///< a datatype we made or got (not the predefined ones)
 using H5Attribute = Hdf5Handle<H5Aclose>;  ///< an attribute (H5Acreate2 / H5Aopen)
 using H5PropList = Hdf5Handle<H5Pclose>;   ///< a property list (H5Pcreate / H5Pcopy)
+
+/// Reads the variable-length string attribute `name` of `object`; nullopt with `*why` ("has no
+/// attribute NAME", "attribute NAME is not a string", "cannot read attribute NAME") otherwise.
+inline std::optional<std::string> ReadStringAttribute(hid_t object, const char* name,
+                                                      std::string* why) {
+  const H5Attribute a(H5Aexists(object, name) > 0 ? H5Aopen(object, name, H5P_DEFAULT) : -1);
+  if (!a) {
+    *why = std::string("has no attribute ") + name;
+    return std::nullopt;
+  }
+  const H5Datatype type(H5Aget_type(a.get()));
+  if (H5Tget_class(type.get()) != H5T_STRING || H5Tis_variable_str(type.get()) <= 0) {
+    *why = std::string("attribute ") + name + " is not a string";
+    return std::nullopt;
+  }
+  char* text = nullptr;
+  if (H5Aread(a.get(), type.get(), &text) < 0 || !text) {
+    *why = std::string("cannot read attribute ") + name;
+    return std::nullopt;
+  }
+  std::string out(text);
+  H5free_memory(text);
+  return out;
+}
 
 /// Writes `value` as a variable-length UTF-8 string attribute `name` of `object`, as h5py writes
 /// a Python str. False where HDF5 refuses (the caller names the file).

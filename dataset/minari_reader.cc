@@ -233,6 +233,12 @@ MinariEpisode ReadEpisode(const std::string& label, hid_t file, int64_t index, i
   e.id = index;
   e.obs_dim = obs_dim;
   e.seed = r.Unsigned("seed");
+  if (H5Aexists(group.get(), "look") > 0) {  // a randomized look's draw (fetchscope --randomize)
+    std::string why;
+    const std::optional<std::string> look = ReadStringAttribute(group.get(), "look", &why);
+    if (!look || !nlohmann::json::accept(*look)) Fail(where, "attribute look: not JSON text");
+    e.look = *look;
+  }
 
   hsize_t t = 0, rows = 0;
   const H5Dataset rewards = r.Open("rewards", 0, &t);

@@ -55,6 +55,7 @@ TrajectoryEpisode FromMinariEpisode(const MinariEpisode& m, const EnvSpec& spec,
   e.index = static_cast<int>(m.id);
   e.seed = m.seed;
   e.file = file;
+  if (!m.look.empty()) e.look = nlohmann::json::parse(m.look);  // checked JSON by the reader
   const int rows = m.steps() + 1;
   for (int t = 0; t < rows; ++t) {
     TrajectoryStep s;

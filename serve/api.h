@@ -16,6 +16,7 @@ struct Frame {
   std::string bytes;         ///< the image file
   std::string content_type;  ///< "image/jpeg" or "image/png"
   std::string camera;        ///< the camera shown, as a --camera value
+  std::string look;          ///< the look drawn (render/look.h's LookJson, compact); "" plain
   double render_ms = 0;      ///< restoring the state and rendering (GL, readback, HUD)
   double encode_ms = 0;      ///< JPEG or PNG encoding
 };

@@ -314,6 +314,7 @@ LoadedEpisode& Engine::State::Load(int source, int index) {
                              keep);
       e->reset_seed = src.seed;
       e->placed = recorded.placed;
+      e->look = recorded.look;
       replay = {{"reset", recorded.placed ? "placed"
                           : index == 0    ? "seed"
                                           : "continued generator"},
@@ -372,11 +373,17 @@ StepState Engine::State::Resolve(Session& session, const StepRef& at) {
     }
     const LiveEpisode& live = *session.live;
     state.env = env_of_source[live.source];
+    state.look = &live.look;
+    state.seed = sources[live.source].seed;
+    state.episode = live.index;
     steps = &live.steps;
     checkpoints = &live.checkpoints;
   } else {
     const LoadedEpisode& e = Load(at.source, at.episode);
     state.env = env_of_source[at.source];
+    state.look = &e.look;
+    state.seed = sources[at.source].seed;
+    state.episode = at.episode;
     steps = &e.steps;
     checkpoints = &e.checkpoints;
     if (at.step < static_cast<int>(e.ghost.size())) state.ghost = &e.ghost[at.step];
@@ -439,8 +446,44 @@ Renderer& Engine::State::RendererFor(FetchEnv& env, int width, int height, size_
   return *renderers.back().renderer;
 }
 
+std::optional<LookDraw> Engine::State::ViewLook(const ViewRequest& view, const StepState& state,
+                                                const std::vector<std::string>& keys) const {
+  const bool stored = state.look && state.look->is_object();
+  if (view.look == "plain" || (view.look == "recorded" && !stored)) return std::nullopt;
+  const mjModel* model = state.env->model();
+  if (view.look.empty() || view.look == "recorded") {
+    if (stored) {
+      try {
+        return ParseLookJson(*state.look, "the episode's look");
+      } catch (const UsageError& e) {
+        throw RequestError(409, e.what());
+      }
+    }
+    if (!options.look || !options.look->any()) return std::nullopt;
+    return DrawLook(*options.look, LookSeed(state.seed, state.episode), keys, model);
+  }
+  // another draw: of serve's --randomize kinds, else the stored look's kinds, else all four
+  LookConfig config = options.look.value_or(LookConfig{});
+  if (!config.any() && stored) {
+    const LookDraw own = ParseLookJson(*state.look, "the episode's look");
+    config.colors = own.colors;
+    config.textures = own.textures;
+    config.lighting = own.lighting;
+    config.camera = own.camera;
+  }
+  if (!config.any()) config.colors = config.textures = config.lighting = config.camera = true;
+  return DrawLook(config, LookSeed(std::stoull(view.look), state.episode), keys, model);
+}
+
+void Engine::State::SetViewLook(const ViewRequest& view, const StepState& state, Renderer& renderer,
+                                std::string* look_text) {
+  const std::optional<LookDraw> look = ViewLook(view, state, renderer.camera_keys());
+  renderer.SetLook(look ? &*look : nullptr);
+  if (look_text) *look_text = look ? LookJson(*look).dump() : "";
+}
+
 Renderer& Engine::State::Prepare(const ViewRequest& view, const StepState& state, FrameInfo* info,
-                                 std::string* camera_text) {
+                                 std::string* camera_text, std::string* look_text) {
   FetchEnv& env = *state.env;
   std::vector<CameraSpec> cameras;
   try {
@@ -450,6 +493,7 @@ Renderer& Engine::State::Prepare(const ViewRequest& view, const StepState& state
   }
   Renderer& renderer = RendererFor(env, view.width, view.height, cameras.size());
   renderer.SetView(cameras, view.overlays);
+  SetViewLook(view, state, renderer, look_text);
   renderer.SetTrail(state.trail);
   env.Restore(*state.checkpoint);
   *info = MakeFrameInfo(env, *state.row);
@@ -476,7 +520,7 @@ Frame Engine::RenderFrame(const std::string& session, const ViewRequest& r) {
     Frame frame;
     const auto start = Clock::now();
     FrameInfo info;
-    Renderer& renderer = s.Prepare(r, state, &info, &frame.camera);
+    Renderer& renderer = s.Prepare(r, state, &info, &frame.camera, &frame.look);
     const int w = renderer.width(), h = renderer.height();
     s.rgb.resize(static_cast<size_t>(w) * h * 3);
     const mjData* data = state.env->data();

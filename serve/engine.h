@@ -21,6 +21,7 @@
 #include <thread>
 #include <vector>
 
+#include "render/look.h"
 #include "render/obs_view.h"
 #include "render/view.h"
 #include "serve/api.h"
@@ -51,6 +52,9 @@ struct EngineOptions {
   double idle_timeout_s = 600;  ///< a session unused this long is freed
   int episode_cache = 8;        ///< replayed episodes kept (their checkpoints and data)
   int max_live_steps = 10000;   ///< steps a live episode may take
+  /// --randomize: the look of every episode without a stored one, and the kinds a page's
+  /// redraw (look=N) draws; nullopt: not given
+  std::optional<LookConfig> look;
 };
 
 class Engine : public Api {

@@ -35,6 +35,7 @@ struct LoadedEpisode {
   std::optional<HindsightEpisode> hindsight;  ///< a recording's relabelling (the overlay)
   std::optional<uint64_t> reset_seed;         ///< the seed record --seed reproduces it with
   std::optional<PlacedReset> placed;          ///< a recording's reset placed by hand
+  nlohmann::json look;                        ///< a recording's stored look (null: none)
   bool float32 = false;                       ///< its actions' dtype
   nlohmann::json data;                        ///< Engine::Episode's answer
 };
@@ -46,6 +47,7 @@ struct LiveEpisode {
   int prefix = 0;                          ///< its first steps that came from the served episode
   std::optional<uint64_t> reset_seed;      ///< the record --seed that reproduces its reset
   std::optional<PlacedReset> placed;       ///< its reset placed by hand (saved; record --from)
+  nlohmann::json look;                     ///< the look it continues (saved); null: none
   bool float32 = false;                    ///< the dtype of every action it takes
   std::vector<TrajectoryStep> steps;       ///< t = 0 .. n
   std::vector<EnvCheckpoint> checkpoints;  ///< the env after each step
@@ -77,6 +79,9 @@ struct StepState {
   std::vector<std::array<double, 3>> trail;  ///< achieved goals of the steps before
   const std::array<double, 3>* ghost = nullptr;
   const std::vector<HindsightGoal>* relabelled = nullptr;
+  const nlohmann::json* look = nullptr;  ///< the episode's stored look, if any
+  uint64_t seed = 0;                     ///< its source's seed (serve's --randomize draws)
+  int episode = 0;                       ///< its index
 };
 
 /// The images an exec: policy sees on one env (--obs-camera): the plan and its renderer.
@@ -119,7 +124,14 @@ struct Engine::State {
   /// The renderer for `view` on `state`'s env, its cameras and overlays set, `state` restored,
   /// and the frame info of that step: what RenderFrame and Pick draw.
   Renderer& Prepare(const ViewRequest& view, const StepState& state, FrameInfo* info,
-                    std::string* camera_text);
+                    std::string* camera_text, std::string* look_text = nullptr);
+  /// The look `view` asks for on `state` (ViewRequest::look), set on `renderer`; its LookJson
+  /// (compact) into `look_text` where given, "" for the plain look.
+  void SetViewLook(const ViewRequest& view, const StepState& state, Renderer& renderer,
+                   std::string* look_text);
+  /// The look `view` asks for on `state` for the views `camera_keys`; nullopt: plain.
+  std::optional<LookDraw> ViewLook(const ViewRequest& view, const StepState& state,
+                                   const std::vector<std::string>& camera_keys) const;
   /// The images of --obs-camera drawn on `env` as it stands at `row` (the live episode's last
   /// step): what an exec: policy receives with its line.
   PixelRecorder& DrawPolicyImages(FetchEnv& env, const TrajectoryStep& row);

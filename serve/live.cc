@@ -132,7 +132,7 @@ std::string FreeSessionName(const fs::path& dir) {
 // A saved live episode's trajectory, as record writes the episode it re-renders: the same
 // writer, env, seed, policy text and assets, so that the two files are the same bytes.
 Trajectory SavedTrajectory(const EnvSpec& spec, const FetchEnv& env, const LiveEpisode& live,
-                           const fs::path& json_path) {
+                           const fs::path& json_path, const nlohmann::json& look) {
   Trajectory trajectory;
   trajectory.env_id = spec.id;
   trajectory.seed = live.reset_seed.value_or(0);
@@ -146,6 +146,7 @@ Trajectory SavedTrajectory(const EnvSpec& spec, const FetchEnv& env, const LiveE
     if (row.reward) episode.episode_return += *row.reward;
   }
   episode.placed = live.placed;
+  episode.look = look;
   trajectory.episodes = {episode};
   return trajectory;
 }
@@ -229,6 +230,7 @@ nlohmann::json Engine::StartLive(const std::string& session, const StartRequest&
       live.prefix = r.from.step;
       live.reset_seed = e.reset_seed;
       live.placed = e.placed;
+      live.look = e.look;
       live.float32 = e.float32;
       live.steps.assign(e.steps.begin(), e.steps.begin() + r.from.step + 1);
       live.checkpoints.assign(e.checkpoints.begin(), e.checkpoints.begin() + r.from.step + 1);
@@ -333,18 +335,25 @@ nlohmann::json Engine::SaveLive(const std::string& session, const ViewRequest& v
     const FetchEnv& env = *s.env_of_source[live.source];
     // the camera goes into the record command: one this env cannot draw is refused here, as a
     // frame request of it is, not saved into a command that would fail
+    std::vector<std::string> keys;
     try {
-      ParseCameraList(view.camera, env.model());
+      for (const CameraSpec& c : ParseCameraList(view.camera, env.model())) {
+        keys.push_back(CameraText(c));
+      }
     } catch (const UsageError& e) {
       throw RequestError(400, std::string("parameter camera: ") + e.what());
     }
+    // the look the page shows (look=...), saved with the episode so that the command redraws it
+    const std::optional<LookDraw> look =
+        s.ViewLook(view, s.Resolve(ses, {kLiveSource, 0, 0}), keys);
     std::error_code ec;
     fs::create_directories(options_.save_dir, ec);
     const fs::path dir = fs::absolute(options_.save_dir);
     const std::string name = FreeSessionName(dir);
     const fs::path json_path = dir / (name + ".json");
     const fs::path csv_path = dir / (name + ".csv");
-    const Trajectory trajectory = SavedTrajectory(*src.spec, env, live, json_path);
+    const Trajectory trajectory =
+        SavedTrajectory(*src.spec, env, live, json_path, look ? LookJson(*look) : nlohmann::json());
     try {
       WriteFileAtomically(json_path.string(), TrajectoryText(trajectory));
       WriteFileAtomically(csv_path.string(), ActionsCsv(live.steps));
@@ -362,10 +371,10 @@ nlohmann::json Engine::SaveLive(const std::string& session, const ViewRequest& v
       return out;
     }
     const fs::path record_out = dir / name;
-    // a placed reset is in the trajectory alone: record replays it --from there (no seed
-    // resets to it); otherwise the seed's reset and the replay of the saved actions
+    // a placed reset and a look are in the trajectory alone: record replays it --from there (no
+    // seed resets to it); otherwise the seed's reset and the replay of the saved actions
     const std::vector<std::string> replay =
-        live.placed
+        live.placed || look
             ? std::vector<std::string>{"--from", json_path.string()}
             : std::vector<std::string>{
                   "--env-id", src.spec->id,      "--seed",  std::to_string(*live.reset_seed),

@@ -132,11 +132,19 @@ ViewRequest ParseView(const Params& p) {
   v.layer = static_cast<Layer>(p.Choice("layer", {"rgb", "depth", "segmentation"}));
   v.format = static_cast<ImageFormat>(p.Choice("format", {"jpeg", "png"}));
   v.quality = p.Int("quality", 1, 100, v.quality);
+  v.look = p.Text("look", "");
+  const bool digits = !v.look.empty() && v.look.size() <= 18 &&
+                      v.look.find_first_not_of("0123456789") == std::string::npos;
+  if (!v.look.empty() && v.look != "plain" && v.look != "recorded" && !digits) {
+    Bad("parameter look '" + Params::Printable(v.look) +
+        "' is not a look; accepted: plain, recorded, or a draw's seed (0..10^18)");
+  }
   return v;
 }
 
-constexpr std::initializer_list<const char*> kViewNames = {
-    "source", "episode", "t", "camera", "width", "height", "overlay", "layer", "format", "quality"};
+constexpr std::initializer_list<const char*> kViewNames = {"source", "episode", "t",       "camera",
+                                                           "width",  "height",  "overlay", "layer",
+                                                           "format", "quality", "look"};
 
 }  // namespace
 
@@ -151,7 +159,7 @@ ViewRequest ParseViewRequest(const Query& query) { return ParseView(Params(query
 
 PickRequest ParsePickRequest(const Query& query) {
   const Params p(query, {"source", "episode", "t", "camera", "width", "height", "overlay", "layer",
-                         "format", "quality", "x", "y"});
+                         "format", "quality", "look", "x", "y"});
   PickRequest pick;
   pick.view = ParseView(p);
   pick.x = p.Int("x", 0, pick.view.width - 1, std::nullopt);

@@ -58,6 +58,10 @@ struct ViewRequest {
   Layer layer = Layer::kRgb;
   ImageFormat format = ImageFormat::kJpeg;
   int quality = 80;  ///< JPEG quality
+  /// the look (render/look.h): "" the episode's own (a recording's stored look, else serve's
+  /// --randomize draw, else plain), "plain", "recorded" (the stored look or plain), or a seed N
+  /// (a draw of serve's --randomize kinds, all four without it, from LookSeed(N, episode))
+  std::string look;
 };
 
 /// A hover: which object is at pixel (x, y) of that view (row 0 = top).

@@ -488,6 +488,7 @@ void Server::Routes() {
                       frame.encode_ms);
         res.set_header("Server-Timing", timing);
         res.set_header("X-Fetchscope-Camera", Printable(frame.camera, 4096));
+        res.set_header("X-Fetchscope-Look", Printable(frame.look, 8192));
         res.set_content(frame.bytes, frame.content_type);
       }));
   Get("/api/pick", ApiHandler([this](const httplib::Request& req, httplib::Response& res) {

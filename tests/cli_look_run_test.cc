@@ -124,11 +124,12 @@ camera = meta["pixels"]["cameras"][0]
 legend = meta["pixels"]["segmentation_legend"]
 object_id = [e["id"] for e in legend if e.get("body") == "object0" and not e.get("site")][0]
 assert [e["body"] for e in legend if e["id"] in (25, 26)] == ["robot0:r_gripper_finger_link", "robot0:l_gripper_finger_link"]
-out = {"moving": camera["moving"], "hits": 0, "tried": 0, "fovys": [], "demo_looks": 0}
+out = {"moving": camera["moving"], "hits": 0, "tried": 0, "fovys": [], "demo_looks": 0, "looks": []}
 r = h5py.File(demo, "r")
 for k in range(3):
     e = f["episode_%d" % k]
     look = json.loads(e.attrs["look"])
+    out["looks"].append(look)
     out["demo_looks"] += json.loads(r["data/demo_%d" % k].attrs["look"]) == look
     fovy = look["cameras"]["external_camera_0"]["fovy"]
     out["fovys"].append(fovy)
@@ -167,6 +168,13 @@ print(json.dumps(out)))";
   EXPECT_EQ(out["demo_looks"], 3) << "robomimic's demos store the same draws";
   std::set<double> fovys(out["fovys"].begin(), out["fovys"].end());
   EXPECT_EQ(fovys.size(), 3u) << "each episode its own fovy: " << out["fovys"];
+  // record --from the dataset draws each episode as the dataset stored it
+  const fs::path again = dir.path() / "again";
+  const auto from =
+      RunFetchscope("record --from fs/look-v0 --minari-root '" + (dir.path() / "root").string() +
+                    "' --width 64 --height 64 --no-report --quiet --out '" + again.string() + "'");
+  ASSERT_EQ(from.exit_code, 0) << from.output;
+  for (int k = 0; k < 3; ++k) EXPECT_EQ(EpisodeOf(again, k)["look"], out["looks"][k]) << k;
 }
 
 TEST(LookRun, LooksWithoutImagesOrRangesWithoutLooksAreOneLine) {

@@ -192,3 +192,70 @@ TEST(ServeLiveTest, APlacementOffTheTableOrMalformedIsRefusedInOneLine) {
 
 }  // namespace
 }  // namespace fetchscope
+
+namespace fetchscope {
+namespace {
+
+// The look control: a step of a randomized recording drawn with its stored look (render's frame
+// of that draw, pixel for pixel), plainly, or under another draw (the same seed, the same
+// frame); a live episode continued from it saves the look it shows, and the printed command
+// (record --from the session) redraws it.
+TEST(ServeLiveTest, TheLookControlRedrawsAStepPlainAsRecordedOrUnderAnotherDraw) {
+  TempDir dir;
+  const auto rec = RunFetchscope(
+      "record --env-id FetchPush-v4 --policy scripted --seed 4 --steps 6 --width 96 --height 96 "
+      "--randomize colors,textures --no-report --quiet --out '" +
+      (dir.path() / "run").string() + "'");
+  ASSERT_EQ(rec.exit_code, 0) << rec.output;
+  const json stored =
+      json::parse(ReadFile((dir.path() / "run" / "episode_000.json").string()))["episodes"][0];
+  ServeProcess serve("'" + (dir.path() / "run").string() + "' --save-dir '" +
+                         (dir.path() / "saved").string() + "'",
+                     dir.path());
+  ASSERT_TRUE(serve.started()) << serve.log();
+  Api api(serve);
+  const std::string s = api.NewSession();
+  const std::string at =
+      "/api/frame?session=" + s +
+      "&source=0&episode=0&t=3&width=96&height=96&format=png&overlay=" + Encode("goal,achieved");
+  const auto get = [&](const std::string& look) {
+    const auto r = api.Get(at + (look.empty() ? "" : "&look=" + look));
+    EXPECT_TRUE(r && r->status == 200) << (r ? r->body : "no answer");
+    return std::make_pair(r->body, r->get_header_value("X-Fetchscope-Look"));
+  };
+  const auto own = get(""), recorded = get("recorded"), plain = get("plain"), seven = get("7");
+  EXPECT_EQ(own, recorded);
+  EXPECT_EQ(json::parse(own.second), stored["look"]);
+  EXPECT_EQ(plain.second, "");
+  EXPECT_NE(plain.first, own.first);
+  EXPECT_EQ(seven, get("7"));
+  EXPECT_NE(seven.first, own.first);
+  EXPECT_NE(json::parse(seven.second)["seed"], stored["look"]["seed"]);
+  EXPECT_EQ(json::parse(seven.second)["kinds"], json::array({"colors", "textures"}));
+  ExpectRefusal(api.Get(at + "&look=shiny"), 400,
+                "parameter look 'shiny' is not a look; accepted: plain, recorded", "bad look");
+
+  // the stored look is render's draw of that episode: the same pixels
+  const fs::path png = dir.path() / "render.png";
+  const auto r = RunFetchscope("render --env-id FetchPush-v4 --seed 4 --policy 'replay:" +
+                               (dir.path() / "run" / "episode_000.json").string() +
+                               "' --steps 3 --width 96 --height 96 --overlay goal,achieved "
+                               "--randomize colors,textures -o '" +
+                               png.string() + "'");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(DecodePng(own.first).pixels == ReadPng(png.string()).pixels);
+
+  // continued live and saved under the look on screen: record --from redraws it
+  api.Json(api.Post("/api/live/start?session=" + s + "&source=0&episode=0&t=2"));
+  api.Json(api.Post("/api/live/step?session=" + s + "&action=0.5,0,0,0"));
+  const json saved = api.Json(
+      api.Post("/api/live/save?session=" + s + "&width=96&height=96&overlay=goal,achieved&look=7"));
+  const std::string command = saved.value("command", "");
+  EXPECT_NE(command.find(" record --from "), std::string::npos) << command;
+  ASSERT_EQ(RunPrinted(command), 0) << command;
+  const json again = json::parse(ReadFile(saved["episode_file"].get<std::string>()));
+  EXPECT_EQ(again["episodes"][0]["look"]["seed"], json::parse(seven.second)["seed"]);
+}
+
+}  // namespace
+}  // namespace fetchscope

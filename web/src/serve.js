@@ -9,7 +9,7 @@
 (() => {
   performance.mark('fetchscope-serve-script');
   const {el} = FS;
-  const {episodeBrowser, placementForm, growLists, cutLists, cameraText, parseCamera, DEFAULT_FREE} = FSServeTools;
+  const {episodeBrowser, placementForm, lookControl, growLists, cutLists, cameraText, parseCamera, DEFAULT_FREE} = FSServeTools;
   // serve accepts a POST on the cookie only with this Content-Type (and this page's Origin, which
   // the browser sends): a form or a no-cors fetch on another site's page cannot send it
   const POST_HEADERS = {'Content-Type': 'application/json'};
@@ -37,6 +37,7 @@
     savedSteps: 0,   // the live steps the last save holds (a reload with more asks first)
     rows: null,      // the rows of the episode shown (the step inspector's)
     placePick: null, // set by a placement form: the next click on the view gives it its world point
+    look: '',        // the look control: '' the episode's own, 'plain', or a draw's seed
   };
   const stats = {requested: 0, received: 0, dropped: 0, errors: 0, lastError: '', renderMs: [], encodeMs: [],
                  roundTripMs: [], times: [], lastCamera: '', lastFormat: '',
@@ -86,7 +87,7 @@
     const at = state.source === 'live' ? {source: 'live', t: state.t}
                                        : {source: state.source, episode: state.episode, t: state.t};
     return {...at, camera: state.camera, overlay: state.overlay, layer: state.layer,
-            width: state.width, height: state.height, format, quality: 80};
+            width: state.width, height: state.height, format, quality: 80, ...(state.look ? {look: state.look} : {})};
   }
 
   // Asks for the frame of the current view; while one is on its way, only remembers to ask again.
@@ -115,6 +116,7 @@
       image.dataset.format = format;
       image.dataset.step = String(params.t);
       image.dataset.camera = response.headers.get('X-Fetchscope-Camera') || '';
+      look.show(response.headers.get('X-Fetchscope-Look') || '');
       image.src = lastUrl;
       stats.received++;
       const now = performance.now();
@@ -299,6 +301,7 @@
              : state.overlay === 'all' ? OVERLAYS : state.overlay.split(',').map((s) => s.trim());
     OVERLAYS.forEach((name, i) => { overlayBoxes[i].checked = on.includes(name); });
   }
+  const look = lookControl((value) => { state.look = value; requestFrame(); });
   const layerSelect = el('select', {'aria-label': 'layer'}, ...['rgb', 'depth', 'segmentation'].map((l) => el('option', {value: l}, l)));
   layerSelect.addEventListener('change', () => { state.layer = layerSelect.value; requestFrame(); });
   const sizeSelect = el('select', {'aria-label': 'size'},
@@ -631,6 +634,7 @@
             el('p', {class: 'caption'}, 'as an option of render and record: ', cameraOption),
             overlayRow,
             el('div', {class: 'serve-row'}, 'layer ', layerSelect, ' size ', sizeSelect, ' ', otherSelect),
+            el('div', {class: 'serve-row'}, look.element),
             liveBox),
          el('div', {class: 'serve-side'}, el('h3', {}, 'Served'), sourcesBox, inspector)),
       viewerBox);

@@ -316,6 +316,31 @@ window.FSServeTools = (() => {
     return {box: otherBox, select: otherSelect, fill: fillOtherSelect, requestFrame: requestOtherFrame, showDifference};
   }
 
+  // ---- the look: the episode's own (a stored look, else serve's --randomize), plain, or another
+  // draw (a seed); the frame's answer says which look it drew (X-Fetchscope-Look)
+
+  function lookControl(onChange) {
+    const select = el('select', {'aria-label': 'look', class: 'serve-look'},
+        el('option', {value: ''}, 'look: the episode\'s own'), el('option', {value: 'plain'}, 'look: plain'),
+        el('option', {value: 'draw'}, 'look: a draw…'));
+    const seed = el('input', {type: 'number', min: '0', step: '1', value: '1', class: 'serve-look-seed', 'aria-label': 'draw seed', hidden: true});
+    const next = el('button', {type: 'button', class: 'serve-look-next', hidden: true, title: 'the next seed: another draw of the same step'}, 'another draw');
+    const shown = el('span', {class: 'caption serve-look-shown'});
+    const value = () => (select.value === 'draw' ? String(Math.max(0, Math.floor(Number(seed.value) || 0))) : select.value);
+    const changed = () => { seed.hidden = next.hidden = select.value !== 'draw'; onChange(value()); };
+    select.addEventListener('change', changed);
+    seed.addEventListener('change', changed);
+    next.addEventListener('click', () => { seed.value = String((Math.floor(Number(seed.value)) || 0) + 1); changed(); });
+    // what the frame was drawn with: "plain", or the draw's seed and kinds
+    function show(text) {
+      let look = null;
+      try { look = text ? JSON.parse(text) : null; } catch (e) { look = null; }
+      shown.textContent = look ? `drawn: ${look.kinds.join(', ')} (look seed ${look.seed})` : 'plain';
+      shown.dataset.seed = look ? String(look.seed) : '';
+    }
+    return {element: el('span', {class: 'serve-look-box'}, select, seed, next, shown), value, show};
+  }
+
   // ---- placing a live env's reset: where the block and the goal start, typed or clicked on the
   // view (the next click's world point), sent with the start (goal=x,y,z, object=x,y); the saved
   // session records it, so that its record command resets there too
@@ -366,6 +391,6 @@ window.FSServeTools = (() => {
     return {element, fill};
   }
 
-  return {fields, shownValue, stepPlot, parseFilter, episodeBrowser, inspector, sideBySide, placementForm,
+  return {fields, shownValue, stepPlot, parseFilter, episodeBrowser, inspector, sideBySide, placementForm, lookControl,
           growLists, cutLists, cameraText, parseCamera, DEFAULT_FREE};
 })();
