@@ -310,6 +310,7 @@ struct EpisodeTally {
   std::vector<double> returns;  // of the complete episodes
   int incomplete = 0;
   bool has_hindsight = false;
+  bool has_look = false;    // --randomize: episodes drawn with a look
   bool has_replay = false;  // record --from DATASET
 };
 
@@ -385,6 +386,12 @@ void AddEpisodeDetails(const RecordedRun& run, int k, const ManifestEpisode& ent
   if (entry.hindsight) {
     (*e)["hindsight"] = EpisodeHindsightToJson(*entry.hindsight);
     tally->has_hindsight = true;
+  }
+  if (const auto look = entry.extra.find("look"); look != entry.extra.end() && look->is_object()) {
+    (*e)["look"] = *look;  // --randomize's draw: the table and the viewer say it
+    // its 64-bit seed as text: a page's numbers are doubles
+    (*e)["look_seed"] = look->contains("seed") ? look->at("seed").dump() : "";
+    tally->has_look = true;
   }
   // record --from DATASET: the reset used and how far the replay drifted from the dataset
   const auto divergence = entry.extra.find("divergence");
@@ -537,6 +544,7 @@ json ReportData(const RecordedRun& run) {
           {"fps", m.video.fps.value_or(25)},
           {"has_hindsight", tally.has_hindsight},
           {"has_replay", tally.has_replay},
+          {"has_look", tally.has_look},
           {"overlay_legend", OverlayLegendJson(m, tally.has_replay)},
           {"episodes", std::move(episodes)},
           {"summary",

@@ -70,6 +70,12 @@ TEST(LookRun, RecordDrawsEachEpisodeKeepsThePhysicsAndRecordFromRedrawsItExactly
     EXPECT_EQ(manifest["episodes"][k]["look"], b["look"]) << "manifest entry " << k;
   }
   EXPECT_NE(EpisodeOf(look, 0)["look"]["seed"], EpisodeOf(look, 1)["look"]["seed"]);
+  // the report lists each episode's draw, its 64-bit seed as text (a page's numbers are doubles)
+  ASSERT_EQ(RunFetchscope("report '" + look.string() + "'").exit_code, 0);
+  const std::string html = ReadFile((look / "index.html").string());
+  EXPECT_NE(html.find("\"has_look\":true"), std::string::npos);
+  EXPECT_NE(html.find("\"look_seed\":\"" + EpisodeOf(look, 1)["look"]["seed"].dump() + "\""),
+            std::string::npos);
 
   // --from without --randomize: the stored looks; --randomize none: the plain look
   const std::string common = " --width 96 --height 96 --format apng --no-report --quiet";

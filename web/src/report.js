@@ -2,6 +2,9 @@
 // inspect/report.cc ReportData and inspect/viewer.h AddEpisodeViewers for its fields.
 (() => {
   const {data, colors, el, num, percent} = FS;
+  // a randomized look in a few words: its kinds, its seed and the object's colour
+  const lookText = (look, seed) => `${look.kinds.join(', ')} (seed ${seed})` +
+      (look.colors && look.colors.object ? `, object rgb ${look.colors.object.slice(0, 3).map((v) => v.toFixed(2)).join(' ')}` : '');
   const page = document.getElementById('page');
   const episodes = data.episodes;
   const recorded = episodes.filter((e) => e.status !== 'missing');
@@ -121,6 +124,10 @@
     columns.push({label: 'original successes', value: (e) => (e.hindsight ? e.hindsight.original_successes : null),
                   render: (e) => (e.hindsight ? String(e.hindsight.original_successes) : '—'), numeric: true});
   }
+  if (data.has_look) {  // --randomize: each episode's draw (its seed and kinds; the whole draw in the tooltip)
+    columns.push({label: 'look', value: (e) => (e.look ? e.look.seed : null),
+                  render: (e) => (e.look ? el('span', {class: 'look', title: JSON.stringify(e.look)}, lookText(e.look, e.look_seed)) : 'plain')});
+  }
   if (data.has_replay) {  // record --from DATASET: the reset used, and the first divergence
     columns.push({label: 'reset', value: (e) => (e.replay ? e.replay.reset : null), render: (e) => (e.replay ? e.replay.reset : '—')});
     // a difference in its unit, metres as mm (as the console says it)
@@ -173,7 +180,8 @@
   missing.hidden = true;
   page.append(missing);
   const headline = (e) => `episode ${e.label} — ${e.success ? 'success' : 'failure'}, return ${num(e.return, 2)}, ` +
-      `final distance ${num(e.final_distance, 3)} m` + (e.complete ? '' : ', interrupted');
+      `final distance ${num(e.final_distance, 3)} m` + (e.complete ? '' : ', interrupted') +
+      (e.look ? ` · look: ${lookText(e.look, e.look_seed)}` : '');
   // the markers drawn in the frames (the videos' and the sheets'), each in its colour
   const markerLegend = (id) => (data.overlay_legend && data.overlay_legend.length
     ? el('p', {class: 'caption overlay-legend', id}, 'Markers in the frames:',

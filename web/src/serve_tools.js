@@ -335,8 +335,9 @@ window.FSServeTools = (() => {
     function show(text) {
       let look = null;
       try { look = text ? JSON.parse(text) : null; } catch (e) { look = null; }
-      shown.textContent = look ? `drawn: ${look.kinds.join(', ')} (look seed ${look.seed})` : 'plain';
-      shown.dataset.seed = look ? String(look.seed) : '';
+      const seed = look ? (/"seed":\s*([0-9]+)/.exec(text) || [])[1] : '';  // 64 bits: as text
+      shown.textContent = look ? `drawn: ${look.kinds.join(', ')} (look seed ${seed})` : 'plain';
+      shown.dataset.seed = seed || '';
     }
     return {element: el('span', {class: 'serve-look-box'}, select, seed, next, shown), value, show};
   }
