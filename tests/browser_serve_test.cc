@@ -296,6 +296,18 @@ TEST_F(BrowserTest, ServeInspectsStepsHoldsAGraspAndFreesClosedPages) {
   EXPECT_EQ(cameras["main"], cameras["main_before"]) << cameras;
   EXPECT_NE(cameras["main"], "external_camera_0") << cameras;
 
+  // 1d. the look control: two draws (their seeds differ, all four kinds: the run has no look),
+  // then the episode's own look, plain
+  const json& looks = result["looks"];
+  ASSERT_EQ(looks.size(), 3u) << looks;
+  EXPECT_NE(looks[0]["seed"], "") << looks;
+  EXPECT_NE(looks[1]["seed"], looks[0]["seed"]) << looks;
+  EXPECT_NE(looks[0]["text"].get<std::string>().find("colors, textures, lighting, camera"),
+            std::string::npos)
+      << looks;
+  EXPECT_EQ(looks[2]["seed"], "") << looks;
+  EXPECT_EQ(looks[2]["text"], "plain") << looks;
+
   // 2. the grasp: closed on the block, it holds through four lifts (both fingers press it)
   EXPECT_GE(result["chords"].get<int>(), 1) << "no step moved along two axes at once";
   for (const json& n : result["press_steps"]) EXPECT_EQ(n, 1) << "a press, or a chord, took " << n;

@@ -127,6 +127,20 @@ try {
   await a.screenshot({path: join(args.out, 'side_by_side.png'), fullPage: false});
   await a.locator('select.serve-other-select').selectOption('');
 
+  // 1d. the look control: a draw by seed, another draw, then the episode's own (plain here)
+  const lookShown = () => a.evaluate(() => ({seed: document.querySelector('.serve-look-shown').dataset.seed,
+                                              text: document.querySelector('.serve-look-shown').textContent}));
+  result.looks = [];
+  await a.locator('select.serve-look').selectOption('draw');
+  await a.waitForFunction(() => document.querySelector('.serve-look-shown').dataset.seed, null, {timeout});
+  result.looks.push(await lookShown());
+  await a.locator('button.serve-look-next').click();
+  await a.waitForFunction((s) => document.querySelector('.serve-look-shown').dataset.seed !== s, result.looks[0].seed, {timeout});
+  result.looks.push(await lookShown());
+  await a.locator('select.serve-look').selectOption('');
+  await a.waitForFunction(() => document.querySelector('.serve-look-shown').dataset.seed === '', null, {timeout});
+  result.looks.push(await lookShown());
+
   // 2. a grasp from the keys: open, over the block with two-axis chords, down, close, lift x4
   await a.locator(`button.serve-start-env[data-source="${args['live-source']}"]`).click();
   await a.waitForFunction(() => window.fetchscopeServe.state.live !== null, null, {timeout});
