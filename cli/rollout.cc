@@ -125,6 +125,23 @@ class DatasetOutputs {
   EpisodeOutput* output_ = nullptr;
 };
 
+// The images each step renders (--obs-camera) under the looks of --randomize, which needs them.
+// Bad assets fail here, before any worker starts.
+PixelPlan PlanRolloutPixels(const RolloutOptions& o, const EnvSpec& spec, const AssetSource& assets,
+                            const std::optional<LookConfig>& look) {
+  FetchEnv check(spec, assets);
+  ObsSetup obs = ResolveObs(o.obs, check.model(), kMsaaAuto);
+  if (look && look->any() && !obs.enabled()) {
+    throw UsageError("--randomize " + o.look.randomize +
+                     " draws the look of images, and rollout renders none; accepted: with "
+                     "--obs-camera (the dataset's or an exec: policy's images)");
+  }
+  if (look && look->camera) {  // each episode's jitter moves every camera: poses per step
+    for (ObsCamera& camera : obs.cameras) camera.moving = true;
+  }
+  return PlanPixels(obs, check.model(), !o.minari.empty(), !o.robomimic.file.empty());
+}
+
 // parse (AddRollout) -> resolve -> run (RunRolloutJob) -> print.
 int RunRollout(const RolloutOptions& o) {
   EpisodeRequest request;
@@ -140,22 +157,8 @@ int RunRollout(const RolloutOptions& o) {
   const AssetSource& assets = run.env.assets;
   const std::string path = JsonOutPath(o.json_out, "rollout");
   CheckJsonOutReplaces(path, {{"env_id", spec.id}, {"seed", seed}}, o.overwrite);
-  const bool robomimic = !o.robomimic.file.empty();
-  PixelPlan pixels;
   const std::optional<LookConfig> look = ResolveLook(o.look);
-  {
-    FetchEnv check(spec, assets);  // bad assets fail here, before any worker starts
-    ObsSetup obs = ResolveObs(o.obs, check.model(), kMsaaAuto);
-    if (look && look->any() && !obs.enabled()) {
-      throw UsageError("--randomize " + o.look.randomize +
-                       " draws the look of images, and rollout renders none; accepted: with "
-                       "--obs-camera (the dataset's or an exec: policy's images)");
-    }
-    if (look && look->camera) {  // each episode's jitter moves every camera: poses per step
-      for (ObsCamera& camera : obs.cameras) camera.moving = true;
-    }
-    pixels = PlanPixels(obs, check.model(), !o.minari.empty(), robomimic);
-  }
+  const PixelPlan pixels = PlanRolloutPixels(o, spec, assets, look);
   // a shard plays its share of the run's episodes (episode k in shard k mod N), each as in the
   // whole run; merge-datasets puts the shards' datasets together
   const Shard shard = ResolveShard(o.shard, o.shard_count);
