@@ -97,9 +97,10 @@ namespace {
 // An episode's CPU by stage: sim, and the renderer's own stages between `before` and `after`,
 // the rest of the render thread's time (`render_cpu`) as render_other.
 CpuStages EpisodeCpu(const CpuStages& before, const CpuStages& after, double sim_cpu,
-                     double render_cpu) {
+                     double render_cpu, double look_cpu) {
   CpuStages cpu;
   cpu.sim = sim_cpu;
+  cpu.look = look_cpu;
   cpu.scene = after.scene - before.scene;
   cpu.gl = after.gl - before.gl;
   cpu.hud = after.hud - before.hud;
@@ -161,6 +162,12 @@ void RecordRunner::Run(int k, WorkerChannel& channel) {
     in_flight.pop_front();
     channel.Progress(1);
   };
+  // the episode's look, drawn (or read back) and taken by the renderer before its first step,
+  // on a lap of its own: the look stage
+  double look_cpu = 0;
+  CpuLap look_lap;
+  const std::optional<LookDraw> look = SetEpisodeLook(k);
+  look_lap.Into(&look_cpu);
   auto sim_start = Clock::now();
   CpuLap lap;
   auto on_step = [&](const StepRecord& record, const StepResult*) {
@@ -188,7 +195,6 @@ void RecordRunner::Run(int k, WorkerChannel& channel) {
     return !channel.StopRequested();
   };
   EpisodeRecord episode;
-  const std::optional<LookDraw> look = SetEpisodeLook(k);
   try {
     if (pixels_) pixels_->Begin(k);
     episode = PlayEpisode(k, on_step, channel);
@@ -207,7 +213,7 @@ void RecordRunner::Run(int k, WorkerChannel& channel) {
   encoder->SetHindsight(HindsightCounts(episode));
   encoder->SetLayerInfo(legend.Json(k), std::move(depth_scales));
   encoder->Close(std::move(episode), sim_s, render_s,
-                 EpisodeCpu(renderer_before, renderer_->cpu(), sim_cpu, render_cpu));
+                 EpisodeCpu(renderer_before, renderer_->cpu(), sim_cpu, render_cpu, look_cpu));
   encoders_.push_back(std::move(encoder));
 }
 
