@@ -162,12 +162,8 @@ void RecordRunner::Run(int k, WorkerChannel& channel) {
     in_flight.pop_front();
     channel.Progress(1);
   };
-  // the episode's look, drawn (or read back) and taken by the renderer before its first step,
-  // on a lap of its own: the look stage
-  double look_cpu = 0;
-  CpuLap look_lap;
-  const std::optional<LookDraw> look = SetEpisodeLook(k);
-  look_lap.Into(&look_cpu);
+  double look_cpu = 0;  // the look stage: the episode's look, before its first step
+  const std::optional<LookDraw> look = SetEpisodeLook(k, &look_cpu);
   auto sim_start = Clock::now();
   CpuLap lap;
   auto on_step = [&](const StepRecord& record, const StepResult*) {
@@ -217,7 +213,8 @@ void RecordRunner::Run(int k, WorkerChannel& channel) {
   encoders_.push_back(std::move(encoder));
 }
 
-std::optional<LookDraw> RecordRunner::SetEpisodeLook(int k) {
+std::optional<LookDraw> RecordRunner::SetEpisodeLook(int k, double* cpu) {
+  CpuLap lap;
   const TrajectoryEpisode* recorded = nullptr;
   if (plan_.from) {
     const auto it = plan_.from->episodes.find(k);
@@ -231,6 +228,7 @@ std::optional<LookDraw> RecordRunner::SetEpisodeLook(int k) {
       EpisodeLook(plan_.look, plan_.seed, k, recorded, keys, sequence_.env().model());
   renderer_->SetLook(look ? &*look : nullptr);
   if (pixels_) pixels_->SetLook(look ? &*look : nullptr);
+  lap.Into(cpu);
   return look;
 }
 
