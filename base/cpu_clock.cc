@@ -32,6 +32,7 @@ CpuStages& CpuStages::operator+=(const CpuStages& o) {
   hud += o.hud;
   copy += o.copy;
   render_other += o.render_other;
+  look += o.look;
   convert += o.convert;
   encode += o.encode;
   sheet += o.sheet;
@@ -41,7 +42,7 @@ CpuStages& CpuStages::operator+=(const CpuStages& o) {
 }
 
 double CpuStages::OutsideGl() const {
-  return sim + scene + hud + copy + render_other + convert + encode + sheet + trajectory +
+  return sim + scene + hud + copy + render_other + look + convert + encode + sheet + trajectory +
          encode_other;
 }
 
@@ -52,6 +53,7 @@ std::map<std::string, double> CpuStages::Items() const {
           {"hud", hud},
           {"copy", copy},
           {"render_other", render_other},
+          {"look", look},
           {"convert", convert},
           {"encode", encode},
           {"sheet", sheet},

@@ -41,6 +41,10 @@ struct CpuStages {
   double hud = 0;           ///< the HUD and tile labels drawn into the read-back frame
   double copy = 0;          ///< frame copies on the render thread (row flip, GIF copy)
   double render_other = 0;  ///< the rest of the render thread's time per frame
+  /// a randomized look's once-per-episode work: its draw (DrawLook, or the stored look read
+  /// back) and the renderer taking it (texture pixels made and uploaded); the per-frame edits of
+  /// the scene's geoms, lights and cameras are in `scene`
+  double look = 0;
   double convert = 0;       ///< RGB to YUV (swscale) and its input copy
   double encode = 0;        ///< the video encoders (sending frames, flushing, muxing)
   double sheet = 0;         ///< the contact sheet: tiles kept, composed, PNG written

@@ -53,6 +53,15 @@ nlohmann::json BenchDataset(const AssetSource& assets, const std::string& backen
 nlohmann::json BenchExecImages(const AssetSource& assets, const std::string& backends, int episodes,
                                const std::string& size, const std::string& python);
 
+/// What a randomized look (issue 49) costs a recorded frame's CPU: `repeats` pairs of record runs
+/// of this binary (FetchPush-v4, random, `episodes` episodes at 480x480, --jobs 1, on `backend`,
+/// LP_NUM_THREADS=0), plain and --randomize colors,textures,lighting,camera alternating; per frame
+/// the renderer's stages outside GL (scene, hud, copy), the look's own (its draw and texture
+/// upload), their sum, the whole of outside GL and GL, each plain beside randomized (mean, range,
+/// every run) with the ratio of the means.
+nlohmann::json BenchLook(const AssetSource& assets, const std::string& backend, int episodes,
+                         int repeats);
+
 /// One record run of about `target_frames` frames at 640x480 on the first of `backends`, its
 /// resident set sampled every `interval_s`: whether memory stays flat over a long run.
 nlohmann::json BenchSoak(const AssetSource& assets, const std::string& backends, int target_frames,

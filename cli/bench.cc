@@ -34,6 +34,8 @@ struct BenchOptions {
   int exec_episodes = 10;
   std::string exec_size = "96x80";
   std::string exec_python = "python3";
+  int look_episodes = 8;
+  int look_repeats = 3;
 };
 
 int RunBench(const BenchOptions& o) {
@@ -67,6 +69,10 @@ int RunBench(const BenchOptions& o) {
   if (o.what == "exec-images") {
     j["exec_images"] =
         bench::BenchExecImages(source, o.backends, o.exec_episodes, o.exec_size, o.exec_python);
+  }
+  if (o.what == "look") {
+    const std::string first = o.backends.substr(0, o.backends.find(','));
+    j["look"] = bench::BenchLook(source, first, o.look_episodes, o.look_repeats);
   }
   if (o.what == "soak") j["soak"] = bench::BenchSoak(source, o.backends, o.soak_frames, 1.0);
   if (o.what == "serve") {
@@ -104,11 +110,20 @@ Command AddBench(CLI::App& app) {
          "dataset (rollout --obs-camera) beside record of the same camera and size and "
          "rollout without images (--dataset-episodes, --dataset-size); or exec-images: images "
          "to a Python exec: policy beside the same images into a dataset, and where a step's "
-         "CPU goes (--exec-episodes, --exec-size, --exec-python). node, soak, serve, dataset "
-         "and exec-images are not part of all")
+         "CPU goes (--exec-episodes, --exec-size, --exec-python); or look: a randomized look's "
+         "CPU per recorded frame, plain beside --randomize colors,textures,lighting,camera "
+         "(record runs on the first of --backends; --look-episodes, --look-repeats). node, "
+         "soak, serve, dataset, exec-images and look are not part of all")
       ->capture_default_str()
       ->check(CLI::IsMember({"sim", "render", "encode", "record", "all", "node", "soak", "serve",
-                             "dataset", "exec-images"}));
+                             "dataset", "exec-images", "look"}));
+  sub->add_option("--look-episodes", o->look_episodes, "--what look: episodes of each record run")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 100000));
+  sub->add_option("--look-repeats", o->look_repeats,
+                  "--what look: record runs of each look (plain, randomized alternating)")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 1000));
   sub->add_option("--exec-episodes", o->exec_episodes, "--what exec-images: episodes of each run")
       ->capture_default_str()
       ->check(CLI::Range(1, 100000));

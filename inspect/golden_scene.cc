@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <set>
 #include <sstream>
 
@@ -228,6 +229,31 @@ GoldenScene ReadDefaults(ManifestReader& r, const nlohmann::json& root) {
   return defaults;
 }
 
+// "randomize" and "look_seed": the scene's fixed look, if any.
+void ReadLook(ManifestReader& r, const nlohmann::json& s, const std::string& where,
+              GoldenScene* scene) {
+  const std::string none;
+  scene->randomize = r.String(s, "randomize", where, &none);
+  try {
+    scene->look = ParseRandomize(scene->randomize);
+  } catch (const UsageError& e) {
+    std::string what = e.what();  // "--randomize: 'x' is not a kind ...": named as the member
+    if (what.rfind("--randomize: ", 0) == 0) what.erase(0, 13);
+    r.Fail(where, "\"randomize\": " + what);
+  }
+  scene->look_seed = scene->seed;
+  if (!s.contains("look_seed")) return;
+  if (!scene->look.any()) {
+    r.Fail(where,
+           "\"look_seed\" needs \"randomize\" (a comma list of colors, textures, "
+           "lighting, camera)");
+  }
+  if (!s["look_seed"].is_number_unsigned()) {
+    r.Fail(where, "\"look_seed\" must be a non-negative integer");
+  }
+  scene->look_seed = s["look_seed"].get<uint64_t>();
+}
+
 // Scene `i` of the manifest in the golden folder `dir`, its name not in `names` (and then
 // added to it).
 GoldenScene ReadScene(ManifestReader& r, const nlohmann::json& s, size_t i,
@@ -237,7 +263,7 @@ GoldenScene ReadScene(ManifestReader& r, const nlohmann::json& s, size_t i,
       "name",  "env_id",    "assets",     "seed",  "policy",
       "steps", "camera",    "overlay",    "width", "height",
       "msaa",  "tolerance", "state_atol", "note",  "same_backend_tolerance",
-      "mask"};
+      "mask",  "randomize", "look_seed"};
   std::string where = "scenes[" + std::to_string(i) + "]";
   if (!s.is_object()) r.Fail(where, "must be an object");
   GoldenScene scene;
@@ -283,6 +309,7 @@ GoldenScene ReadScene(ManifestReader& r, const nlohmann::json& s, size_t i,
   } catch (const UsageError& e) {
     r.Fail(where, e.what());
   }
+  ReadLook(r, s, where, &scene);
   return scene;
 }
 
@@ -365,6 +392,11 @@ SceneResult RenderScene(GlContext& gl, const GoldenScene& scene, const std::stri
   CheckRenderFrame(options);
   gl.MakeCurrent();
   Renderer renderer(gl, env.model(), options);
+  std::optional<LookDraw> look;
+  if (scene.look.any()) {  // episode 0's draw of `render --seed look_seed --randomize ...`
+    look = DrawLook(scene.look, LookSeed(scene.look_seed, 0), renderer.camera_keys(), env.model());
+    renderer.SetLook(&*look);
+  }
 
   SceneResult result;
   result.width = renderer.width();

@@ -11,12 +11,17 @@
 //                "overlay": "none", "width": 320, "height": 240, "msaa": 4,
 //                "tolerance": {"max_fraction": 0.002},
 //                "same_backend_tolerance": {"threshold": 8},
-//                "mask": [[x, y, width, height], ...]}, ...]}
+//                "mask": [[x, y, width, height], ...],
+//                "randomize": "colors,textures,lighting,camera", "look_seed": 11}, ...]}
 // "tolerance" applies when the goldens were made on another backend or GL renderer,
 // "same_backend_tolerance" (defaults: kSameBackendTolerance) when on this one; a scene's members
 // override the defaults one by one. "mask" lists frame rectangles left out of the image
-// comparison. Its goldens are NAME.png, NAME_state.json and NAME_meta.json (how and where they
-// were made, inspect/golden_meta.h) beside the manifest.
+// comparison. "randomize" (as --randomize) renders the scene under one fixed randomized look:
+// the draw `fetchscope render --seed LOOK_SEED --randomize LIST` makes (DrawLook from
+// LookSeed(look_seed, 0)); "look_seed" defaults to "seed". A look never changes the physics, so
+// its state golden is the plain scene's (a changed draw fails in pixels). Its goldens are
+// NAME.png, NAME_state.json and NAME_meta.json (how and where they were made,
+// inspect/golden_meta.h) beside the manifest.
 #pragma once
 
 #include <cstdint>
@@ -26,6 +31,7 @@
 
 #include "inspect/image_diff.h"
 #include "render/gl_context.h"
+#include "render/look.h"
 #include "src/policy_spec.h"
 
 namespace fetchscope {
@@ -69,6 +75,9 @@ struct GoldenScene {
   GoldenTolerance same_tolerance = kSameBackendTolerance;  ///< on the goldens' own backend
   std::vector<GoldenMask> masks;                           ///< left out of the image comparison
   double state_atol = 1e-6;  ///< absolute tolerance on every state number
+  std::string randomize;     ///< "randomize" as given ("" = the plain look)
+  LookConfig look;           ///< ParseRandomize(randomize); look.any() false: the plain look
+  uint64_t look_seed = 0;    ///< the look's seed: DrawLook(look, LookSeed(look_seed, 0), ...)
 };
 
 /// A parsed manifest.

@@ -97,9 +97,10 @@ namespace {
 // An episode's CPU by stage: sim, and the renderer's own stages between `before` and `after`,
 // the rest of the render thread's time (`render_cpu`) as render_other.
 CpuStages EpisodeCpu(const CpuStages& before, const CpuStages& after, double sim_cpu,
-                     double render_cpu) {
+                     double render_cpu, double look_cpu) {
   CpuStages cpu;
   cpu.sim = sim_cpu;
+  cpu.look = look_cpu;
   cpu.scene = after.scene - before.scene;
   cpu.gl = after.gl - before.gl;
   cpu.hud = after.hud - before.hud;
@@ -161,6 +162,8 @@ void RecordRunner::Run(int k, WorkerChannel& channel) {
     in_flight.pop_front();
     channel.Progress(1);
   };
+  double look_cpu = 0;  // the look stage: the episode's look, before its first step
+  const std::optional<LookDraw> look = SetEpisodeLook(k, &look_cpu);
   auto sim_start = Clock::now();
   CpuLap lap;
   auto on_step = [&](const StepRecord& record, const StepResult*) {
@@ -188,7 +191,6 @@ void RecordRunner::Run(int k, WorkerChannel& channel) {
     return !channel.StopRequested();
   };
   EpisodeRecord episode;
-  const std::optional<LookDraw> look = SetEpisodeLook(k);
   try {
     if (pixels_) pixels_->Begin(k);
     episode = PlayEpisode(k, on_step, channel);
@@ -207,11 +209,12 @@ void RecordRunner::Run(int k, WorkerChannel& channel) {
   encoder->SetHindsight(HindsightCounts(episode));
   encoder->SetLayerInfo(legend.Json(k), std::move(depth_scales));
   encoder->Close(std::move(episode), sim_s, render_s,
-                 EpisodeCpu(renderer_before, renderer_->cpu(), sim_cpu, render_cpu));
+                 EpisodeCpu(renderer_before, renderer_->cpu(), sim_cpu, render_cpu, look_cpu));
   encoders_.push_back(std::move(encoder));
 }
 
-std::optional<LookDraw> RecordRunner::SetEpisodeLook(int k) {
+std::optional<LookDraw> RecordRunner::SetEpisodeLook(int k, double* cpu) {
+  CpuLap lap;
   const TrajectoryEpisode* recorded = nullptr;
   if (plan_.from) {
     const auto it = plan_.from->episodes.find(k);
@@ -225,6 +228,7 @@ std::optional<LookDraw> RecordRunner::SetEpisodeLook(int k) {
       EpisodeLook(plan_.look, plan_.seed, k, recorded, keys, sequence_.env().model());
   renderer_->SetLook(look ? &*look : nullptr);
   if (pixels_) pixels_->SetLook(look ? &*look : nullptr);
+  lap.Into(cpu);
   return look;
 }
 

@@ -99,8 +99,9 @@ class RecordRunner : public EpisodeRunner {
   HindsightEpisode SampleEpisodeHindsight(int k, const std::vector<StepRecord>& steps);
   EpisodeHindsight HindsightCounts(const EpisodeRecord& episode);
   void AddRelabelled(int t, FrameInfo* info) const;
-  // Episode k's look (run/episode_look.h), set on the renderer and the pixel recorder.
-  std::optional<LookDraw> SetEpisodeLook(int k);
+  // Episode k's look (run/episode_look.h), set on the renderer and the pixel recorder; the
+  // thread CPU it took (the draw, the textures made and uploaded) is added to *cpu.
+  std::optional<LookDraw> SetEpisodeLook(int k, double* cpu);
   void RenderLayers(const mjData* data, const FrameInfo& info, Frame* f, EpisodeLegend* legend,
                     std::vector<DepthScale>* depth_scales);
 

@@ -2,7 +2,8 @@
 // xml.etree) and JSON reports, the same-backend tolerance catching a block's red 0.2 -> 0.25
 // while a cross-backend set keeps the measured 32 levels, the assets-changed line, a state
 // difference named by quantity (a table raised 2 mm), masks, --require-genuine, goldens
-// without metadata, a capped msaa, and update saying what changed.
+// without metadata, a capped msaa, update saying what changed, and a scene under a fixed
+// randomized look (issue 49).
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -12,6 +13,7 @@
 #include <string>
 
 #include "encode/png_io.h"
+#include "inspect/image_diff.h"
 #include "tests/test_util.h"
 
 namespace fs = std::filesystem;
@@ -297,6 +299,64 @@ TEST(GoldenCheck, AnMsaaTheDriverCapsIsReported) {
   EXPECT_NE(
       nlohmann::json::parse(ReadFile(json))["scenes"][0]["notes"].dump().find("msaa 16 asked"),
       std::string::npos);
+}
+
+// "randomize" and "look_seed": push_reset_external_look is push_reset_external under one drawn
+// look. The draw is applied (more than a tenth of the pixels differ by over 32 levels), at check
+// time too (another look_seed fails in pixels), and never touches the physics (the two state
+// goldens are equal but for the scene's name).
+TEST(GoldenLook, AFixedDrawIsAppliedAndLeavesTheStateAlone) {
+  Goldens g;
+  const Image plain = ReadPng((g.dir() / "push_reset_external.png").string());
+  const Image look = ReadPng((g.dir() / "push_reset_external_look.png").string());
+  ASSERT_EQ(plain.width, look.width);
+  ASSERT_EQ(plain.height, look.height);
+  const ImageDiffStats d =
+      CompareRgb(plain.pixels.data(), look.pixels.data(), plain.width, plain.height, 32);
+  EXPECT_GT(d.fraction_over, 0.10) << d.fraction_over;
+  nlohmann::json a = nlohmann::json::parse(ReadFile(g.dir() / "push_reset_external_state.json"));
+  nlohmann::json b =
+      nlohmann::json::parse(ReadFile(g.dir() / "push_reset_external_look_state.json"));
+  a.erase("scene");
+  b.erase("scene");
+  EXPECT_EQ(a, b);
+
+  EXPECT_EQ(g.Run("check", "--backend osmesa --only push_reset_external_look").exit_code, 0);
+  g.Scene("push_reset_external_look")["look_seed"] = 12;
+  g.SaveManifest();
+  const CommandResult other = g.Run("check", "--backend osmesa --only push_reset_external_look");
+  EXPECT_EQ(other.exit_code, 1) << other.output;
+  EXPECT_NE(other.output.find("state equal, pixels differ"), std::string::npos) << other.output;
+}
+
+// A malformed look field: one line naming the member and what is accepted, exit 2.
+TEST(GoldenLook, AMalformedLookFieldIsOneLineExit2) {
+  const struct {
+    const char* member;
+    nlohmann::json value;
+    bool drop_randomize;
+    const char* says;
+  } cases[] = {
+      {"randomize", "colours,camera", false,
+       "\"randomize\": 'colours' is not a kind (did you mean 'colors'?)"},
+      {"randomize", 3, false, "\"randomize\" must be a string"},
+      {"look_seed", -1, false, "\"look_seed\" must be a non-negative integer"},
+      {"look_seed", 5, true, "\"look_seed\" needs \"randomize\""},
+  };
+  for (const auto& c : cases) {
+    Goldens g;
+    nlohmann::json& scene = g.Scene("push_reset_external_look");
+    scene[c.member] = c.value;
+    if (c.drop_randomize) scene.erase("randomize");
+    g.SaveManifest();
+    const CommandResult r = g.Run("check", "--backend osmesa --only reach_reset");
+    EXPECT_EQ(r.exit_code, 2) << r.output;
+    EXPECT_NE(r.output.find(c.says), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("scene 'push_reset_external_look'"), std::string::npos) << r.output;
+    int lines = 0;
+    for (char ch : r.output) lines += ch == '\n';
+    EXPECT_EQ(lines, 1) << r.output;
+  }
 }
 
 }  // namespace

@@ -14,8 +14,11 @@
 # docs/golden_review.png: golden check's review page after the block's red went 0.2 -> 0.25 (the
 # bundled models copied with that one change; a same-backend check fails it), photographed by
 # web/test/check_golden_review.mjs.
+# docs/randomized_looks.png: one step under 16 randomized looks, tiled 4x4
+# (tools/randomized-looks-sheet.sh).
 # Needs a build (build/fetchscope), Debian's chromium and web/node_modules (tools/install-deps.sh).
-# `tools/docs-screenshots.sh BUILD OUT golden` makes only the golden review page's picture.
+# `tools/docs-screenshots.sh BUILD OUT golden` makes only the golden review page's picture,
+# `tools/docs-screenshots.sh BUILD OUT looks` only the randomized looks' sheet.
 #   tools/docs-screenshots.sh [BUILD_DIR] [OUT_DIR (default docs)]
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -43,6 +46,10 @@ json.dump(m, open(sys.argv[1], "w"), indent=1)' "$work/golden/manifest.json"
   grep -q '"console_errors":\[\],"page_errors":\[\]' "$work/golden.json" ||
     { cat "$work/golden.json" >&2; echo "docs-screenshots: the golden review page has errors" >&2; exit 1; }
 }
+if [[ "${3:-}" == looks ]]; then
+  tools/randomized-looks-sheet.sh "${1:-build}" "$out/randomized_looks.png"
+  exit 0
+fi
 golden_review
 if [[ "${3:-}" == golden ]]; then echo "docs-screenshots: $out/golden_review.png"; exit 0; fi
 common=(--env-id FetchPush-v4 --episodes 5 --steps 20 --width 240 --height 240 --quiet)
@@ -103,4 +110,5 @@ kill -INT "$serve_pid"; wait "$serve_pid" || true
 grep -q '"console_errors":\[\],"page_errors":\[\]' "$work/debug.json" && [[ -f "$work/inspector.png" ]] ||
   { cat "$work/debug.json" >&2; echo "docs-screenshots: the serve page has errors" >&2; exit 1; }
 cp "$work/inspector.png" "$out/serve_inspector.png"
-echo "docs-screenshots: $out/report.png $out/compare.png $out/viewer.png $out/pick_and_place.png $out/push_three_views.png $out/contacts.png $out/contacts_plot.png $out/serve_inspector.png $out/golden_review.png"
+tools/randomized-looks-sheet.sh "${1:-build}" "$out/randomized_looks.png" >/dev/null
+echo "docs-screenshots: $out/report.png $out/compare.png $out/viewer.png $out/pick_and_place.png $out/push_three_views.png $out/contacts.png $out/contacts_plot.png $out/serve_inspector.png $out/golden_review.png $out/randomized_looks.png"
