@@ -1,6 +1,7 @@
 #include "cli/look_options.h"
 
 #include "base/errors.h"
+#include "cli/common.h"
 
 namespace fetchscope::cli {
 
@@ -13,6 +14,9 @@ void AddLookOptions(CLI::App* sub, LookOptions* o, const std::string& from_note)
       "the episode, apart from the physics (the states are the plain run's); the draw is stored "
       "with each episode (\"look\"). Ranges: docs/guide/recording.md, \"Randomized looks\"" +
           from_note);
+  sub->add_option("--look-seed", o->look_seed,
+                  "--randomize: draw the looks from this seed instead of --seed (episode k's "
+                  "look is LookSeed(S, k)): the same episodes under other looks");
   sub->add_option("--randomize-config", o->config,
                   "JSON file of [min, max] ranges (and robot_colors) for --randomize, e.g. "
                   "{\"camera_fovy\": [-2, 2]}; keys not given keep their defaults");
@@ -31,6 +35,15 @@ std::optional<LookConfig> ResolveLook(const LookOptions& o) {
   LookConfig config = ParseRandomize(o.randomize);
   if (!o.config.empty()) ReadLookConfig(o.config, &config);
   return config;
+}
+
+std::optional<uint64_t> ResolveLookSeed(const LookOptions& o) {
+  if (o.look_seed.empty()) return std::nullopt;
+  if (!o.option || o.option->count() == 0) {
+    throw UsageError("--look-seed " + o.look_seed +
+                     " without --randomize draws nothing; accepted: with --randomize LIST");
+  }
+  return ParseSeed(o.look_seed);
 }
 
 }  // namespace fetchscope::cli

@@ -14,6 +14,7 @@ namespace fetchscope::cli {
 struct LookOptions {
   std::string randomize;          ///< --randomize LIST; empty: not given
   std::string config;             ///< --randomize-config FILE.json; empty: the default ranges
+  std::string look_seed;          ///< --look-seed S; empty: the run's --seed
   CLI::Option* option = nullptr;  ///< --randomize's option (count() > 0 when given)
 };
 
@@ -25,5 +26,10 @@ void AddLookOptions(CLI::App* sub, LookOptions* options, const std::string& from
 /// and checked now); nullopt when --randomize was not given. --randomize-config without
 /// --randomize is refused in one line. Throws UsageError as ParseRandomize and ReadLookConfig.
 std::optional<LookConfig> ResolveLook(const LookOptions& options);
+
+/// --look-seed: the seed the looks are drawn from (LookSeed(S, episode)) instead of --seed, so
+/// that the same episodes are drawn under other looks; nullopt when not given. Refused in one
+/// line without --randomize, or as a seed that is not one (ParseSeed).
+std::optional<uint64_t> ResolveLookSeed(const LookOptions& options);
 
 }  // namespace fetchscope::cli

@@ -220,6 +220,7 @@ RecordJob ResolveRecord(RecordOptions* options, const PolicySpec& policy,
   plan.hindsight = overlays.hindsight;
   job.hud = overlays.hud;
   plan.look = ResolveLook(o.look);
+  plan.look_seed = ResolveLookSeed(o.look);
   // the one resolver: env, seed, assets, the episodes (a replayed trajectory's own) and the
   // policy's context
   EpisodeRequest request{policy,  o.episodes, o.episodes_given,

@@ -85,8 +85,8 @@ int RunRender(const RenderCommandOptions& o) {
   auto gl = CreateViewContext(view.backend, ResolveGpuChoice(view));
   Renderer renderer(*gl, fetch.model(), view.render);
   if (look_config.any()) {  // episode k's draw, as record draws it for its frames
-    const LookDraw look =
-        DrawLook(look_config, LookSeed(seed, k), renderer.camera_keys(), fetch.model());
+    const LookDraw look = DrawLook(look_config, LookSeed(ResolveLookSeed(o.look).value_or(seed), k),
+                                   renderer.camera_keys(), fetch.model());
     renderer.SetLook(&look);
   }
   if (o.verbose) {

@@ -173,6 +173,7 @@ int RunRollout(const RolloutOptions& o) {
   job.policy_context = &run.policy_context;
   job.steps = o.steps;
   job.look = look;
+  job.look_seed = ResolveLookSeed(o.look);
   job.contact_signals = ParseContactSignals(o.signals);
   job.episodes = episodes;
   job.episodes_requested = static_cast<int>(run.episodes.size());

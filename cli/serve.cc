@@ -92,6 +92,7 @@ int RunServe(const ServeOptions& o, const CLI::App& sub) {
   }
   serve::EngineOptions engine_options;
   engine_options.look = ResolveLook(o.look);
+  engine_options.look_seed = ResolveLookSeed(o.look);
   {
     // the view options checked against the first source's model (its cameras), as are the
     // exec: policy's cameras

@@ -224,8 +224,8 @@ std::optional<LookDraw> RecordRunner::SetEpisodeLook(int k, double* cpu) {
   if (pixels_) {
     for (const std::string& key : pixels_->camera_keys()) keys.push_back(key);
   }
-  const std::optional<LookDraw> look =
-      EpisodeLook(plan_.look, plan_.seed, k, recorded, keys, sequence_.env().model());
+  const std::optional<LookDraw> look = EpisodeLook(plan_.look, plan_.look_seed.value_or(plan_.seed),
+                                                   k, recorded, keys, sequence_.env().model());
   renderer_->SetLook(look ? &*look : nullptr);
   if (pixels_) pixels_->SetLook(look ? &*look : nullptr);
   lap.Into(cpu);

@@ -62,6 +62,7 @@ struct RecordPlan {
   /// --randomize: each episode's look drawn from LookSeed(seed, k) (none: plain); nullopt: not
   /// given (record --from then draws each episode as it stored its look)
   std::optional<LookConfig> look;
+  std::optional<uint64_t> look_seed;  ///< --look-seed: the looks' seed instead of `seed`
 };
 
 /// The episode sinks' options for `plan`.

@@ -43,8 +43,8 @@ class RolloutRunner : public EpisodeRunner {
   void Run(int k, WorkerChannel& channel) override {
     std::optional<LookDraw> look;
     if (pixels_) {
-      look = EpisodeLook(job_.look, job_.seed, k, nullptr, pixels_->camera_keys(),
-                         sequence_.env().model());
+      look = EpisodeLook(job_.look, job_.look_seed.value_or(job_.seed), k, nullptr,
+                         pixels_->camera_keys(), sequence_.env().model());
       pixels_->SetLook(look ? &*look : nullptr);
     }
     if (pixels_) pixels_->Begin(k);

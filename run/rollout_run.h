@@ -42,6 +42,7 @@ struct RolloutJob {
   GpuChoice gpu;                         ///< their EGL devices
   int stop_after_success = -1;           ///< --stop-after-success K (-1: off)
   std::optional<LookConfig> look;        ///< --randomize: each episode's images' look
+  std::optional<uint64_t> look_seed;     ///< --look-seed: the looks' seed instead of `seed`
   std::function<void()> on_episode;      ///< called as each episode is done (progress), if set
   /// the episodes' trajectory JSON is wanted (--json-out, or JSON on stdout); else the result
   /// keeps each episode's success alone, so that memory stays flat over a long dataset run

@@ -460,7 +460,8 @@ std::optional<LookDraw> Engine::State::ViewLook(const ViewRequest& view, const S
       }
     }
     if (!options.look || !options.look->any()) return std::nullopt;
-    return DrawLook(*options.look, LookSeed(state.seed, state.episode), keys, model);
+    return DrawLook(*options.look, LookSeed(options.look_seed.value_or(state.seed), state.episode),
+                    keys, model);
   }
   // another draw: of serve's --randomize kinds, else the stored look's kinds, else all four
   LookConfig config = options.look.value_or(LookConfig{});

@@ -55,6 +55,7 @@ struct EngineOptions {
   /// --randomize: the look of every episode without a stored one, and the kinds a page's
   /// redraw (look=N) draws; nullopt: not given
   std::optional<LookConfig> look;
+  std::optional<uint64_t> look_seed;  ///< --look-seed: serve's draws from it, not the source's seed
 };
 
 class Engine : public Api {

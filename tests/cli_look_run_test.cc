@@ -183,6 +183,28 @@ print(json.dumps(out)))";
   for (int k = 0; k < 3; ++k) EXPECT_EQ(EpisodeOf(again, k)["look"], out["looks"][k]) << k;
 }
 
+// --look-seed draws the same episodes under other looks: the looks of --seed 9, the states of
+// --seed 0.
+TEST(LookRun, ALookSeedDrawsTheSameEpisodesUnderOtherLooks) {
+  TempDir dir;
+  const std::string run =
+      "record --env-id FetchReach-v4 --policy random --steps 3 --width 64 --height 64 "
+      "--randomize colors,lighting --no-report --no-sheets --quiet";
+  const fs::path a = dir.path() / "a", b = dir.path() / "b", c = dir.path() / "c";
+  ASSERT_EQ(RunFetchscope(run + " --seed 0 --look-seed 9 --out '" + a.string() + "'").exit_code, 0);
+  ASSERT_EQ(RunFetchscope(run + " --seed 9 --out '" + b.string() + "'").exit_code, 0);
+  ASSERT_EQ(RunFetchscope(run + " --seed 0 --out '" + c.string() + "'").exit_code, 0);
+  EXPECT_EQ(EpisodeOf(a, 0)["look"], EpisodeOf(b, 0)["look"]);
+  EXPECT_NE(EpisodeOf(a, 0)["look"], EpisodeOf(c, 0)["look"]);
+  EXPECT_EQ(EpisodeOf(a, 0)["steps"], EpisodeOf(c, 0)["steps"]);
+  const auto alone = RunFetchscope("record --env-id FetchReach-v4 --look-seed 3 --out '" +
+                                   (dir.path() / "d").string() + "'");
+  EXPECT_EQ(alone.exit_code, 2);
+  EXPECT_EQ(testing::LineCount(alone.output), 1) << alone.output;
+  EXPECT_NE(alone.output.find("--look-seed 3 without --randomize"), std::string::npos)
+      << alone.output;
+}
+
 TEST(LookRun, LooksWithoutImagesOrRangesWithoutLooksAreOneLine) {
   TempDir dir;
   const auto rollout = RunFetchscope("rollout --env-id FetchPush-v4 --randomize colors");
