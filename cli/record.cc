@@ -35,6 +35,7 @@
 #include "inspect/report.h"
 #include "render/layers.h"
 #include "render/text.h"
+#include "run/episode_look.h"
 #include "run/episode_scheduler.h"
 #include "run/manifest.h"
 #include "run/node_probe.h"
@@ -191,6 +192,11 @@ void ResolveRecordWorld(const RecordOptions& o, RecordJob* job) {
     plan.video.height = frame.height;
     job->model_path = env.model_path();
     if (plan.from) VerifyRecording(env, *plan.from);  // an edited recording stops here
+    if (plan.from && !plan.look) {                    // and so does a stored look that is not one
+      for (const auto& [k, episode] : plan.from->episodes) {
+        EpisodeLook(std::nullopt, 0, k, &episode, {}, env.model());
+      }
+    }
     // --obs-camera: the dataset's images, at the run's --msaa (as render draws them)
     ObsSetup obs = ResolveObs(o.obs, env.model(), plan.view.render.msaa_samples);
     if (CameraLookDrawn(plan)) {  // each episode's jitter moves every camera: poses per step

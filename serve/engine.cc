@@ -451,26 +451,27 @@ std::optional<LookDraw> Engine::State::ViewLook(const ViewRequest& view, const S
   const bool stored = state.look && state.look->is_object();
   if (view.look == "plain" || (view.look == "recorded" && !stored)) return std::nullopt;
   const mjModel* model = state.env->model();
-  if (view.look.empty() || view.look == "recorded") {
-    if (stored) {
-      try {
-        return ParseLookJson(*state.look, "the episode's look");
-      } catch (const UsageError& e) {
-        throw RequestError(409, e.what());
-      }
+  std::optional<LookDraw> own;  // the stored look; a run folder's that is not one: 409, one line
+  if (stored) {
+    try {
+      own = ParseLookJson(*state.look, "the episode's look");
+    } catch (const UsageError& e) {
+      throw RequestError(409, e.what());
     }
+  }
+  if (view.look.empty() || view.look == "recorded") {
+    if (own) return own;
     if (!options.look || !options.look->any()) return std::nullopt;
     return DrawLook(*options.look, LookSeed(options.look_seed.value_or(state.seed), state.episode),
                     keys, model);
   }
   // another draw: of serve's --randomize kinds, else the stored look's kinds, else all four
   LookConfig config = options.look.value_or(LookConfig{});
-  if (!config.any() && stored) {
-    const LookDraw own = ParseLookJson(*state.look, "the episode's look");
-    config.colors = own.colors;
-    config.textures = own.textures;
-    config.lighting = own.lighting;
-    config.camera = own.camera;
+  if (!config.any() && own) {
+    config.colors = own->colors;
+    config.textures = own->textures;
+    config.lighting = own->lighting;
+    config.camera = own->camera;
   }
   if (!config.any()) config.colors = config.textures = config.lighting = config.camera = true;
   return DrawLook(config, LookSeed(std::stoull(view.look), state.episode), keys, model);

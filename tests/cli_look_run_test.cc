@@ -228,6 +228,22 @@ TEST(LookRun, LooksWithoutImagesOrRangesWithoutLooksAreOneLine) {
   EXPECT_EQ(testing::LineCount(kind.output), 1) << kind.output;
   EXPECT_NE(kind.output.find("colours"), std::string::npos) << kind.output;
   EXPECT_FALSE(fs::exists(dir.path() / "out"));
+  // record --from a run whose stored look is not one: one line before anything is written
+  const fs::path run = dir.path() / "run";
+  ASSERT_EQ(RunFetchscope("record --env-id FetchReach-v4 --steps 2 --width 64 --height 64 "
+                          "--randomize colors --no-report --quiet --out '" +
+                          run.string() + "'")
+                .exit_code,
+            0);
+  json edited = json::parse(ReadFile((run / "episode_000.json").string()));
+  edited["episodes"][0]["look"]["kinds"] = json::array({"glitter"});
+  std::ofstream(run / "episode_000.json") << edited.dump();
+  const auto from = RunFetchscope("record --from '" + run.string() + "' --out '" +
+                                  (dir.path() / "again").string() + "'");
+  EXPECT_EQ(from.exit_code, 2) << from.output;
+  EXPECT_EQ(testing::LineCount(from.output), 1) << from.output;
+  EXPECT_NE(from.output.find("episode 0: look"), std::string::npos) << from.output;
+  EXPECT_FALSE(fs::exists(dir.path() / "again"));
 }
 
 }  // namespace

@@ -6,6 +6,7 @@
 
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -255,6 +256,38 @@ TEST(ServeLiveTest, TheLookControlRedrawsAStepPlainAsRecordedOrUnderAnotherDraw)
   ASSERT_EQ(RunPrinted(command), 0) << command;
   const json again = json::parse(ReadFile(saved["episode_file"].get<std::string>()));
   EXPECT_EQ(again["episodes"][0]["look"]["seed"], json::parse(seven.second)["seed"]);
+}
+
+}  // namespace
+}  // namespace fetchscope
+
+namespace fetchscope {
+namespace {
+
+// A run folder whose stored look is not one (edited, or hostile): its frames are refused in one
+// line (409) naming the key, the plain look still draws, and the server goes on.
+TEST(ServeLiveTest, AStoredLookThatIsNotOneIsRefusedInOneLine) {
+  TempDir dir;
+  const fs::path run = dir.path() / "run";
+  ASSERT_EQ(RunFetchscope("record --env-id FetchReach-v4 --steps 2 --width 64 --height 64 "
+                          "--randomize colors --no-report --quiet --out '" +
+                          run.string() + "'")
+                .exit_code,
+            0);
+  const fs::path file = run / "episode_000.json";
+  json edited = json::parse(ReadFile(file.string()));
+  edited["episodes"][0]["look"]["colors"]["object"] = "red";
+  std::ofstream(file) << edited.dump();
+  ServeProcess serve("'" + run.string() + "'", dir.path());
+  ASSERT_TRUE(serve.started()) << serve.log();
+  Api api(serve);
+  const std::string at = "/api/frame?session=" + api.NewSession() +
+                         "&source=0&episode=0&t=1&width=64&height=64&format=png";
+  ExpectRefusal(api.Get(at), 409, "look.colors.object", "an edited look");
+  ExpectRefusal(api.Get(at + "&look=4"), 409, "look.colors.object", "a draw over an edited look");
+  const auto plain = api.Get(at + "&look=plain");
+  ASSERT_TRUE(plain);
+  EXPECT_EQ(plain->status, 200) << plain->body;
 }
 
 }  // namespace
