@@ -423,6 +423,21 @@ void WriteReports(const GoldenOptions& o, const GoldenRun& run) {
 
 }  // namespace
 
+namespace {
+
+// A golden run's header: the command, its manifest, the GL it renders on, its --out.
+GoldenRun StartRun(const char* command, const GoldenManifest& manifest, const GlContext& gl,
+                   const GoldenOptions& o) {
+  GoldenRun run;
+  run.command = command;
+  run.manifest = (fs::path(manifest.dir) / "manifest.json").string();
+  run.running_on = RunningOn(gl.info());
+  run.out = o.out;
+  return run;
+}
+
+}  // namespace
+
 int GoldenCheck(const GoldenOptions& options) {
   GoldenOptions o = options;
   o.golden_dir = ResolveGoldenDir(options.golden_dir, /*writes=*/false);
@@ -447,11 +462,7 @@ int GoldenCheck(const GoldenOptions& options) {
     Unusable(e);
   }
   InstallStopSignals();  // finish the scene in progress, then stop
-  GoldenRun run;
-  run.command = "check";
-  run.manifest = (fs::path(manifest.dir) / "manifest.json").string();
-  run.running_on = RunningOn(gl->info());
-  run.out = o.out;
+  GoldenRun run = StartRun("check", manifest, *gl, o);
   int status = 0;
   run.rows = CheckScenes(*gl, manifest, scenes, genuine, o, &status);
   if (status != 0) return status;
@@ -557,11 +568,7 @@ int GoldenUpdate(const GoldenOptions& options) {
   }
   auto gl = CreateGlContext(o.backend, o.gpu);
   InstallStopSignals();  // finish the scene in progress, then stop
-  GoldenRun run;
-  run.command = "update";
-  run.manifest = (fs::path(manifest.dir) / "manifest.json").string();
-  run.running_on = RunningOn(gl->info());
-  run.out = o.out;
+  GoldenRun run = StartRun("update", manifest, *gl, o);
   for (const GoldenScene* s : scenes) {
     const SceneResult actual = RenderScene(*gl, *s, SceneAssets(*s, manifest.dir, genuine));
     run.rows.push_back(UpdateRow(manifest, *s, actual, o.out));

@@ -10,6 +10,7 @@
 #include "base/atomic_file.h"
 #include "base/json_util.h"
 #include "encode/png_io.h"
+#include "inspect/html_page.h"
 
 namespace fs = std::filesystem;
 
@@ -18,31 +19,7 @@ namespace {
 
 // Text for XML and HTML: the five special characters escaped, control characters (not allowed
 // in XML 1.0) as '?'.
-std::string Escape(const std::string& s) {
-  std::string out;
-  for (const char c : s) {
-    switch (c) {
-      case '&':
-        out += "&amp;";
-        break;
-      case '<':
-        out += "&lt;";
-        break;
-      case '>':
-        out += "&gt;";
-        break;
-      case '"':
-        out += "&quot;";
-        break;
-      case '\'':
-        out += "&apos;";
-        break;
-      default:
-        out += (static_cast<unsigned char>(c) < 0x20 && c != '\n' && c != '\t') ? '?' : c;
-    }
-  }
-  return out;
-}
+std::string Escape(const std::string& s) { return EscapeMarkup(s, true); }
 
 std::string Format(const char* format, double a, double b = 0, double c = 0) {
   char buf[160];

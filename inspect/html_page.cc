@@ -31,28 +31,7 @@ std::string ScriptSafe(const std::string& text) {
   return out;
 }
 
-std::string HtmlEscape(const std::string& text) {
-  std::string out;
-  for (char c : text) {
-    switch (c) {
-      case '&':
-        out += "&amp;";
-        break;
-      case '<':
-        out += "&lt;";
-        break;
-      case '>':
-        out += "&gt;";
-        break;
-      case '"':
-        out += "&quot;";
-        break;
-      default:
-        out += c;
-    }
-  }
-  return out;
-}
+std::string HtmlEscape(const std::string& text) { return EscapeMarkup(text, false); }
 
 }  // namespace
 
@@ -111,6 +90,32 @@ std::string HtmlPage(PageKind kind, const std::string& title, const nlohmann::js
           ScriptSafe(kind_js) + "\n</script>\n";
   html += "</body>\n</html>\n";
   return html;
+}
+
+std::string EscapeMarkup(const std::string& text, bool xml) {
+  std::string out;
+  for (const char c : text) {
+    switch (c) {
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      case '\'':
+        out += xml ? "&apos;" : "'";
+        break;
+      default:
+        out += xml && static_cast<unsigned char>(c) < 0x20 && c != '\n' && c != '\t' ? '?' : c;
+    }
+  }
+  return out;
 }
 
 }  // namespace fetchscope

@@ -31,4 +31,8 @@ const char* EmbeddedUplotVersion();
 /// Returns {low, high}; {0, 1} when n is 0.
 std::pair<double, double> WilsonInterval(int successes, int n, double z = 1.959963984540054);
 
+/// `text` for HTML text and attribute values: & < > " escaped. With `xml` (XML 1.0, JUnit) also
+/// ' as &apos;, and control characters other than newline and tab, which XML refuses, as '?'.
+std::string EscapeMarkup(const std::string& text, bool xml);
+
 }  // namespace fetchscope
